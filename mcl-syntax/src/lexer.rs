@@ -1,0 +1,462 @@
+//! The lexer: text to tokens, comments kept aside as trivia. It never fails:
+//! characters it cannot use are reported and skipped.
+
+use crate::diag::{codes, Diagnostic};
+use crate::span::Span;
+use std::fmt;
+
+/// Reserved words. Constraint kinds (`mutex`, `_order_`, ...), the task binding
+/// markers `a:`/`e:` and the action markers `c:`/`v:` are contextual and lexed
+/// as identifiers, so they stay usable as names elsewhere.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kw {
+    Import,
+    Actions,
+    Events,
+    Pattern,
+    Patterns,
+    Tasks,
+    Mission,
+    PlanOp,
+    Constraints,
+    Places,
+    Transitions,
+    Arcs,
+    While,
+    If,
+    Then,
+    Else,
+    Do,
+    Parallel,
+    And,
+    Or,
+    Try,
+    Catch,
+    Not,
+    Monitor,
+    Condition,
+    WhileCondition,
+}
+
+impl Kw {
+    pub const ALL: [Kw; 26] = [
+        Kw::Import,
+        Kw::Actions,
+        Kw::Events,
+        Kw::Pattern,
+        Kw::Patterns,
+        Kw::Tasks,
+        Kw::Mission,
+        Kw::PlanOp,
+        Kw::Constraints,
+        Kw::Places,
+        Kw::Transitions,
+        Kw::Arcs,
+        Kw::While,
+        Kw::If,
+        Kw::Then,
+        Kw::Else,
+        Kw::Do,
+        Kw::Parallel,
+        Kw::And,
+        Kw::Or,
+        Kw::Try,
+        Kw::Catch,
+        Kw::Not,
+        Kw::Monitor,
+        Kw::Condition,
+        Kw::WhileCondition,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kw::Import => "import",
+            Kw::Actions => "actions",
+            Kw::Events => "events",
+            Kw::Pattern => "pattern",
+            Kw::Patterns => "patterns",
+            Kw::Tasks => "tasks",
+            Kw::Mission => "mission",
+            Kw::PlanOp => "mcl_plan_op",
+            Kw::Constraints => "constraints",
+            Kw::Places => "places",
+            Kw::Transitions => "transitions",
+            Kw::Arcs => "arcs",
+            Kw::While => "while",
+            Kw::If => "if",
+            Kw::Then => "then",
+            Kw::Else => "else",
+            Kw::Do => "do",
+            Kw::Parallel => "parallel",
+            Kw::And => "and",
+            Kw::Or => "or",
+            Kw::Try => "try",
+            Kw::Catch => "catch",
+            Kw::Not => "not",
+            Kw::Monitor => "monitor",
+            Kw::Condition => "condition",
+            Kw::WhileCondition => "while_condition",
+        }
+    }
+
+    pub fn from_str(s: &str) -> Option<Kw> {
+        Kw::ALL.iter().copied().find(|k| k.as_str() == s)
+    }
+
+    /// Keywords that start a top-level item.
+    pub fn starts_item(self) -> bool {
+        matches!(
+            self,
+            Kw::Import
+                | Kw::Actions
+                | Kw::Events
+                | Kw::Pattern
+                | Kw::Patterns
+                | Kw::Tasks
+                | Kw::Mission
+                | Kw::PlanOp
+                | Kw::Constraints
+        )
+    }
+}
+
+/// One token; identifiers, numbers and strings borrow their text from the source.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Token<'src> {
+    Ident(&'src str),
+    /// A number as written, e.g. `-2` or `15.5`.
+    Num(&'src str),
+    /// A string literal including its quotes, as written.
+    Str(&'src str),
+    Kw(Kw),
+    LBrace,
+    RBrace,
+    LParen,
+    RParen,
+    LBracket,
+    RBracket,
+    Semi,
+    Colon,
+    Comma,
+    Dot,
+    Eq,
+    /// `->` or `→`.
+    Arrow,
+}
+
+impl fmt::Display for Token<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Token::Ident(s) => write!(f, "identifier `{s}`"),
+            Token::Num(s) => write!(f, "number `{s}`"),
+            Token::Str(s) => write!(f, "string {s}"),
+            Token::Kw(k) => write!(f, "keyword `{}`", k.as_str()),
+            Token::LBrace => f.write_str("`{`"),
+            Token::RBrace => f.write_str("`}`"),
+            Token::LParen => f.write_str("`(`"),
+            Token::RParen => f.write_str("`)`"),
+            Token::LBracket => f.write_str("`[`"),
+            Token::RBracket => f.write_str("`]`"),
+            Token::Semi => f.write_str("`;`"),
+            Token::Colon => f.write_str("`:`"),
+            Token::Comma => f.write_str("`,`"),
+            Token::Dot => f.write_str("`.`"),
+            Token::Eq => f.write_str("`=`"),
+            Token::Arrow => f.write_str("`->`"),
+        }
+    }
+}
+
+/// The kind of a comment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CommentKind {
+    /// `// ...` up to the end of the line (the newline is not part of it).
+    Line,
+    /// `/* ... */`.
+    Block,
+}
+
+/// A comment, kept as trivia so that the formatter and the editor can use it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Comment {
+    pub kind: CommentKind,
+    pub span: Span,
+}
+
+/// The result of lexing: tokens with spans, comments, and lexical errors.
+#[derive(Debug, Default)]
+pub struct Lexed<'src> {
+    pub tokens: Vec<(Token<'src>, Span)>,
+    pub comments: Vec<Comment>,
+    pub errors: Vec<Diagnostic>,
+}
+
+fn is_ident_start(c: char) -> bool {
+    c.is_ascii_alphabetic() || c == '_' || c == '$'
+}
+
+fn is_ident_continue(c: char) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, '_' | '$' | '-' | '/')
+}
+
+/// Splits `src` into tokens. Never fails: unknown characters become errors.
+pub fn lex(src: &str) -> Lexed<'_> {
+    let bytes = src.as_bytes();
+    let mut out = Lexed { tokens: Vec::with_capacity(src.len() / 4), ..Default::default() };
+    let mut i = 0usize;
+    while i < bytes.len() {
+        let b = bytes[i];
+        let start = i;
+        // ASCII fast path; other characters are decoded below.
+        match b {
+            b' ' | b'\t' | b'\n' | b'\r' => {
+                i += 1;
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                let end = if i > start && bytes[i - 1] == b'\r' { i - 1 } else { i };
+                out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(start, end) });
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                let mut closed = false;
+                while i < bytes.len() {
+                    if bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/') {
+                        i += 2;
+                        closed = true;
+                        break;
+                    }
+                    i += 1;
+                }
+                if !closed {
+                    out.errors.push(
+                        Diagnostic::error(codes::UNTERMINATED_COMMENT, "unterminated block comment", Span::new(start, start + 2))
+                            .with_help("close the comment with `*/`"),
+                    );
+                }
+                out.comments.push(Comment { kind: CommentKind::Block, span: Span::new(start, i) });
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                let mut closed = false;
+                while i < bytes.len() {
+                    match bytes[i] {
+                        b'\\' if i + 1 < bytes.len() && bytes[i + 1] != b'\n' => i += 2,
+                        b'"' => {
+                            i += 1;
+                            closed = true;
+                            break;
+                        }
+                        b'\n' => break,
+                        _ => i += 1,
+                    }
+                }
+                let i_end = i.min(bytes.len());
+                // `i` may sit in the middle of a multi-byte char only if the
+                // escape skipped into it; move to the next boundary.
+                let mut end = i_end;
+                while !src.is_char_boundary(end) {
+                    end += 1;
+                }
+                i = end;
+                if !closed {
+                    out.errors.push(
+                        Diagnostic::error(codes::UNTERMINATED_STRING, "unterminated string", Span::new(start, end))
+                            .with_help("add the closing `\"` on the same line"),
+                    );
+                }
+                out.tokens.push((Token::Str(&src[start..end]), Span::new(start, end)));
+                continue;
+            }
+            b'0'..=b'9' => {
+                i = lex_number(src, i, &mut out);
+                continue;
+            }
+            b'-' if bytes.get(i + 1).is_some_and(u8::is_ascii_digit) => {
+                i = lex_number(src, i + 1, &mut out);
+                // lex_number pushed a token starting after '-': widen it.
+                if let Some((Token::Num(_), span)) = out.tokens.last_mut() {
+                    *span = Span::new(start, span.end as usize);
+                    let end = span.end as usize;
+                    out.tokens.last_mut().expect("just pushed").0 = Token::Num(&src[start..end]);
+                }
+                continue;
+            }
+            b'-' if bytes.get(i + 1) == Some(&b'>') => {
+                out.tokens.push((Token::Arrow, Span::new(i, i + 2)));
+                i += 2;
+                continue;
+            }
+            _ => {}
+        }
+        let punct = match b {
+            b'{' => Some(Token::LBrace),
+            b'}' => Some(Token::RBrace),
+            b'(' => Some(Token::LParen),
+            b')' => Some(Token::RParen),
+            b'[' => Some(Token::LBracket),
+            b']' => Some(Token::RBracket),
+            b';' => Some(Token::Semi),
+            b':' => Some(Token::Colon),
+            b',' => Some(Token::Comma),
+            b'.' => Some(Token::Dot),
+            b'=' => Some(Token::Eq),
+            _ => None,
+        };
+        if let Some(t) = punct {
+            out.tokens.push((t, Span::new(i, i + 1)));
+            i += 1;
+            continue;
+        }
+        let c = src[i..].chars().next().expect("i is a char boundary inside src");
+        if is_ident_start(c) {
+            i += 1;
+            while i < bytes.len() {
+                let c = bytes[i] as char;
+                if !bytes[i].is_ascii() || !is_ident_continue(c) {
+                    break;
+                }
+                // `-` before `>` is an arrow; `/` before `/` or `*` starts a comment.
+                let next = bytes.get(i + 1).copied();
+                if (c == '-' && next == Some(b'>')) || (c == '/' && matches!(next, Some(b'/') | Some(b'*'))) {
+                    break;
+                }
+                i += 1;
+            }
+            let text = &src[start..i];
+            let tok = match Kw::from_str(text) {
+                Some(k) => Token::Kw(k),
+                None => Token::Ident(text),
+            };
+            out.tokens.push((tok, Span::new(start, i)));
+            continue;
+        }
+        if c == '→' {
+            out.tokens.push((Token::Arrow, Span::new(i, i + c.len_utf8())));
+            i += c.len_utf8();
+            continue;
+        }
+        if c.is_whitespace() {
+            i += c.len_utf8();
+            continue;
+        }
+        // Skip a run of unknown characters and report it once.
+        let mut end = i + c.len_utf8();
+        while end < bytes.len() {
+            let c2 = src[end..].chars().next().expect("boundary");
+            if c2.is_whitespace() || c2.is_ascii_alphanumeric() || "{}()[];:,.=\"_$/".contains(c2) || c2 == '→' {
+                break;
+            }
+            end += c2.len_utf8();
+        }
+        let shown = &src[i..end];
+        let mut d = Diagnostic::error(codes::UNKNOWN_CHAR, format!("unexpected character{} `{}`", if shown.chars().count() > 1 { "s" } else { "" }, shown.escape_debug()), Span::new(i, end));
+        if c == '≠' || c == '!' {
+            d = d.with_help("MCL programs have no operators; expressions belong to planning operators");
+        } else if c == '\'' {
+            d = d.with_help("strings are written with double quotes: \"...\"");
+        } else if c == '#' {
+            d = d.with_help("comments are written `// ...` or `/* ... */`");
+        }
+        out.errors.push(d);
+        i = end;
+    }
+    out
+}
+
+/// Lexes `[0-9]+(\.[0-9]+)?` starting at `i`; pushes the token; returns the new position.
+fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
+    let bytes = src.as_bytes();
+    let start = i;
+    while i < bytes.len() && bytes[i].is_ascii_digit() {
+        i += 1;
+    }
+    let int_len = i - start;
+    if i + 1 < bytes.len() && bytes[i] == b'.' && bytes[i + 1].is_ascii_digit() {
+        i += 1;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+    }
+    if int_len > 1 && bytes[start] == b'0' {
+        out.errors.push(
+            Diagnostic::error(codes::BAD_NUMBER, "number with a leading zero", Span::new(start, i))
+                .with_help("write numbers without leading zeros, e.g. `7` or `0.5`"),
+        );
+    }
+    out.tokens.push((Token::Num(&src[start..i]), Span::new(start, i)));
+    i
+}
+
+/// Decodes a string literal token (with quotes) into its value.
+pub fn unescape(raw: &str) -> String {
+    let inner = raw.strip_prefix('"').unwrap_or(raw);
+    let inner = inner.strip_suffix('"').unwrap_or(inner);
+    let mut out = String::with_capacity(inner.len());
+    let mut chars = inner.chars();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            match chars.next() {
+                Some('n') => out.push('\n'),
+                Some('t') => out.push('\t'),
+                Some(other) => out.push(other),
+                None => out.push('\\'),
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kinds(src: &str) -> Vec<Token<'_>> {
+        lex(src).tokens.into_iter().map(|(t, _)| t).collect()
+    }
+
+    #[test]
+    fn identifiers_with_dash_slash_dollar() {
+        assert_eq!(kinds("way-point a/b $x"), vec![Token::Ident("way-point"), Token::Ident("a/b"), Token::Ident("$x")]);
+    }
+
+    #[test]
+    fn arrows_end_identifiers() {
+        assert_eq!(kinds("begin->T0"), vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]);
+        assert_eq!(kinds("a → b"), vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]);
+    }
+
+    #[test]
+    fn negative_and_decimal_numbers() {
+        assert_eq!(kinds("-2 15.5 x -0.5"), vec![Token::Num("-2"), Token::Num("15.5"), Token::Ident("x"), Token::Num("-0.5")]);
+        assert_eq!(kinds("begin.1"), vec![Token::Ident("begin"), Token::Dot, Token::Num("1")]);
+        assert_eq!(kinds("a-2"), vec![Token::Ident("a-2")]);
+    }
+
+    #[test]
+    fn comments_are_trivia() {
+        let l = lex("a // x\n/* y */ b//z");
+        assert_eq!(l.tokens.len(), 2);
+        assert_eq!(l.comments.len(), 3);
+        assert!(l.errors.is_empty());
+    }
+
+    #[test]
+    fn errors_do_not_stop_lexing() {
+        let l = lex("a # b \"open\n c /* never");
+        assert_eq!(l.errors.len(), 3);
+        assert!(l.tokens.iter().any(|(t, _)| *t == Token::Ident("c")));
+    }
+
+    #[test]
+    fn strings_unescape() {
+        assert_eq!(unescape(r#""a\"b\\c""#), "a\"b\\c");
+    }
+}

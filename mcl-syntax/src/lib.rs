@@ -1,0 +1,17 @@
+//! # mcl-syntax
+//!
+//! The MCL language's syntax: a lexer that keeps comments as trivia, an
+//! error-tolerant parser that always returns a tree and a list of errors, the
+//! syntax tree, spans and line/column conversion, and the diagnostic type that
+//! every later layer uses. This crate knows nothing about salsa, nets or LSP.
+
+pub mod ast;
+pub mod diag;
+pub mod lexer;
+pub mod parser;
+pub mod span;
+pub mod visit;
+
+pub use diag::{Diagnostic, Label, Severity};
+pub use parser::{parse, Parse};
+pub use span::{LineCol, LineIndex, Span};

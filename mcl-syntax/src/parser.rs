@@ -1,0 +1,753 @@
+//! The error-tolerant parser.
+//!
+//! Parsing runs in two passes. First the token stream is *balanced*: every
+//! `{`, `(` and `[` gets its closing delimiter, inserting the missing ones
+//! (one error at the unclosed opener) and dropping stray closers (one error
+//! each), the way rustc builds token trees. A top-level keyword (`mission`,
+//! `tasks`, ...) found inside an open block closes it, so a forgotten `}` is
+//! reported once instead of swallowing the rest of the file. Then a chumsky
+//! grammar runs on the balanced stream and recovers at statement, definition
+//! and item boundaries.
+
+use crate::ast::*;
+use crate::diag::{codes, Diagnostic};
+use crate::lexer::{lex, unescape, Comment, Kw, Token};
+use crate::span::Span;
+use chumsky::error::{RichPattern, RichReason};
+use chumsky::input::{Input as _, MappedInput, ValueInput};
+use chumsky::prelude::*;
+
+/// The result of parsing one file: always a tree, plus comments and errors.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Parse {
+    pub file: SourceFile,
+    pub comments: Vec<Comment>,
+    /// Lexical and syntax errors (and warnings for non-canonical spellings), in source order.
+    pub errors: Vec<Diagnostic>,
+}
+
+/// Parses a whole file. Never panics and never gives up.
+pub fn parse(src: &str) -> Parse {
+    let lexed = lex(src);
+    let mut errors = lexed.errors;
+    let tokens = balance(lexed.tokens, src.len(), &mut errors);
+    let eoi = SimpleSpan::from(src.len()..src.len());
+    let input: Vec<(Token<'_>, SimpleSpan)> =
+        tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
+    let (file, parse_errors) = file_parser().parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
+    errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
+    let file = file.unwrap_or_default();
+    lint_spellings(&file, &mut errors);
+    errors.sort_by_key(|d| (d.span.start, d.span.end));
+    errors.dedup();
+    Parse { file, comments: lexed.comments, errors }
+}
+
+// ---------------------------------------------------------------------------
+// Pass 1: delimiter balancing.
+
+fn closer_of(t: Token<'_>) -> Option<Token<'static>> {
+    match t {
+        Token::LBrace => Some(Token::RBrace),
+        Token::LParen => Some(Token::RParen),
+        Token::LBracket => Some(Token::RBracket),
+        _ => None,
+    }
+}
+
+fn is_closer(t: Token<'_>) -> bool {
+    matches!(t, Token::RBrace | Token::RParen | Token::RBracket)
+}
+
+fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diagnostic>) -> Vec<(Token<'s>, Span)> {
+    let mut out = Vec::with_capacity(tokens.len() + 4);
+    let mut stack: Vec<(Token<'s>, Span)> = Vec::new();
+    let unclosed = |open: (Token<'_>, Span), at: Span, why: &str| {
+        let close = closer_of(open.0).expect("stack holds openers");
+        Diagnostic::error(codes::UNCLOSED_DELIMITER, format!("unclosed {}", open.0), open.1)
+            .with_label(at, format!("{close} expected {why}"))
+            .with_help(format!("add the missing {close}"))
+    };
+    for (tok, span) in tokens {
+        if closer_of(tok).is_some() {
+            stack.push((tok, span));
+            out.push((tok, span));
+        } else if is_closer(tok) {
+            match stack.iter().rposition(|(o, _)| closer_of(*o) == Some(tok)) {
+                Some(pos) => {
+                    while stack.len() > pos + 1 {
+                        let open = stack.pop().expect("len > pos + 1");
+                        errors.push(unclosed(open, span, "before this"));
+                        out.push((closer_of(open.0).expect("opener"), Span::at(span.start as usize)));
+                    }
+                    stack.pop();
+                    out.push((tok, span));
+                }
+                None => {
+                    errors.push(
+                        Diagnostic::error(codes::UNMATCHED_CLOSE, format!("unmatched {tok}"), span)
+                            .with_help("remove it, or add the opening delimiter it closes"),
+                    );
+                }
+            }
+        } else if matches!(tok, Token::Kw(k) if k.starts_item()) && !stack.is_empty() {
+            // Items only appear at the top level: close everything still open.
+            while let Some(open) = stack.pop() {
+                errors.push(unclosed(open, Span::at(span.start as usize), "before the next item"));
+                out.push((closer_of(open.0).expect("opener"), Span::at(span.start as usize)));
+            }
+            out.push((tok, span));
+        } else {
+            out.push((tok, span));
+        }
+    }
+    while let Some(open) = stack.pop() {
+        errors.push(unclosed(open, Span::at(len), "at the end of the file"));
+        out.push((closer_of(open.0).expect("opener"), Span::at(len)));
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------
+// Pass 2: the grammar.
+
+type In<'t, 's> = MappedInput<'t, Token<'s>, SimpleSpan, &'t [(Token<'s>, SimpleSpan)], fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan)>;
+type Extra<'t, 's> = extra::Err<Rich<'t, Token<'s>, SimpleSpan>>;
+
+/// Custom errors carry their code and help in the message, separated by `\u{1}`.
+fn custom(code: &str, msg: impl std::fmt::Display, help: &str) -> String {
+    format!("{code}\u{1}{msg}\u{1}{help}")
+}
+
+fn name<'t, 's: 't, I>() -> impl Parser<'t, I, Name, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    select! { Token::Ident(s) = e => Name { text: s.to_string(), span: Span::from(e.span()) } }.labelled("identifier")
+}
+
+fn number<'t, 's: 't, I>() -> impl Parser<'t, I, Number, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    select! { Token::Num(s) = e => Number { text: s.to_string(), span: Span::from(e.span()) } }.labelled("number")
+}
+
+/// A contextual word lexed as an identifier, e.g. `c`, `v`, `a`, `e`, `mutex`.
+fn word<'t, 's: 't, I>(w: &'static str, label: &'static str) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    select! { Token::Ident(s) = e if s == w => Span::from(e.span()) }.labelled(label)
+}
+
+fn kw<'t, 's: 't, I>(k: Kw) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    just(Token::Kw(k)).map_with(|_, e| Span::from(e.span()))
+}
+
+/// Any balanced token tree: a delimited group or a single non-delimiter token.
+fn token_tree<'t, 's: 't, I>() -> impl Parser<'t, I, (), Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    recursive(|tt| {
+        let group = |o: Token<'static>, c: Token<'static>| tt.clone().repeated().delimited_by(just(o), just(c));
+        choice((
+            group(Token::LBrace, Token::RBrace),
+            group(Token::LParen, Token::RParen),
+            group(Token::LBracket, Token::RBracket),
+            none_of([Token::LBrace, Token::RBrace, Token::LParen, Token::RParen, Token::LBracket, Token::RBracket])
+                .ignored(),
+        ))
+        .ignored()
+    })
+}
+
+/// `p` repeated inside a braced list of `;`-terminated definitions. A broken
+/// definition is skipped up to and including its `;` (or up to the `}`).
+fn semi_list<'t, 's: 't, I, T>(
+    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
+) -> impl Parser<'t, I, Vec<T>, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    T: 't,
+{
+    let skip = token_tree()
+        .and_is(none_of([Token::Semi, Token::RBrace]).ignored())
+        .repeated()
+        .then(just(Token::Semi).or_not())
+        .ignored();
+    let item = p.then_ignore(just(Token::Semi)).map(Some).recover_with(via_parser(
+        none_of([Token::RBrace]).rewind().ignore_then(skip).map(|_| None),
+    ));
+    none_of([Token::RBrace])
+        .rewind()
+        .ignore_then(item)
+        .repeated()
+        .collect::<Vec<Option<T>>>()
+        .map(|v| v.into_iter().flatten().collect())
+}
+
+/// `{ ... }` whose contents, if they fail to parse, become `fallback`.
+fn braced<'t, 's: 't, I, T: 't>(
+    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
+    fallback: impl Fn() -> T + Clone + 't,
+) -> impl Parser<'t, I, T, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    p.delimited_by(just(Token::LBrace), just(Token::RBrace)).recover_with(via_parser(
+        just(Token::LBrace).ignore_then(token_tree().repeated()).then_ignore(just(Token::RBrace)).map(move |_| fallback()),
+    ))
+}
+
+fn value<'t, 's: 't, I>() -> impl Parser<'t, I, Value, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    recursive(|value| {
+        let list = value
+            .separated_by(just(Token::Comma))
+            .allow_trailing()
+            .collect::<Vec<_>>()
+            .delimited_by(just(Token::LBracket), just(Token::RBracket))
+            .recover_with(via_parser(
+                just(Token::LBracket)
+                    .ignore_then(token_tree().repeated())
+                    .then_ignore(just(Token::RBracket))
+                    .to(Vec::new()),
+            ));
+        let string = select! { Token::Str(s) => ValueKind::Str(unescape(s)) }.labelled("string");
+        choice((
+            name().then(list.clone().or_not()).map(|(n, l)| match l {
+                Some(items) => ValueKind::List { tag: Some(n), items },
+                None => ValueKind::Ident(n),
+            }),
+            number().map(ValueKind::Number),
+            string,
+            list.map(|items| ValueKind::List { tag: None, items }),
+        ))
+        .map_with(|kind, e| Value { kind, span: Span::from(e.span()) })
+        .labelled("value")
+    })
+}
+
+fn stmt_error(span: Span) -> Stmt {
+    Stmt { kind: StmtKind::Error, span }
+}
+
+fn empty_block(span: Span) -> Block {
+    Block { stmts: vec![stmt_error(span)], span }
+}
+
+/// Tokens that end a statement list (never consumed by statement recovery).
+const STMT_STOP: [Token<'static>; 7] =
+    [Token::LBrace, Token::RBrace, Token::RParen, Token::RBracket, Token::Kw(Kw::Then), Token::Kw(Kw::Do), Token::Kw(Kw::Else)];
+
+fn block<'t, 's: 't, I>(
+    stmt: impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone + 't,
+) -> impl Parser<'t, I, Block, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    // A statement that fails is skipped up to the next `;` or closing token.
+    let skip = token_tree().and_is(none_of([Token::Semi]).ignored()).and_is(none_of(STMT_STOP).ignored()).repeated();
+    let recovering = stmt.recover_with(via_parser(
+        token_tree()
+            .and_is(none_of(STMT_STOP).ignored())
+            .then(skip)
+            .map_with(|_, e| stmt_error(Span::from(e.span()))),
+    ));
+    let item = none_of(STMT_STOP).rewind().ignore_then(recovering).then(just(Token::Semi).map_with(|_, e| Span::from(e.span())).or_not());
+    item.repeated().collect::<Vec<(Stmt, Option<Span>)>>().validate(|items, e, emitter| {
+        let span = Span::from(e.span());
+        if items.is_empty() {
+            emitter.emit(Rich::custom(
+                e.span(),
+                custom(codes::EMPTY_BLOCK, "expected a statement", "a block holds at least one task call or control structure; use `Void()` for a task that does nothing"),
+            ));
+            return empty_block(span);
+        }
+        let n = items.len();
+        let mut stmts = Vec::with_capacity(n);
+        for (i, (s, semi)) in items.into_iter().enumerate() {
+            if i + 1 < n && semi.is_none() && s.kind != StmtKind::Error {
+                emitter.emit(Rich::custom(
+                    SimpleSpan::from(s.span.end as usize..s.span.end as usize),
+                    custom(codes::UNEXPECTED_TOKEN, "expected `;` between two statements", "`;` runs the statement before it, then the statement after it"),
+                ));
+            }
+            stmts.push(s);
+        }
+        Block { stmts, span }
+    })
+}
+
+fn stmt<'t, 's: 't, I>() -> impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone
+where
+    I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+{
+    recursive(|stmt| {
+        let block = block(stmt.boxed()).boxed();
+        let braced_block = braced(block.clone(), || empty_block(Span::default()))
+            .map_with(|mut b: Block, e| {
+                b.span = Span::from(e.span());
+                b
+            })
+            .labelled("`{ ... }`")
+            .boxed();
+        let paren_block = block
+            .clone()
+            .delimited_by(just(Token::LParen), just(Token::RParen))
+            .recover_with(via_parser(
+                just(Token::LParen)
+                    .ignore_then(token_tree().repeated())
+                    .then_ignore(just(Token::RParen))
+                    .map_with(|_, e| empty_block(Span::from(e.span()))),
+            ))
+            .boxed();
+        // A condition: `( A )`, `{ A }` or a bare statement list ending at `then`/`do`.
+        let cond = choice((paren_block.clone(), braced_block.clone(), block.clone())).boxed();
+
+        let args = value()
+            .separated_by(just(Token::Comma))
+            .allow_trailing()
+            .collect::<Vec<_>>()
+            .delimited_by(just(Token::LParen), just(Token::RParen))
+            .map_with(|args, e| (args, Span::from(e.span())))
+            .recover_with(via_parser(
+                just(Token::LParen)
+                    .ignore_then(token_tree().repeated())
+                    .then_ignore(just(Token::RParen))
+                    .map_with(|_, e| (Vec::new(), Span::from(e.span()))),
+            ));
+        let call = name()
+            .then(args)
+            .then(just(Token::Colon).ignore_then(name()).or_not())
+            .map_with(|((name, (args, args_span)), label), e| {
+                StmtKind::Call(Call { name, args, args_span, label, span: Span::from(e.span()) })
+            })
+            .labelled("task call");
+
+        let while_ = kw(Kw::While)
+            .then(cond.clone())
+            .then_ignore(kw(Kw::Do).or_not())
+            .then(braced_block.clone())
+            .map(|((keyword, cond), body)| StmtKind::While { keyword, cond, body });
+
+        let else_ = kw(Kw::Else).then(braced_block.clone()).map(|(_, b)| (b, None));
+        // Table B.4 writes the else branch as `then { C }`: accepted, linted.
+        let then_as_else = kw(Kw::Then).then(braced_block.clone()).map(|(s, b)| (b, Some(s)));
+        let if_ = kw(Kw::If)
+            .then(cond.clone())
+            .then_ignore(kw(Kw::Then).or_not())
+            .then(braced_block.clone())
+            .then(else_.or(then_as_else).or_not())
+            .map(|(((keyword, cond), then), otherwise)| {
+                let (otherwise, then_spelling) = match otherwise {
+                    Some((b, s)) => (Some(b), s),
+                    None => (None, None),
+                };
+                StmtKind::If { keyword, cond, then, otherwise, else_written_then: then_spelling }
+            });
+
+        let par_op = kw(Kw::And).map(|s| (ParallelOp::And, s)).or(kw(Kw::Or).map(|s| (ParallelOp::Or, s)));
+        let parallel = kw(Kw::Parallel)
+            .then(braced_block.clone())
+            .then(par_op.then(braced_block.clone()).repeated().at_least(1).collect::<Vec<_>>())
+            .map(|((keyword, first), rest)| {
+                let mut branches = vec![first];
+                let mut ops = Vec::new();
+                for (op, b) in rest {
+                    ops.push(op);
+                    branches.push(b);
+                }
+                StmtKind::Parallel { keyword, branches, ops }
+            });
+
+        let try_ = kw(Kw::Try)
+            .then(braced_block.clone())
+            .then_ignore(kw(Kw::Catch))
+            .then(braced_block.clone())
+            .map(|((keyword, body), catch)| StmtKind::Try { keyword, body, catch });
+
+        let not = kw(Kw::Not)
+            .then(paren_block.clone().or(braced_block.clone()))
+            .map(|(keyword, body)| StmtKind::Not { keyword, body });
+
+        let handler_kind = kw(Kw::Condition)
+            .map(|s| (MonitorKind::Condition, s))
+            .or(kw(Kw::WhileCondition).map(|s| (MonitorKind::WhileCondition, s)));
+        let handler = handler_kind
+            .then(cond.clone())
+            .then_ignore(kw(Kw::Do))
+            .then(braced_block.clone())
+            .map_with(|(((kind, keyword_span), condition), action), e| MonitorHandler {
+                kind,
+                keyword_span,
+                condition,
+                action,
+                span: Span::from(e.span()),
+            });
+        let monitor = kw(Kw::Monitor)
+            .then(braced_block.clone())
+            .then(handler.repeated().at_least(1).collect::<Vec<_>>())
+            .map(|((keyword, body), handlers)| StmtKind::Monitor { keyword, body, handlers });
+
+        choice((call, while_, if_, parallel, try_, not, monitor))
+            .map_with(|kind, e| Stmt { kind, span: Span::from(e.span()) })
+            .labelled("statement")
+    })
+}
+
+fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
+    // import "path";
+    let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
+    let import = kw(Kw::Import)
+        .then(string)
+        .then_ignore(just(Token::Semi))
+        .map_with(|(_, (path, path_span)), e| Item::Import(Import { path, path_span, span: Span::from(e.span()) }));
+
+    // actions { name = Primitive( c: cmd, v: x, ... ); }
+    enum ActionArg {
+        Command(Name),
+        Param(Value),
+    }
+    let action_arg = choice((
+        word("c", "`c:`").ignore_then(just(Token::Colon)).ignore_then(name()).map(ActionArg::Command),
+        word("v", "`v:`").ignore_then(just(Token::Colon)).ignore_then(value()).map(ActionArg::Param),
+    ));
+    let action_args = action_arg
+        .separated_by(just(Token::Comma))
+        .allow_trailing()
+        .collect::<Vec<_>>()
+        .validate(|args, e, emitter| {
+            let mut command = None;
+            let mut params = Vec::new();
+            for a in args {
+                match a {
+                    ActionArg::Command(c) if command.is_none() => command = Some(c),
+                    ActionArg::Command(c) => emitter.emit(Rich::custom(
+                        SimpleSpan::from(c.span.range()),
+                        custom(codes::MISSING_COMMAND, "an action has exactly one command `c: ...`", "keep one `c:` and pass values with `v:`"),
+                    )),
+                    ActionArg::Param(v) => params.push(v),
+                }
+            }
+            if command.is_none() {
+                emitter.emit(Rich::custom(
+                    e.span(),
+                    custom(codes::MISSING_COMMAND, "an action needs a command `c: ...`", "write the command first, e.g. `GotoPrimitive( c: enable, v: way-point )`"),
+                ));
+            }
+            (command, params)
+        })
+        .delimited_by(just(Token::LParen), just(Token::RParen));
+    let action = name()
+        .then_ignore(just(Token::Eq))
+        .then(name())
+        .then(action_args)
+        .map_with(|((name, primitive), (command, params)), e| ActionDef {
+            name,
+            primitive,
+            command,
+            params,
+            span: Span::from(e.span()),
+        });
+    let actions = kw(Kw::Actions)
+        .ignore_then(braced(semi_list(action), Vec::new))
+        .map_with(|actions, e| Item::Actions(ActionsBlock { actions, span: Span::from(e.span()) }));
+
+    let events = kw(Kw::Events)
+        .ignore_then(braced(semi_list(name()), Vec::new))
+        .map_with(|events, e| Item::Events(EventsBlock { events, span: Span::from(e.span()) }));
+
+    // Patterns.
+    let iface = just(Token::Dot).ignore_then(number());
+    let paren_num = number().delimited_by(just(Token::LParen), just(Token::RParen));
+    let place = name()
+        .then(iface.clone().or_not())
+        .then(paren_num.clone().or_not())
+        .then(iface.clone().or_not())
+        .map_with(|(((name, i1), tokens), i2), e| PlaceDef { name, interface: i1.or(i2), tokens, span: Span::from(e.span()) });
+    let delay = choice((number().map(Delay::Fixed), name().map(Delay::Param))).delimited_by(just(Token::LParen), just(Token::RParen));
+    let transition = name()
+        .then(iface.clone().or_not())
+        .then(delay.or_not())
+        .then(iface.clone().or_not())
+        .map_with(|(((name, i1), delay), i2), e| TransitionDef { name, interface: i1.or(i2), delay, span: Span::from(e.span()) });
+    let node_ref = name().then(iface.clone().or_not()).map(|(name, interface)| NodeRef { name, interface });
+    let arc = node_ref
+        .clone()
+        .then_ignore(just(Token::Arrow))
+        .then(node_ref)
+        .then(paren_num.or_not())
+        .map_with(|((source, target), weight), e| ArcDef { source, target, weight, span: Span::from(e.span()) });
+    let section = |k: Kw| kw(k).ignored();
+    let net = section(Kw::Places)
+        .ignore_then(braced(semi_list(place), Vec::new))
+        .then(section(Kw::Transitions).ignore_then(braced(semi_list(transition), Vec::new)))
+        .then(section(Kw::Arcs).ignore_then(braced(semi_list(arc), Vec::new)))
+        .map(|((places, transitions), arcs)| PatternNet { places, transitions, arcs });
+    let file_name = choice((
+        select! { Token::Str(s) => unescape(s) },
+        name().then(just(Token::Dot).ignore_then(name()).repeated().collect::<Vec<_>>()).map(|(first, rest)| {
+            let mut s = first.text;
+            for n in rest {
+                s.push('.');
+                s.push_str(&n.text);
+            }
+            s
+        }),
+    ))
+    .map_with(|path, e| (path, Span::from(e.span())))
+    .labelled("file name");
+    let pattern_body = choice((
+        just(Token::Colon)
+            .ignore_then(file_name)
+            .then_ignore(just(Token::Semi))
+            .map(|(path, path_span)| PatternBody::File { path, path_span }),
+        braced(net.map(PatternBody::Net), || PatternBody::Net(PatternNet::default())),
+    ));
+    let pattern = name().then(pattern_body).map_with(|(name, body), e| Pattern { name, body, span: Span::from(e.span()) });
+    let pattern_item = none_of([Token::RBrace])
+        .rewind()
+        .ignore_then(pattern.map(Some).recover_with(via_parser(
+            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace]).ignored()).and_is(none_of([Token::LBrace]).ignored()).repeated()).then(just(Token::Semi).or_not()).to(None),
+        )))
+        .repeated()
+        .collect::<Vec<Option<Pattern>>>()
+        .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
+    let patterns = kw(Kw::Pattern)
+        .or(kw(Kw::Patterns))
+        .ignore_then(braced(pattern_item, Vec::new))
+        .map_with(|patterns, e| Item::Patterns(PatternsBlock { patterns, span: Span::from(e.span()) }));
+
+    // Tasks.
+    let name_list = name().separated_by(just(Token::Comma)).allow_trailing().collect::<Vec<_>>();
+    let binding_kind = word("a", "`a:`").to(BindingKind::Action).or(word("e", "`e:`").to(BindingKind::Event));
+    let binding = binding_kind
+        .then_ignore(just(Token::Colon))
+        .then(name())
+        .then_ignore(just(Token::Arrow))
+        .then(name().separated_by(just(Token::Comma)).at_least(1).collect::<Vec<_>>())
+        .map_with(|((kind, target), transitions), e| Binding { kind, target, transitions, span: Span::from(e.span()) });
+    let task = name()
+        .then(name_list.clone().delimited_by(just(Token::LParen), just(Token::RParen)))
+        .then(just(Token::Colon).ignore_then(name()).or_not())
+        .then(braced(semi_list(binding), Vec::new))
+        .map_with(|(((name, params), pattern), bindings), e| TaskDef { name, params, pattern, bindings, span: Span::from(e.span()) });
+    let task_item = none_of([Token::RBrace])
+        .rewind()
+        .ignore_then(task.map(Some).recover_with(via_parser(
+            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated()).then(token_tree().and_is(just(Token::LBrace).ignored()).or_not()).to(None),
+        )))
+        .repeated()
+        .collect::<Vec<Option<TaskDef>>>()
+        .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
+    let tasks = kw(Kw::Tasks)
+        .ignore_then(braced(task_item, Vec::new))
+        .map_with(|tasks, e| Item::Tasks(TasksBlock { tasks, span: Span::from(e.span()) }));
+
+    // Missions.
+    let body = braced(block(stmt().boxed()), || empty_block(Span::default())).map_with(|mut b: Block, e| {
+        if b.span == Span::default() {
+            b.span = Span::from(e.span());
+        }
+        b
+    });
+    let params = name_list.delimited_by(just(Token::LParen), just(Token::RParen));
+    let placement = name()
+        .then_ignore(word("at", "`at`"))
+        .then(number())
+        .delimited_by(just(Token::LBracket), just(Token::RBracket));
+    let header = choice((
+        just(Token::Colon).ignore_then(name()).map(Some).then(params.clone().or_not()),
+        name().or_not().then(params.clone().or_not()),
+    ))
+    .then(placement.or_not());
+    let mission = kw(Kw::Mission)
+        .to(MissionKind::Mission)
+        .or(kw(Kw::PlanOp).to(MissionKind::PlanOp))
+        .map_with(|k, e| (k, Span::from(e.span())))
+        .then(header)
+        .then(body.clone())
+        .map_with(|(((kind, keyword_span), ((name, params), placement)), body), e| {
+            Item::Mission(Mission { kind, keyword_span, name, params: params.unwrap_or_default(), placement, body, span: Span::from(e.span()) })
+        });
+
+    // Constraints.
+    let label_ref = name()
+        .then(just(Token::Colon).ignore_then(name()).or_not())
+        .map_with(|(a, b), e| match b {
+            Some(label) => LabelRef { mission: Some(a), label, span: Span::from(e.span()) },
+            None => LabelRef { mission: None, label: a, span: Span::from(e.span()) },
+        });
+    let refs = label_ref.separated_by(just(Token::Comma)).allow_trailing().collect::<Vec<_>>();
+    let constraint_kw = choice((
+        word("mutex", "`mutex`").map(|s| (ConstraintKind::Mutex, s, false)),
+        word("_mutex_", "`_mutex_`").map(|s| (ConstraintKind::Mutex, s, true)),
+        word("order", "`order`").map(|s| (ConstraintKind::Order, s, false)),
+        word("_order_", "`_order_`").map(|s| (ConstraintKind::Order, s, true)),
+        word("sync", "`sync`").map(|s| (ConstraintKind::Sync, s, false)),
+        word("_sync_", "`_sync_`").map(|s| (ConstraintKind::Sync, s, true)),
+    ))
+    .labelled("`mutex`, `order` or `sync`");
+    let constraint = constraint_kw
+        .then(braced(refs, Vec::new))
+        .then(just(Token::Eq).ignore_then(number()).or_not())
+        .then_ignore(just(Token::Semi).or_not())
+        .map_with(|(((kind, keyword_span, bnf_spelling), refs), bound), e| Constraint {
+            kind,
+            keyword_span,
+            bnf_spelling,
+            refs,
+            bound,
+            span: Span::from(e.span()),
+        });
+    let constraint_item = none_of([Token::RBrace])
+        .rewind()
+        .ignore_then(constraint.map(Some).recover_with(via_parser(
+            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated()).then(token_tree().and_is(just(Token::LBrace).ignored()).or_not()).to(None),
+        )))
+        .repeated()
+        .collect::<Vec<Option<Constraint>>>()
+        .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
+    let constraints = kw(Kw::Constraints)
+        .ignore_then(braced(constraint_item, Vec::new))
+        .map_with(|constraints, e| Item::Constraints(ConstraintsBlock { constraints, span: Span::from(e.span()) }));
+
+    let item = choice((import, actions, events, patterns, tasks, mission, constraints)).labelled("item");
+    let starts_item = any().filter(|t: &Token<'_>| matches!(t, Token::Kw(k) if k.starts_item()));
+    let skip_item = token_tree()
+        .then(token_tree().and_is(starts_item.clone().not()).repeated())
+        .map_with(|_, e| {
+            let _ = e.span();
+        })
+        .to(None);
+    item.map(Some)
+        .recover_with(via_parser(skip_item))
+        .repeated()
+        .collect::<Vec<Option<Item>>>()
+        .map(|v| SourceFile { items: v.into_iter().flatten().collect() })
+        .then_ignore(end())
+}
+
+// ---------------------------------------------------------------------------
+// Errors.
+
+fn describe_expected(expected: &[RichPattern<'_, Token<'_>>]) -> String {
+    let mut names: Vec<String> = expected
+        .iter()
+        .filter_map(|p| match p {
+            RichPattern::Token(t) => Some(format!("{}", &**t)),
+            RichPattern::Label(l) => Some(l.to_string()),
+            RichPattern::Identifier(i) => Some(format!("`{i}`")),
+            RichPattern::EndOfInput => Some("end of file".to_string()),
+            _ => None,
+        })
+        .collect();
+    names.sort();
+    names.dedup();
+    match names.len() {
+        0 => "something else".to_string(),
+        1 => names.remove(0),
+        _ => {
+            let last = names.pop().expect("len >= 2");
+            format!("{} or {}", names.join(", "), last)
+        }
+    }
+}
+
+fn rich_to_diagnostic(e: Rich<'_, Token<'_>, SimpleSpan>) -> Diagnostic {
+    let span = Span::from(*e.span());
+    match e.reason() {
+        RichReason::Custom(msg) => {
+            let mut parts = msg.splitn(3, '\u{1}');
+            let code = parts.next().unwrap_or(codes::UNEXPECTED_TOKEN);
+            let code = [codes::EMPTY_BLOCK, codes::MISSING_COMMAND, codes::UNEXPECTED_TOKEN]
+                .into_iter()
+                .find(|c| *c == code)
+                .unwrap_or(codes::UNEXPECTED_TOKEN);
+            let message = parts.next().unwrap_or("syntax error").to_string();
+            let mut d = Diagnostic::error(code, message, span);
+            if let Some(help) = parts.next().filter(|h| !h.is_empty()) {
+                d = d.with_help(help);
+            }
+            d
+        }
+        RichReason::ExpectedFound { expected, found } => {
+            let expected_s = describe_expected(expected);
+            let found_s = match found {
+                Some(t) => format!("{}", &**t),
+                None => "end of file".to_string(),
+            };
+            let mut d = Diagnostic::error(codes::UNEXPECTED_TOKEN, format!("expected {expected_s}, found {found_s}"), span)
+                .with_label(span, format!("unexpected {found_s}"));
+            if let Some(Token::Kw(k)) = found.as_deref() {
+                if expected.iter().any(|p| matches!(p, RichPattern::Label(l) if l == "identifier")) {
+                    d = d.with_help(format!("`{}` is a keyword and cannot be used as a name", k.as_str()));
+                }
+            }
+            if let Some(Token::Num(_)) = found.as_deref() {
+                if expected.iter().any(|p| matches!(p, RichPattern::Token(t) if **t == Token::RParen)) {
+                    d = d.with_help("separate arguments with `,`");
+                }
+            }
+            d
+        }
+    }
+}
+
+/// Warnings for accepted but non-canonical spellings.
+fn lint_spellings(file: &SourceFile, out: &mut Vec<Diagnostic>) {
+    fn block(b: &Block, out: &mut Vec<Diagnostic>) {
+        for s in &b.stmts {
+            stmt(s, out);
+        }
+    }
+    fn stmt(s: &Stmt, out: &mut Vec<Diagnostic>) {
+        match &s.kind {
+            StmtKind::If { cond, then, otherwise, else_written_then, .. } => {
+                if let Some(span) = else_written_then {
+                    out.push(
+                        Diagnostic::warning(codes::NON_CANONICAL, "the else branch of `if` is written `then`; the canonical keyword is `else`", *span)
+                            .with_label(*span, "accepted for compatibility with the seed's Table B.4")
+                            .with_help("write `else { ... }`"),
+                    );
+                }
+                block(cond, out);
+                block(then, out);
+                if let Some(o) = otherwise {
+                    block(o, out);
+                }
+            }
+            StmtKind::While { cond, body, .. } => {
+                block(cond, out);
+                block(body, out);
+            }
+            StmtKind::Parallel { branches, .. } => branches.iter().for_each(|b| block(b, out)),
+            StmtKind::Try { body, catch, .. } => {
+                block(body, out);
+                block(catch, out);
+            }
+            StmtKind::Not { body, .. } => block(body, out),
+            StmtKind::Monitor { body, handlers, .. } => {
+                block(body, out);
+                for h in handlers {
+                    block(&h.condition, out);
+                    block(&h.action, out);
+                }
+            }
+            StmtKind::Call(_) | StmtKind::Error => {}
+        }
+    }
+    for item in &file.items {
+        if let Item::Mission(m) = item {
+            block(&m.body, out);
+        }
+    }
+}
