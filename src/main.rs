@@ -1,1 +1,68 @@
-fn main() {}
+//! `mcl`: the MCL toolchain's command-line interface. It only wires crates
+//! together; every capability lives in a library crate.
+
+mod cmd;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "mcl", version, about = "Mission Control Language toolchain: check, compile and run AUV missions")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// How diagnostics are printed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    Human,
+    Json,
+}
+
+/// When to color output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ColorChoice {
+    Auto,
+    Always,
+    Never,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Check MCL files for errors (files, or folders searched for *.mcl).
+    ///
+    /// Exit status: 0 without errors (warnings allowed), 1 with errors, 2 on a usage or I/O error.
+    Check {
+        /// Files or folders to check.
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Output format: human-readable reports or one JSON array.
+        #[arg(long, value_enum, default_value = "human")]
+        format: Format,
+        /// Color the human output.
+        #[arg(long, value_enum, default_value = "auto")]
+        color: ColorChoice,
+    },
+    /// Explain a diagnostic code, with an example of the error and its fix.
+    Explain {
+        /// A code such as E0101; without one, lists every code.
+        code: Option<String>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    let code = match cli.command {
+        Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
+        Command::Explain { code } => cmd::explain::run(code.as_deref()),
+    };
+    ExitCode::from(code)
+}

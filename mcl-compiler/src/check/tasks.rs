@@ -1,0 +1,182 @@
+//! Task checks: the pattern, the bindings of actions and events to the
+//! pattern's transitions, and the parameters of the header (seed 5.4, 5.7).
+
+use super::Cx;
+use crate::codes;
+use crate::scope::{self, DefKind};
+use mcl_syntax::ast::*;
+use mcl_syntax::{Diagnostic, Span};
+use rustc_hash::{FxHashMap, FxHashSet};
+
+pub(crate) fn check(cx: &mut Cx<'_>) {
+    for item in &cx.ast().items {
+        let Item::Tasks(block) = item else { continue };
+        for t in &block.tasks {
+            check_task(cx, t);
+        }
+    }
+}
+
+fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
+    // Header.
+    let mut params: FxHashMap<&str, Span> = FxHashMap::default();
+    for p in &t.params {
+        if let Some(prev) = params.insert(&p.text, p.span) {
+            cx.out.push(
+                Diagnostic::error(codes::DUPLICATE_PARAMETER, format!("parameter `{}` is declared twice", p.text), p.span)
+                    .with_label(prev, "first declared here"),
+            );
+        }
+    }
+    // Pattern.
+    let net = match &t.pattern {
+        None => {
+            cx.out.push(
+                Diagnostic::error(codes::UNDEFINED_PATTERN, format!("task `{}` names no pattern", t.name.text), t.name.span)
+                    .with_help(format!("write the pattern after the header: `{}( ... ): AchieveOneGoal {{ ... }}`", t.name.text)),
+            );
+            None
+        }
+        Some(pn) => match cx.scope.first(DefKind::Pattern, &pn.text) {
+            None => {
+                let d = Diagnostic::error(codes::UNDEFINED_PATTERN, format!("cannot find pattern `{}`", pn.text), pn.span)
+                    .with_label(pn.span, "not defined in this file or its imports");
+                let d = cx.suggest(d, &pn.text, cx.scope.names(DefKind::Pattern));
+                cx.out.push(d);
+                None
+            }
+            Some(id) => scope::pattern(cx.db, id).and_then(|p| match &p.body {
+                PatternBody::Net(net) => Some((p, net)),
+                PatternBody::File { .. } => None,
+            }),
+        },
+    };
+    let transitions: FxHashMap<&str, &TransitionDef> =
+        net.map(|(_, n)| n.transitions.iter().map(|t| (t.name.text.as_str(), t)).collect()).unwrap_or_default();
+    let places: FxHashSet<&str> = net.map(|(_, n)| n.places.iter().map(|p| p.name.text.as_str()).collect()).unwrap_or_default();
+
+    // Timed transitions whose delay is a task parameter.
+    if let Some((pat, n)) = net {
+        for tr in &n.transitions {
+            if let Some(Delay::Param(p)) = &tr.delay {
+                if !params.contains_key(p.text.as_str()) {
+                    cx.out.push(
+                        Diagnostic::error(
+                            codes::DELAY_PARAM_NOT_IN_HEADER,
+                            format!("task `{}` has no parameter `{}`, which pattern `{}` uses as the delay of `{}`", t.name.text, p.text, pat.name.text, tr.name.text),
+                            t.name.span,
+                        )
+                        .with_label_in(None, t.name.span, "this task's header")
+                        .with_help(format!("add `{}` to the parameters of `{}`", p.text, t.name.text)),
+                    );
+                }
+            }
+        }
+    }
+
+    // Bindings.
+    let mut event_of_transition: FxHashMap<&str, (&str, Span)> = FxHashMap::default();
+    let mut transition_of_event: FxHashMap<&str, (&str, Span)> = FxHashMap::default();
+    for b in &t.bindings {
+        let (kind, defkind) = match b.kind {
+            BindingKind::Action => ("action", DefKind::Action),
+            BindingKind::Event => ("event", DefKind::Event),
+        };
+        match cx.scope.first(defkind, &b.target.text) {
+            None => {
+                let code = if b.kind == BindingKind::Action { codes::UNDEFINED_ACTION } else { codes::UNDEFINED_EVENT };
+                let d = Diagnostic::error(code, format!("cannot find {kind} `{}`", b.target.text), b.target.span)
+                    .with_label(b.target.span, format!("no {kind} with this name"));
+                let d = cx.suggest(d, &b.target.text, cx.scope.names(defkind));
+                let d = if d.help.is_none() {
+                    d.with_help(format!("declare it in an `{kind}s {{ ... }}` block"))
+                } else {
+                    d
+                };
+                cx.out.push(d);
+            }
+            Some(id) if b.kind == BindingKind::Action => {
+                if let Some(a) = scope::action(cx.db, id) {
+                    for v in &a.params {
+                        if let ValueKind::Ident(pn) = &v.kind {
+                            if !params.contains_key(pn.text.as_str()) {
+                                cx.out.push(
+                                    Diagnostic::error(
+                                        codes::ACTION_PARAM_NOT_IN_HEADER,
+                                        format!("action `{}` needs parameter `{}`, which task `{}` does not declare", a.name.text, pn.text, t.name.text),
+                                        b.target.span,
+                                    )
+                                    .with_label_in(cx.other_file(id), pn.span, format!("`{}` used by the action here", pn.text))
+                                    .with_help(format!("add `{}` to the header: `{}( {} )`", pn.text, t.name.text, header_with(t, &pn.text))),
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+            Some(_) => {}
+        }
+        for tr in &b.transitions {
+            if net.is_some() {
+                match transitions.get(tr.text.as_str()) {
+                    None => {
+                        let pat = t.pattern.as_ref().map(|p| p.text.as_str()).unwrap_or("?");
+                        let msg = if places.contains(tr.text.as_str()) {
+                            format!("`{}` is a place of pattern `{pat}`, not a transition", tr.text)
+                        } else {
+                            format!("pattern `{pat}` has no transition `{}`", tr.text)
+                        };
+                        let d = Diagnostic::error(codes::NOT_A_TRANSITION, msg, tr.span).with_label(tr.span, format!("{kind}s are bound to transitions"));
+                        let d = cx.suggest(d, &tr.text, transitions.keys().copied());
+                        cx.out.push(d);
+                        continue;
+                    }
+                    Some(def) if b.kind == BindingKind::Event && def.delay.is_some() => {
+                        cx.out.push(
+                            Diagnostic::error(codes::TIMED_AND_EVENT, format!("`{}` is a timed transition and cannot also wait for event `{}`", tr.text, b.target.text), tr.span)
+                                .with_label(def.name.span, "declared with a delay here")
+                                .with_help("bind the event to another transition, or remove the delay"),
+                        );
+                    }
+                    Some(_) => {}
+                }
+            }
+            if b.kind == BindingKind::Event {
+                if let Some(&(other_event, prev)) = event_of_transition.get(tr.text.as_str()) {
+                    if other_event != b.target.text {
+                        cx.out.push(
+                            Diagnostic::error(codes::TRANSITION_TWO_EVENTS, format!("transition `{}` is bound to two events, `{other_event}` and `{}`", tr.text, b.target.text), tr.span)
+                                .with_label(prev, format!("bound to `{other_event}` here"))
+                                .with_help("a transition waits for at most one event"),
+                        );
+                    }
+                } else {
+                    event_of_transition.insert(&tr.text, (&b.target.text, tr.span));
+                }
+                match transition_of_event.get(b.target.text.as_str()) {
+                    Some(&(other_tr, prev)) if other_tr != tr.text => {
+                        cx.out.push(
+                            Diagnostic::error(
+                                codes::EVENT_BOUND_TWICE,
+                                format!("event `{}` is bound to two transitions of task `{}`: `{other_tr}` and `{}`", b.target.text, t.name.text, tr.text),
+                                tr.span,
+                            )
+                            .with_label(prev, format!("already bound to `{other_tr}` here"))
+                            .with_help("an event must fire exactly one transition of a task; add a second event or merge the transitions"),
+                        );
+                    }
+                    Some(_) => {}
+                    None => {
+                        transition_of_event.insert(&b.target.text, (&tr.text, tr.span));
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn header_with(t: &TaskDef, extra: &str) -> String {
+    let mut names: Vec<&str> = t.params.iter().map(|p| p.text.as_str()).collect();
+    names.push(extra);
+    names.join(", ")
+}

@@ -1,0 +1,117 @@
+//! Every diagnostic code, with its one-line title and its long explanation
+//! (`mcl explain CODE`). Syntax codes are defined in `mcl_syntax::diag::codes`.
+
+pub use mcl_syntax::diag::codes::*;
+
+// Name resolution.
+pub const UNDEFINED_TASK: &str = "E0101";
+pub const UNDEFINED_ACTION: &str = "E0102";
+pub const UNDEFINED_EVENT: &str = "E0103";
+pub const UNDEFINED_PATTERN: &str = "E0104";
+pub const UNDEFINED_NODE: &str = "E0105";
+pub const NOT_A_TRANSITION: &str = "E0106";
+pub const DUPLICATE_DEFINITION: &str = "E0110";
+pub const DUPLICATE_NODE: &str = "E0111";
+pub const DUPLICATE_LABEL: &str = "E0112";
+pub const DUPLICATE_PARAMETER: &str = "E0113";
+
+// Tasks and patterns.
+pub const ARITY: &str = "E0201";
+pub const ACTION_PARAM_NOT_IN_HEADER: &str = "E0202";
+pub const EVENT_BOUND_TWICE: &str = "E0204";
+pub const INTERFACE: &str = "E0205";
+pub const DELAY_PARAM_NOT_IN_HEADER: &str = "E0206";
+pub const BAD_ARC: &str = "E0207";
+pub const TRANSITION_TWO_EVENTS: &str = "E0208";
+pub const BAD_NUMBER_IN_PATTERN: &str = "E0209";
+pub const PNML_NOT_FOUND: &str = "E0210";
+pub const TIMED_AND_EVENT: &str = "E0211";
+pub const INTERFACE_MISMATCH: &str = "E0212";
+
+// Missions.
+pub const MIXED_PARALLEL: &str = "E0301";
+
+// Constraints.
+pub const UNKNOWN_MISSION: &str = "E0401";
+pub const UNKNOWN_LABEL: &str = "E0402";
+pub const AMBIGUOUS_LABEL: &str = "E0403";
+pub const CONSTRAINT_BOUND: &str = "E0404";
+pub const CONSTRAINT_ARITY: &str = "E0405";
+
+// Imports.
+pub const IMPORT_NOT_FOUND: &str = "E0501";
+pub const IMPORT_CYCLE: &str = "E0502";
+
+// Warnings.
+pub const UNUSED: &str = "W0901";
+pub const UNUSED_PARAMETER: &str = "W0902";
+
+/// A code with its title and its long explanation (Markdown).
+pub struct CodeInfo {
+    pub code: &'static str,
+    pub title: &'static str,
+    pub explanation: &'static str,
+}
+
+macro_rules! registry {
+    ($($code:literal => $title:literal),* $(,)?) => {
+        /// All codes, sorted.
+        pub const ALL: &[CodeInfo] = &[
+            $(CodeInfo { code: $code, title: $title, explanation: include_str!(concat!("../explain/", $code, ".md")) }),*
+        ];
+    };
+}
+
+registry! {
+    "E0001" => "unexpected character",
+    "E0002" => "unterminated string",
+    "E0003" => "unterminated block comment",
+    "E0004" => "malformed number",
+    "E0010" => "unexpected token",
+    "E0011" => "unclosed delimiter",
+    "E0012" => "unmatched closing delimiter",
+    "E0013" => "empty block",
+    "E0014" => "action without exactly one command",
+    "W0015" => "non-canonical spelling",
+    "E0101" => "undefined task",
+    "E0102" => "undefined action",
+    "E0103" => "undefined event",
+    "E0104" => "undefined pattern",
+    "E0105" => "undefined place or transition in an arc",
+    "E0106" => "binding to something that is not a transition of the pattern",
+    "E0110" => "duplicate definition",
+    "E0111" => "duplicate place or transition",
+    "E0112" => "duplicate label",
+    "E0113" => "duplicate parameter",
+    "E0201" => "wrong number of arguments",
+    "E0202" => "action parameter missing from the task header",
+    "E0204" => "event bound to two transitions",
+    "E0205" => "pattern without the common interface",
+    "E0206" => "delay parameter missing from the task header",
+    "E0207" => "arc between two places or two transitions",
+    "E0208" => "transition bound to two events",
+    "E0209" => "invalid number in a pattern",
+    "E0210" => "PNML pattern file not found",
+    "E0211" => "transition both timed and bound to an event",
+    "E0212" => "interface id of an arc end does not match its declaration",
+    "E0301" => "`and` and `or` mixed in one parallel",
+    "E0401" => "constraint names an unknown mission",
+    "E0402" => "constraint names an unknown label",
+    "E0403" => "ambiguous label in a constraint",
+    "E0404" => "misplaced or missing bound",
+    "E0405" => "wrong number of calls in a constraint",
+    "E0501" => "imported file not found",
+    "E0502" => "import cycle",
+    "W0901" => "unused definition",
+    "W0902" => "unused mission parameter",
+}
+
+/// Looks a code up (case-insensitive, `e101` and `E0101` both work).
+pub fn lookup(code: &str) -> Option<&'static CodeInfo> {
+    let c = code.trim().to_ascii_uppercase();
+    let normalized = match (c.chars().next(), c.get(1..).and_then(|d| d.parse::<u32>().ok())) {
+        (Some(l @ ('E' | 'W')), Some(n)) => format!("{l}{n:04}"),
+        _ => c,
+    };
+    ALL.iter().find(|i| i.code == normalized)
+}

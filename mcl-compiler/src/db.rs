@@ -1,0 +1,121 @@
+//! The salsa database: source files are inputs, everything else is a query.
+
+use dashmap::DashMap;
+use salsa::Setter;
+use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
+
+/// One source file. `text` is `None` when the file does not exist or cannot
+/// be read; it is still an input so that creating the file later invalidates
+/// every query that looked for it.
+#[salsa::input(debug)]
+pub struct SourceFile {
+    #[returns(ref)]
+    pub path: PathBuf,
+    #[returns(ref)]
+    pub text: Option<Arc<str>>,
+}
+
+/// The database interface the queries need.
+#[salsa::db]
+pub trait Db: salsa::Database {
+    /// The input for `path` (normalized), reading it from disk on first use
+    /// unless an editor has set its text.
+    fn file(&self, path: &Path) -> SourceFile;
+}
+
+/// The concrete database used by the CLI and the language server.
+#[salsa::db]
+#[derive(Clone, Default)]
+pub struct Database {
+    storage: salsa::Storage<Self>,
+    files: Arc<DashMap<PathBuf, SourceFile>>,
+}
+
+#[salsa::db]
+impl salsa::Database for Database {}
+
+#[salsa::db]
+impl Db for Database {
+    fn file(&self, path: &Path) -> SourceFile {
+        let path = normalize(path);
+        if let Some(f) = self.files.get(&path) {
+            return *f;
+        }
+        let text = read(&path);
+        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text))
+    }
+}
+
+impl Database {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Sets the text of a file, as an editor does for an open document
+    /// (creating the input if needed). Returns the input.
+    pub fn set_text(&mut self, path: &Path, text: impl Into<Arc<str>>) -> SourceFile {
+        let path = normalize(path);
+        let text = Some(text.into());
+        let existing = self.files.get(&path).map(|f| *f);
+        match existing {
+            Some(f) => {
+                if f.text(self) != &text {
+                    f.set_text(self).to(text);
+                }
+                f
+            }
+            None => {
+                let f = SourceFile::new(self, path.clone(), text);
+                self.files.insert(path, f);
+                f
+            }
+        }
+    }
+
+    /// Re-reads a file from disk (after a change notification, or when an
+    /// editor closes it).
+    pub fn reload(&mut self, path: &Path) {
+        let path = normalize(path);
+        let existing = self.files.get(&path).map(|f| *f);
+        if let Some(f) = existing {
+            let text = read(&path);
+            if f.text(self) != &text {
+                f.set_text(self).to(text);
+            }
+        }
+    }
+
+    /// Every file the database knows.
+    pub fn files(&self) -> Vec<SourceFile> {
+        self.files.iter().map(|e| *e.value()).collect()
+    }
+}
+
+fn read(path: &Path) -> Option<Arc<str>> {
+    std::fs::read_to_string(path).ok().map(Arc::from)
+}
+
+/// Makes a path absolute and removes `.` and `..` components lexically (and
+/// resolves symlinks when the file exists), so that one file has one input.
+pub fn normalize(path: &Path) -> PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    let abs = if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        std::env::current_dir().unwrap_or_default().join(path)
+    };
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::ParentDir => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other.as_os_str()),
+        }
+    }
+    out
+}

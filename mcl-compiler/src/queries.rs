@@ -1,0 +1,151 @@
+//! Tracked queries over source files: parsing, line indexes, imports.
+
+use crate::codes;
+use crate::db::{normalize, Db, SourceFile};
+use crate::diagnostics::FileDiagnostic;
+use mcl_syntax::ast::Item;
+use mcl_syntax::{Diagnostic, LineIndex, Parse, Span};
+use std::path::{Path, PathBuf};
+
+/// The syntax tree of a file (an empty tree for a file that cannot be read).
+/// Kept for the most recently used files only.
+#[salsa::tracked(returns(ref), lru = 256)]
+pub fn parse(db: &dyn Db, file: SourceFile) -> Parse {
+    match file.text(db) {
+        Some(text) => mcl_syntax::parse(text),
+        None => Parse { file: Default::default(), comments: Vec::new(), errors: Vec::new() },
+    }
+}
+
+/// Line/column conversion for a file.
+#[salsa::tracked(returns(ref))]
+pub fn line_index(db: &dyn Db, file: SourceFile) -> LineIndex {
+    LineIndex::new(file.text(db).as_deref().unwrap_or(""))
+}
+
+/// One `import` of a file, resolved to its target.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct ResolvedImport {
+    pub target: SourceFile,
+    pub path: PathBuf,
+    pub path_span: Span,
+    pub span: Span,
+}
+
+/// Resolves a path written in `file` relative to `file`'s folder.
+pub fn resolve_relative(db: &dyn Db, file: SourceFile, written: &str) -> PathBuf {
+    let base = file.path(db).parent().map(Path::to_path_buf).unwrap_or_default();
+    normalize(&base.join(written))
+}
+
+/// The imports of one file, in source order.
+#[salsa::tracked(returns(ref))]
+pub fn imports(db: &dyn Db, file: SourceFile) -> Vec<ResolvedImport> {
+    parse(db, file)
+        .file
+        .items
+        .iter()
+        .filter_map(|item| match item {
+            Item::Import(i) => {
+                let path = resolve_relative(db, file, &i.path);
+                Some(ResolvedImport { target: db.file(&path), path, path_span: i.path_span, span: i.span })
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// A program: a root file and every file it imports, transitively.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Program {
+    pub root: SourceFile,
+    /// Imported files before the files that import them; the root is last.
+    pub files: Vec<SourceFile>,
+    /// Import errors located in the root file (missing files, cycles through the root).
+    pub diagnostics: Vec<FileDiagnostic>,
+}
+
+/// The program rooted at `root`.
+#[salsa::tracked(returns(ref))]
+pub fn program(db: &dyn Db, root: SourceFile) -> Program {
+    let mut files = Vec::new();
+    let mut seen = rustc_hash::FxHashSet::default();
+    post_order(db, root, &mut seen, &mut files);
+    let mut diagnostics = Vec::new();
+    for imp in imports(db, root) {
+        if imp.target.text(db).is_none() {
+            let shown = imp.path.display().to_string();
+            let d = if imp.path.is_dir() {
+                Diagnostic::error(codes::IMPORT_NOT_FOUND, format!("cannot import `{shown}`: it is a folder"), imp.path_span)
+                    .with_help("import one `.mcl` file")
+            } else {
+                Diagnostic::error(codes::IMPORT_NOT_FOUND, format!("cannot find the imported file `{shown}`"), imp.path_span)
+                    .with_label(imp.path_span, "no readable file at this path")
+                    .with_help("import paths are relative to the folder of the importing file")
+            };
+            diagnostics.push(FileDiagnostic { file: root, diag: d });
+            continue;
+        }
+        if imp.target == root {
+            diagnostics.push(FileDiagnostic {
+                file: root,
+                diag: Diagnostic::error(codes::IMPORT_CYCLE, "a file cannot import itself", imp.path_span),
+            });
+            continue;
+        }
+        if let Some(path) = path_to(db, imp.target, root) {
+            let mut names = vec![file_name(db, root), file_name(db, imp.target)];
+            names.extend(path.iter().skip(1).map(|f| file_name(db, *f)));
+            diagnostics.push(FileDiagnostic {
+                file: root,
+                diag: Diagnostic::error(codes::IMPORT_CYCLE, "import cycle", imp.path_span)
+                    .with_label(imp.path_span, "this import leads back to this file")
+                    .with_note(format!("cycle: {}", names.join(" -> ")))
+                    .with_help("move the shared definitions into a file that both import"),
+            });
+        }
+    }
+    Program { root, files, diagnostics }
+}
+
+fn file_name(db: &dyn Db, f: SourceFile) -> String {
+    f.path(db).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+fn post_order(db: &dyn Db, f: SourceFile, seen: &mut rustc_hash::FxHashSet<SourceFile>, out: &mut Vec<SourceFile>) {
+    if !seen.insert(f) {
+        return;
+    }
+    for imp in imports(db, f) {
+        if imp.target.text(db).is_some() {
+            post_order(db, imp.target, seen, out);
+        }
+    }
+    out.push(f);
+}
+
+/// A shortest import path `from -> ... -> to` (both included), if any.
+fn path_to(db: &dyn Db, from: SourceFile, to: SourceFile) -> Option<Vec<SourceFile>> {
+    let mut prev = rustc_hash::FxHashMap::default();
+    let mut queue = std::collections::VecDeque::from([from]);
+    prev.insert(from, from);
+    while let Some(f) = queue.pop_front() {
+        if f == to {
+            let mut path = vec![f];
+            let mut cur = f;
+            while cur != from {
+                cur = prev[&cur];
+                path.push(cur);
+            }
+            path.reverse();
+            return Some(path);
+        }
+        for imp in imports(db, f) {
+            if imp.target.text(db).is_some() && !prev.contains_key(&imp.target) {
+                prev.insert(imp.target, f);
+                queue.push_back(imp.target);
+            }
+        }
+    }
+    None
+}

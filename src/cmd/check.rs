@@ -1,0 +1,70 @@
+//! `mcl check`: diagnostics for files and everything they import.
+
+use crate::{ColorChoice, Format};
+use mcl_compiler::diagnostics::{render_human, to_json};
+use mcl_compiler::{check_file, program, Database, Db, FileDiagnostic, SourceFile};
+use mcl_syntax::Severity;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
+    let files = match super::collect_mcl_files(paths) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    let db = Database::new();
+    let mut roots: Vec<SourceFile> = Vec::new();
+    for path in &files {
+        let f = db.file(path);
+        if f.text(&db).is_none() {
+            eprintln!("error: cannot read `{}` (is it UTF-8 text?)", path.display());
+            return 2;
+        }
+        roots.push(f);
+    }
+    // Imported files are checked too, each once.
+    let mut to_check: Vec<SourceFile> = Vec::new();
+    for &r in &roots {
+        for &f in program(&db, r).files.iter().rev() {
+            if !to_check.contains(&f) {
+                to_check.push(f);
+            }
+        }
+    }
+    let mut diags: Vec<FileDiagnostic> = Vec::new();
+    for &f in &to_check {
+        diags.extend(check_file(&db, f).iter().cloned());
+    }
+    let errors = diags.iter().filter(|d| d.diag.severity == Severity::Error).count();
+    let warnings = diags.iter().filter(|d| d.diag.severity == Severity::Warning).count();
+    let mut stdout = std::io::stdout().lock();
+    let written = match format {
+        Format::Json => {
+            let arr: Vec<_> = diags.iter().map(|d| to_json(&db, d)).collect();
+            writeln!(stdout, "{}", serde_json::to_string_pretty(&arr).unwrap_or_else(|_| "[]".into()))
+        }
+        Format::Human => {
+            let use_color = match color {
+                ColorChoice::Always => true,
+                ColorChoice::Never => false,
+                ColorChoice::Auto => std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+            };
+            let mut s = render_human(&db, &diags, use_color);
+            let n = to_check.len();
+            s.push_str(&format!(
+                "checked {n} file{}: {errors} error{}, {warnings} warning{}\n",
+                if n == 1 { "" } else { "s" },
+                if errors == 1 { "" } else { "s" },
+                if warnings == 1 { "" } else { "s" }
+            ));
+            stdout.write_all(s.as_bytes())
+        }
+    };
+    if written.is_err() {
+        return 2;
+    }
+    u8::from(errors > 0)
+}
