@@ -22,7 +22,14 @@ pub trait Db: salsa::Database {
     /// The input for `path` (normalized), reading it from disk on first use
     /// unless an editor has set its text.
     fn file(&self, path: &Path) -> SourceFile;
+    /// The standard library file, implicitly imported by every program.
+    fn stdlib(&self) -> SourceFile;
 }
+
+/// The path under which the standard library appears in diagnostics.
+pub const STDLIB_PATH: &str = "<mcl-std>/std.mcl";
+/// The text of the standard library.
+pub const STDLIB_TEXT: &str = include_str!("../std/std.mcl");
 
 /// The concrete database used by the CLI and the language server.
 #[salsa::db]
@@ -44,6 +51,14 @@ impl Db for Database {
         }
         let text = read(&path);
         *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text))
+    }
+
+    fn stdlib(&self) -> SourceFile {
+        let path = PathBuf::from(STDLIB_PATH);
+        if let Some(f) = self.files.get(&path) {
+            return *f;
+        }
+        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
     }
 }
 
@@ -99,6 +114,9 @@ fn read(path: &Path) -> Option<Arc<str>> {
 /// Makes a path absolute and removes `.` and `..` components lexically (and
 /// resolves symlinks when the file exists), so that one file has one input.
 pub fn normalize(path: &Path) -> PathBuf {
+    if path.starts_with("<mcl-std>") {
+        return path.to_path_buf();
+    }
     if let Ok(p) = path.canonicalize() {
         return p;
     }

@@ -59,7 +59,8 @@ pub fn imports(db: &dyn Db, file: SourceFile) -> Vec<ResolvedImport> {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Program {
     pub root: SourceFile,
-    /// Imported files before the files that import them; the root is last.
+    /// The standard library first, then imported files before the files that
+    /// import them; the root is last.
     pub files: Vec<SourceFile>,
     /// Import errors located in the root file (missing files, cycles through the root).
     pub diagnostics: Vec<FileDiagnostic>,
@@ -70,6 +71,11 @@ pub struct Program {
 pub fn program(db: &dyn Db, root: SourceFile) -> Program {
     let mut files = Vec::new();
     let mut seen = rustc_hash::FxHashSet::default();
+    let std = db.stdlib();
+    if root != std {
+        files.push(std);
+        seen.insert(std);
+    }
     post_order(db, root, &mut seen, &mut files);
     let mut diagnostics = Vec::new();
     for imp in imports(db, root) {

@@ -37,6 +37,8 @@ pub struct DefId {
     pub item: u32,
     pub index: u32,
     pub name_span: Span,
+    /// Defined by the standard library (programs may override it).
+    pub in_stdlib: bool,
 }
 
 /// Every top-level definition of a program, by kind and name, in program
@@ -51,9 +53,11 @@ impl Scope {
     pub fn get(&self, kind: DefKind, name: &str) -> &[DefId] {
         self.defs.get(&(kind, name.to_string())).map_or(&[], Vec::as_slice)
     }
-    /// The first definition of `name`.
+    /// The definition `name` refers to: the first one of the program, or the
+    /// standard library's when the program defines none.
     pub fn first(&self, kind: DefKind, name: &str) -> Option<DefId> {
-        self.get(kind, name).first().copied()
+        let defs = self.get(kind, name);
+        defs.iter().find(|d| !d.in_stdlib).or(defs.first()).copied()
     }
     /// All names defined as `kind`.
     pub fn names(&self, kind: DefKind) -> impl Iterator<Item = &str> {
@@ -74,8 +78,9 @@ pub fn scope(db: &dyn Db, root: SourceFile) -> Scope {
 /// Calls `f` for every top-level definition of one file.
 pub fn for_each_def(db: &dyn Db, file: SourceFile, mut f: impl FnMut(DefId, &str)) {
     let ast = &parse(db, file).file;
+    let in_stdlib = file == db.stdlib();
     for (i, item) in ast.items.iter().enumerate() {
-        let mk = |kind, index: usize, n: &Name| (DefId { kind, file, item: i as u32, index: index as u32, name_span: n.span }, n.text.clone());
+        let mk = |kind, index: usize, n: &Name| (DefId { kind, file, item: i as u32, index: index as u32, name_span: n.span, in_stdlib }, n.text.clone());
         let mut emit = |(id, name): (DefId, String)| f(id, &name);
         match item {
             Item::Actions(b) => b.actions.iter().enumerate().for_each(|(j, a)| emit(mk(DefKind::Action, j, &a.name))),

@@ -27,9 +27,10 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
     }
     // Imported files are checked too, each once.
     let mut to_check: Vec<SourceFile> = Vec::new();
+    let std = db.stdlib();
     for &r in &roots {
         for &f in program(&db, r).files.iter().rev() {
-            if !to_check.contains(&f) {
+            if f != std && !to_check.contains(&f) {
                 to_check.push(f);
             }
         }

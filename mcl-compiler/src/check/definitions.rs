@@ -9,7 +9,8 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
     let mut found = Vec::new();
     for_each_def(cx.db, cx.file, |id, name| found.push((id, name.to_string())));
     for (id, name) in found {
-        let defs = cx.scope.get(id.kind, &name);
+        // Definitions of the standard library may be overridden.
+        let defs: Vec<_> = cx.scope.get(id.kind, &name).iter().filter(|d| !d.in_stdlib).copied().collect();
         let Some(first) = defs.first().copied() else { continue };
         if first == id {
             continue;
