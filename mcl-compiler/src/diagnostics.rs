@@ -34,6 +34,18 @@ fn clamp(text: &str, span: Span) -> std::ops::Range<usize> {
     while !text.is_char_boundary(e) {
         e += 1;
     }
+    // An empty span is drawn on the character after it, so that it shows on
+    // the right line; at a line end it is drawn on the last character.
+    if s == e {
+        match text[s..].chars().next() {
+            Some(c) if c != '\n' && c != '\r' => e = s + c.len_utf8(),
+            _ => {
+                if let Some(c) = text[..s].chars().next_back().filter(|c| *c != '\n') {
+                    s -= c.len_utf8();
+                }
+            }
+        }
+    }
     s..e
 }
 

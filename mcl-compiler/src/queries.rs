@@ -27,6 +27,8 @@ pub fn line_index(db: &dyn Db, file: SourceFile) -> LineIndex {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ResolvedImport {
     pub target: SourceFile,
+    /// The path as written in the file.
+    pub written: String,
     pub path: PathBuf,
     pub path_span: Span,
     pub span: Span,
@@ -48,7 +50,7 @@ pub fn imports(db: &dyn Db, file: SourceFile) -> Vec<ResolvedImport> {
         .filter_map(|item| match item {
             Item::Import(i) => {
                 let path = resolve_relative(db, file, &i.path);
-                Some(ResolvedImport { target: db.file(&path), path, path_span: i.path_span, span: i.span })
+                Some(ResolvedImport { target: db.file(&path), written: i.path.clone(), path, path_span: i.path_span, span: i.span })
             }
             _ => None,
         })
@@ -80,7 +82,7 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
     let mut diagnostics = Vec::new();
     for imp in imports(db, root) {
         if imp.target.text(db).is_none() {
-            let shown = imp.path.display().to_string();
+            let shown = imp.written.clone();
             let d = if imp.path.is_dir() {
                 Diagnostic::error(codes::IMPORT_NOT_FOUND, format!("cannot import `{shown}`: it is a folder"), imp.path_span)
                     .with_help("import one `.mcl` file")

@@ -23,6 +23,7 @@ pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     cx.out.extend(parse(db, file).errors.iter().cloned());
     let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
     definitions::check(&mut cx);
+    definitions::check_imported_clashes(&mut cx);
     patterns::check(&mut cx);
     tasks::check(&mut cx);
     missions::check(&mut cx);

@@ -29,6 +29,7 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
         }
     }
     // Pattern.
+    let mut pattern_file = None;
     let net = match &t.pattern {
         None => {
             cx.out.push(
@@ -45,10 +46,13 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                 cx.out.push(d);
                 None
             }
-            Some(id) => scope::pattern(cx.db, id).and_then(|p| match &p.body {
-                PatternBody::Net(net) => Some((p, net)),
-                PatternBody::File { .. } => None,
-            }),
+            Some(id) => {
+                pattern_file = cx.other_file(id);
+                scope::pattern(cx.db, id).and_then(|p| match &p.body {
+                    PatternBody::Net(net) => Some((p, net)),
+                    PatternBody::File { .. } => None,
+                })
+            }
         },
     };
     let transitions: FxHashMap<&str, &TransitionDef> =
@@ -134,7 +138,7 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     Some(def) if b.kind == BindingKind::Event && def.delay.is_some() => {
                         cx.out.push(
                             Diagnostic::error(codes::TIMED_AND_EVENT, format!("`{}` is a timed transition and cannot also wait for event `{}`", tr.text, b.target.text), tr.span)
-                                .with_label(def.name.span, "declared with a delay here")
+                                .with_label_in(pattern_file.clone(), def.name.span, "declared with a delay here")
                                 .with_help("bind the event to another transition, or remove the delay"),
                         );
                     }
