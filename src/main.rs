@@ -8,7 +8,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "mcl", version, about = "Mission Control Language toolchain: check, compile and run AUV missions")]
+#[command(
+    name = "mcl",
+    version,
+    about = "Mission Control Language toolchain: check, compile and run AUV missions"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -45,6 +49,22 @@ enum Command {
         #[arg(long, value_enum, default_value = "auto")]
         color: ColorChoice,
     },
+    /// Compile the missions of a file to Petri nets (PNML 2009), and optionally Graphviz.
+    ///
+    /// Exit status: 0 on success, 1 when the program has errors, 2 on a usage or I/O error.
+    Compile {
+        /// The MCL file whose missions to compile.
+        file: PathBuf,
+        /// Write the PNML here (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Also write a Graphviz drawing (with --out-dir: one `<mission>.dot` per mission).
+        #[arg(long, num_args = 0..=1, default_missing_value = "")]
+        dot: Option<PathBuf>,
+        /// Write one `<mission>.pnml` per mission into this folder.
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
     /// Explain a diagnostic code, with an example of the error and its fix.
     Explain {
         /// A code such as E0101; without one, lists every code.
@@ -61,8 +81,29 @@ fn main() -> ExitCode {
         }
     };
     let code = match cli.command {
-        Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
+        Command::Check {
+            paths,
+            format,
+            color,
+        } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
+        Command::Compile {
+            file,
+            output,
+            dot,
+            out_dir,
+        } => {
+            if dot.as_ref().is_some_and(|d| d.as_os_str().is_empty()) && out_dir.is_none() {
+                eprintln!("error: --dot needs a path unless --out-dir is given");
+                return ExitCode::from(2);
+            }
+            cmd::compile::run(cmd::compile::Options {
+                file: &file,
+                output: output.as_deref(),
+                dot: dot.as_deref(),
+                out_dir: out_dir.as_deref(),
+            })
+        }
     };
     ExitCode::from(code)
 }

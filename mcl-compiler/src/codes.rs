@@ -31,6 +31,9 @@ pub const INTERFACE_MISMATCH: &str = "E0212";
 // Missions.
 pub const MIXED_PARALLEL: &str = "E0301";
 
+// Building blocks.
+pub const BLOCK_PROPERTY: &str = "E0601";
+
 // Constraints.
 pub const UNKNOWN_MISSION: &str = "E0401";
 pub const UNKNOWN_LABEL: &str = "E0402";
@@ -102,6 +105,7 @@ registry! {
     "E0405" => "wrong number of calls in a constraint",
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
+    "E0601" => "building block that breaks the block properties",
     "W0901" => "unused definition",
     "W0902" => "unused mission parameter",
 }
@@ -109,7 +113,10 @@ registry! {
 /// Looks a code up (case-insensitive, `e101` and `E0101` both work).
 pub fn lookup(code: &str) -> Option<&'static CodeInfo> {
     let c = code.trim().to_ascii_uppercase();
-    let normalized = match (c.chars().next(), c.get(1..).and_then(|d| d.parse::<u32>().ok())) {
+    let normalized = match (
+        c.chars().next(),
+        c.get(1..).and_then(|d| d.parse::<u32>().ok()),
+    ) {
         (Some(l @ ('E' | 'W')), Some(n)) => format!("{l}{n:04}"),
         _ => c,
     };

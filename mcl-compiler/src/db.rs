@@ -50,7 +50,10 @@ impl Db for Database {
             return *f;
         }
         let text = read(&path);
-        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text))
+        *self
+            .files
+            .entry(path.clone())
+            .or_insert_with(|| SourceFile::new(self, path, text))
     }
 
     fn stdlib(&self) -> SourceFile {
@@ -58,7 +61,10 @@ impl Db for Database {
         if let Some(f) = self.files.get(&path) {
             return *f;
         }
-        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
+        *self
+            .files
+            .entry(path.clone())
+            .or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
     }
 }
 

@@ -13,7 +13,11 @@ use std::path::{Path, PathBuf};
 pub fn parse(db: &dyn Db, file: SourceFile) -> Parse {
     match file.text(db) {
         Some(text) => mcl_syntax::parse(text),
-        None => Parse { file: Default::default(), comments: Vec::new(), errors: Vec::new() },
+        None => Parse {
+            file: Default::default(),
+            comments: Vec::new(),
+            errors: Vec::new(),
+        },
     }
 }
 
@@ -36,7 +40,11 @@ pub struct ResolvedImport {
 
 /// Resolves a path written in `file` relative to `file`'s folder.
 pub fn resolve_relative(db: &dyn Db, file: SourceFile, written: &str) -> PathBuf {
-    let base = file.path(db).parent().map(Path::to_path_buf).unwrap_or_default();
+    let base = file
+        .path(db)
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
     normalize(&base.join(written))
 }
 
@@ -50,7 +58,13 @@ pub fn imports(db: &dyn Db, file: SourceFile) -> Vec<ResolvedImport> {
         .filter_map(|item| match item {
             Item::Import(i) => {
                 let path = resolve_relative(db, file, &i.path);
-                Some(ResolvedImport { target: db.file(&path), written: i.path.clone(), path, path_span: i.path_span, span: i.span })
+                Some(ResolvedImport {
+                    target: db.file(&path),
+                    written: i.path.clone(),
+                    path,
+                    path_span: i.path_span,
+                    span: i.span,
+                })
             }
             _ => None,
         })
@@ -84,20 +98,35 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
         if imp.target.text(db).is_none() {
             let shown = imp.written.clone();
             let d = if imp.path.is_dir() {
-                Diagnostic::error(codes::IMPORT_NOT_FOUND, format!("cannot import `{shown}`: it is a folder"), imp.path_span)
-                    .with_help("import one `.mcl` file")
+                Diagnostic::error(
+                    codes::IMPORT_NOT_FOUND,
+                    format!("cannot import `{shown}`: it is a folder"),
+                    imp.path_span,
+                )
+                .with_help("import one `.mcl` file")
             } else {
-                Diagnostic::error(codes::IMPORT_NOT_FOUND, format!("cannot find the imported file `{shown}`"), imp.path_span)
-                    .with_label(imp.path_span, "no readable file at this path")
-                    .with_help("import paths are relative to the folder of the importing file")
+                Diagnostic::error(
+                    codes::IMPORT_NOT_FOUND,
+                    format!("cannot find the imported file `{shown}`"),
+                    imp.path_span,
+                )
+                .with_label(imp.path_span, "no readable file at this path")
+                .with_help("import paths are relative to the folder of the importing file")
             };
-            diagnostics.push(FileDiagnostic { file: root, diag: d });
+            diagnostics.push(FileDiagnostic {
+                file: root,
+                diag: d,
+            });
             continue;
         }
         if imp.target == root {
             diagnostics.push(FileDiagnostic {
                 file: root,
-                diag: Diagnostic::error(codes::IMPORT_CYCLE, "a file cannot import itself", imp.path_span),
+                diag: Diagnostic::error(
+                    codes::IMPORT_CYCLE,
+                    "a file cannot import itself",
+                    imp.path_span,
+                ),
             });
             continue;
         }
@@ -113,14 +142,26 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
             });
         }
     }
-    Program { root, files, diagnostics }
+    Program {
+        root,
+        files,
+        diagnostics,
+    }
 }
 
 fn file_name(db: &dyn Db, f: SourceFile) -> String {
-    f.path(db).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+    f.path(db)
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
-fn post_order(db: &dyn Db, f: SourceFile, seen: &mut rustc_hash::FxHashSet<SourceFile>, out: &mut Vec<SourceFile>) {
+fn post_order(
+    db: &dyn Db,
+    f: SourceFile,
+    seen: &mut rustc_hash::FxHashSet<SourceFile>,
+    out: &mut Vec<SourceFile>,
+) {
     if !seen.insert(f) {
         return;
     }

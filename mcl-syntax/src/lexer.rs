@@ -202,7 +202,10 @@ fn is_ident_continue(c: char) -> bool {
 /// Splits `src` into tokens. Never fails: unknown characters become errors.
 pub fn lex(src: &str) -> Lexed<'_> {
     let bytes = src.as_bytes();
-    let mut out = Lexed { tokens: Vec::with_capacity(src.len() / 4), ..Default::default() };
+    let mut out = Lexed {
+        tokens: Vec::with_capacity(src.len() / 4),
+        ..Default::default()
+    };
     let mut i = 0usize;
     while i < bytes.len() {
         let b = bytes[i];
@@ -217,8 +220,15 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 while i < bytes.len() && bytes[i] != b'\n' {
                     i += 1;
                 }
-                let end = if i > start && bytes[i - 1] == b'\r' { i - 1 } else { i };
-                out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(start, end) });
+                let end = if i > start && bytes[i - 1] == b'\r' {
+                    i - 1
+                } else {
+                    i
+                };
+                out.comments.push(Comment {
+                    kind: CommentKind::Line,
+                    span: Span::new(start, end),
+                });
                 continue;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
@@ -234,11 +244,18 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 }
                 if !closed {
                     out.errors.push(
-                        Diagnostic::error(codes::UNTERMINATED_COMMENT, "unterminated block comment", Span::new(start, start + 2))
-                            .with_help("close the comment with `*/`"),
+                        Diagnostic::error(
+                            codes::UNTERMINATED_COMMENT,
+                            "unterminated block comment",
+                            Span::new(start, start + 2),
+                        )
+                        .with_help("close the comment with `*/`"),
                     );
                 }
-                out.comments.push(Comment { kind: CommentKind::Block, span: Span::new(start, i) });
+                out.comments.push(Comment {
+                    kind: CommentKind::Block,
+                    span: Span::new(start, i),
+                });
                 continue;
             }
             b'"' => {
@@ -263,14 +280,32 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 while !src.is_char_boundary(end) {
                     end += 1;
                 }
+                if !closed {
+                    // The string runs to the end of the line. If the line goes
+                    // on with a delimiter or separator, the closing quote most
+                    // likely belongs just before it (`Search( "cable ) ;`):
+                    // end the string there so that the rest of the line is
+                    // lexed as usual and one missing quote gives one error.
+                    if let Some(p) = bytes[start + 1..end]
+                        .iter()
+                        .position(|b| matches!(b, b')' | b']' | b'}' | b';' | b','))
+                    {
+                        end = start + 1 + p;
+                    }
+                }
                 i = end;
                 if !closed {
                     out.errors.push(
-                        Diagnostic::error(codes::UNTERMINATED_STRING, "unterminated string", Span::new(start, end))
-                            .with_help("add the closing `\"` on the same line"),
+                        Diagnostic::error(
+                            codes::UNTERMINATED_STRING,
+                            "unterminated string",
+                            Span::new(start, end),
+                        )
+                        .with_help("add the closing `\"` on the same line"),
                     );
                 }
-                out.tokens.push((Token::Str(&src[start..end]), Span::new(start, end)));
+                out.tokens
+                    .push((Token::Str(&src[start..end]), Span::new(start, end)));
                 continue;
             }
             b'0'..=b'9' => {
@@ -313,7 +348,10 @@ pub fn lex(src: &str) -> Lexed<'_> {
             i += 1;
             continue;
         }
-        let c = src[i..].chars().next().expect("i is a char boundary inside src");
+        let c = src[i..]
+            .chars()
+            .next()
+            .expect("i is a char boundary inside src");
         if is_ident_start(c) {
             i += 1;
             while i < bytes.len() {
@@ -323,7 +361,9 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 }
                 // `-` before `>` is an arrow; `/` before `/` or `*` starts a comment.
                 let next = bytes.get(i + 1).copied();
-                if (c == '-' && next == Some(b'>')) || (c == '/' && matches!(next, Some(b'/') | Some(b'*'))) {
+                if (c == '-' && next == Some(b'>'))
+                    || (c == '/' && matches!(next, Some(b'/') | Some(b'*')))
+                {
                     break;
                 }
                 i += 1;
@@ -337,7 +377,8 @@ pub fn lex(src: &str) -> Lexed<'_> {
             continue;
         }
         if c == '→' {
-            out.tokens.push((Token::Arrow, Span::new(i, i + c.len_utf8())));
+            out.tokens
+                .push((Token::Arrow, Span::new(i, i + c.len_utf8())));
             i += c.len_utf8();
             continue;
         }
@@ -345,19 +386,61 @@ pub fn lex(src: &str) -> Lexed<'_> {
             i += c.len_utf8();
             continue;
         }
+        // `#` is a comment in many languages: report it and skip the line.
+        if c == '#' {
+            let mut end = i;
+            while end < bytes.len() && bytes[end] != b'\n' {
+                end += 1;
+            }
+            out.errors.push(
+                Diagnostic::error(
+                    codes::UNKNOWN_CHAR,
+                    "`#` does not start a comment in MCL",
+                    Span::new(i, i + 1),
+                )
+                .with_help("comments are written `// ...` or `/* ... */`"),
+            );
+            out.comments.push(Comment {
+                kind: CommentKind::Line,
+                span: Span::new(i, end),
+            });
+            i = end;
+            continue;
+        }
         // Skip a run of unknown characters and report it once.
         let mut end = i + c.len_utf8();
         while end < bytes.len() {
             let c2 = src[end..].chars().next().expect("boundary");
-            if c2.is_whitespace() || c2.is_ascii_alphanumeric() || "{}()[];:,.=\"_$/".contains(c2) || c2 == '→' {
+            if c2.is_whitespace()
+                || c2.is_ascii_alphanumeric()
+                || "{}()[];:,.=\"_$/".contains(c2)
+                || c2 == '→'
+            {
                 break;
             }
             end += c2.len_utf8();
         }
         let shown = &src[i..end];
-        let mut d = Diagnostic::error(codes::UNKNOWN_CHAR, format!("unexpected character{} `{}`", if shown.chars().count() > 1 { "s" } else { "" }, shown.escape_debug()), Span::new(i, end));
+        let mut d = Diagnostic::error(
+            codes::UNKNOWN_CHAR,
+            format!(
+                "unexpected character{} `{}`",
+                if shown.chars().count() > 1 { "s" } else { "" },
+                shown
+                    .chars()
+                    .flat_map(|c| if c.is_control() {
+                        c.escape_debug().collect::<Vec<_>>()
+                    } else {
+                        vec![c]
+                    })
+                    .collect::<String>()
+            ),
+            Span::new(i, end),
+        );
         if c == '≠' || c == '!' {
-            d = d.with_help("MCL programs have no operators; expressions belong to planning operators");
+            d = d.with_help(
+                "MCL programs have no operators; expressions belong to planning operators",
+            );
         } else if c == '\'' {
             d = d.with_help("strings are written with double quotes: \"...\"");
         } else if c == '#' {
@@ -377,19 +460,44 @@ fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usiz
         i += 1;
     }
     let int_len = i - start;
-    if i + 1 < bytes.len() && bytes[i] == b'.' && bytes[i + 1].is_ascii_digit() {
+    let fraction = i + 1 < bytes.len() && bytes[i] == b'.' && bytes[i + 1].is_ascii_digit();
+    if fraction {
         i += 1;
         while i < bytes.len() && bytes[i].is_ascii_digit() {
             i += 1;
         }
     }
-    if int_len > 1 && bytes[start] == b'0' {
+    if !fraction
+        && i < bytes.len()
+        && bytes[i] == b'.'
+        && !bytes
+            .get(i + 1)
+            .is_some_and(|&b| b.is_ascii_digit() || is_ident_start(b as char))
+    {
+        // `1.`: a fraction without digits. Take the dot into the number so
+        // that the parser sees one (malformed) number.
+        i += 1;
         out.errors.push(
-            Diagnostic::error(codes::BAD_NUMBER, "number with a leading zero", Span::new(start, i))
-                .with_help("write numbers without leading zeros, e.g. `7` or `0.5`"),
+            Diagnostic::error(
+                codes::BAD_NUMBER,
+                "number with a `.` but no digits after it",
+                Span::new(start, i),
+            )
+            .with_help("write the fraction's digits, or drop the `.`: `1` or `1.5`"),
         );
     }
-    out.tokens.push((Token::Num(&src[start..i]), Span::new(start, i)));
+    if int_len > 1 && bytes[start] == b'0' {
+        out.errors.push(
+            Diagnostic::error(
+                codes::BAD_NUMBER,
+                "number with a leading zero",
+                Span::new(start, i),
+            )
+            .with_help("write numbers without leading zeros, e.g. `7` or `0.5`"),
+        );
+    }
+    out.tokens
+        .push((Token::Num(&src[start..i]), Span::new(start, i)));
     i
 }
 
@@ -424,19 +532,43 @@ mod tests {
 
     #[test]
     fn identifiers_with_dash_slash_dollar() {
-        assert_eq!(kinds("way-point a/b $x"), vec![Token::Ident("way-point"), Token::Ident("a/b"), Token::Ident("$x")]);
+        assert_eq!(
+            kinds("way-point a/b $x"),
+            vec![
+                Token::Ident("way-point"),
+                Token::Ident("a/b"),
+                Token::Ident("$x")
+            ]
+        );
     }
 
     #[test]
     fn arrows_end_identifiers() {
-        assert_eq!(kinds("begin->T0"), vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]);
-        assert_eq!(kinds("a → b"), vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]);
+        assert_eq!(
+            kinds("begin->T0"),
+            vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]
+        );
+        assert_eq!(
+            kinds("a → b"),
+            vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]
+        );
     }
 
     #[test]
     fn negative_and_decimal_numbers() {
-        assert_eq!(kinds("-2 15.5 x -0.5"), vec![Token::Num("-2"), Token::Num("15.5"), Token::Ident("x"), Token::Num("-0.5")]);
-        assert_eq!(kinds("begin.1"), vec![Token::Ident("begin"), Token::Dot, Token::Num("1")]);
+        assert_eq!(
+            kinds("-2 15.5 x -0.5"),
+            vec![
+                Token::Num("-2"),
+                Token::Num("15.5"),
+                Token::Ident("x"),
+                Token::Num("-0.5")
+            ]
+        );
+        assert_eq!(
+            kinds("begin.1"),
+            vec![Token::Ident("begin"), Token::Dot, Token::Num("1")]
+        );
         assert_eq!(kinds("a-2"), vec![Token::Ident("a-2")]);
     }
 
@@ -450,7 +582,7 @@ mod tests {
 
     #[test]
     fn errors_do_not_stop_lexing() {
-        let l = lex("a # b \"open\n c /* never");
+        let l = lex("a @ b \"open\n c /* never");
         assert_eq!(l.errors.len(), 3);
         assert!(l.tokens.iter().any(|(t, _)| *t == Token::Ident("c")));
     }

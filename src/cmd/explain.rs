@@ -10,15 +10,17 @@ pub fn run(code: Option<&str>) -> u8 {
             }
             0
         }
-        Some(code) => match codes::lookup(code) {
-            Some(info) => {
-                print!("{}", info.explanation);
-                0
+        Some(code) => {
+            match codes::lookup(code) {
+                Some(info) => {
+                    print!("{}", info.explanation);
+                    0
+                }
+                None => {
+                    eprintln!("error: `{code}` is not an MCL diagnostic code; `mcl explain` lists them all");
+                    2
+                }
             }
-            None => {
-                eprintln!("error: `{code}` is not an MCL diagnostic code; `mcl explain` lists them all");
-                2
-            }
-        },
+        }
     }
 }

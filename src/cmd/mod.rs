@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod check;
+pub mod compile;
 pub mod explain;
 
 use std::path::{Path, PathBuf};

@@ -13,7 +13,9 @@ pub const INTERFACE: [&str; 4] = ["begin", "abort", "ok", "fail"];
 
 pub(crate) fn check(cx: &mut Cx<'_>) {
     for item in &cx.ast().items {
-        let Item::Patterns(block) = item else { continue };
+        let Item::Patterns(block) = item else {
+            continue;
+        };
         for p in &block.patterns {
             match &p.body {
                 PatternBody::Net(net) => check_net(cx, p, net),
@@ -21,8 +23,15 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                     let full = resolve_relative(cx.db, cx.file, path);
                     if !full.is_file() {
                         cx.out.push(
-                            Diagnostic::error(codes::PNML_NOT_FOUND, format!("cannot find the PNML file `{path}` of pattern `{}`", p.name.text), *path_span)
-                                .with_help("the path is relative to the folder of this file"),
+                            Diagnostic::error(
+                                codes::PNML_NOT_FOUND,
+                                format!(
+                                    "cannot find the PNML file `{path}` of pattern `{}`",
+                                    p.name.text
+                                ),
+                                *path_span,
+                            )
+                            .with_help("the path is relative to the folder of this file"),
                         );
                     }
                 }
@@ -42,8 +51,12 @@ fn nonneg_int(cx: &mut Cx<'_>, n: &Number, what: &str) -> Option<u32> {
         Some(v) => Some(v),
         None => {
             cx.out.push(
-                Diagnostic::error(codes::BAD_NUMBER_IN_PATTERN, format!("{what} must be a whole number >= 0, found `{}`", n.text), n.span)
-                    .with_label(n.span, "not a whole number"),
+                Diagnostic::error(
+                    codes::BAD_NUMBER_IN_PATTERN,
+                    format!("{what} must be a whole number >= 0, found `{}`", n.text),
+                    n.span,
+                )
+                .with_label(n.span, "not a whole number"),
             );
             None
         }
@@ -55,14 +68,26 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
     let mut nodes: FxHashMap<&'n str, (Node, Span, u32)> = FxHashMap::default();
     let mut declare = |cx: &mut Cx<'_>, name: &'n Name, kind: Node, iface: u32| {
         if let Some((prev_kind, prev, _)) = nodes.get(name.text.as_str()) {
-            let what = |k: Node| if k == Node::Place { "place" } else { "transition" };
+            let what = |k: Node| {
+                if k == Node::Place {
+                    "place"
+                } else {
+                    "transition"
+                }
+            };
             cx.out.push(
                 Diagnostic::error(
                     codes::DUPLICATE_NODE,
-                    format!("`{}` is declared twice in pattern `{}`", name.text, p.name.text),
+                    format!(
+                        "`{}` is declared twice in pattern `{}`",
+                        name.text, p.name.text
+                    ),
                     name.span,
                 )
-                .with_label(*prev, format!("first declared here as a {}", what(*prev_kind)))
+                .with_label(
+                    *prev,
+                    format!("first declared here as a {}", what(*prev_kind)),
+                )
                 .with_label(name.span, format!("declared again as a {}", what(kind)))
                 .with_help("places and transitions of a pattern share one namespace"),
             );
@@ -72,7 +97,11 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
     };
     let mut interface_places: FxHashMap<&str, Span> = FxHashMap::default();
     for pl in &net.places {
-        let iface = pl.interface.as_ref().and_then(|n| nonneg_int(cx, n, "an interface id")).unwrap_or(0);
+        let iface = pl
+            .interface
+            .as_ref()
+            .and_then(|n| nonneg_int(cx, n, "an interface id"))
+            .unwrap_or(0);
         if let Some(t) = &pl.tokens {
             nonneg_int(cx, t, "an initial marking");
         }
@@ -88,29 +117,57 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
             }
         } else if INTERFACE.contains(&pl.name.text.as_str()) {
             cx.out.push(
-                Diagnostic::error(codes::INTERFACE, format!("place `{}` of the common interface must be on interface 1", pl.name.text), pl.span)
-                    .with_help(format!("write `{}.1;`", pl.name.text)),
+                Diagnostic::error(
+                    codes::INTERFACE,
+                    format!(
+                        "place `{}` of the common interface must be on interface 1",
+                        pl.name.text
+                    ),
+                    pl.span,
+                )
+                .with_help(format!("write `{}.1;`", pl.name.text)),
             );
             interface_places.insert(&pl.name.text, pl.name.span);
         }
     }
-    let missing: Vec<&str> = INTERFACE.iter().copied().filter(|n| !interface_places.contains_key(n)).collect();
+    let missing: Vec<&str> = INTERFACE
+        .iter()
+        .copied()
+        .filter(|n| !interface_places.contains_key(n))
+        .collect();
     if !missing.is_empty() {
-        let list = missing.iter().map(|m| format!("`{m}.1`")).collect::<Vec<_>>().join(", ");
+        let list = missing
+            .iter()
+            .map(|m| format!("`{m}.1`"))
+            .collect::<Vec<_>>()
+            .join(", ");
         cx.out.push(
             Diagnostic::error(
                 codes::INTERFACE,
-                format!("pattern `{}` lacks the common interface: no place {list}", p.name.text),
+                format!(
+                    "pattern `{}` lacks the common interface: no place {list}",
+                    p.name.text
+                ),
                 p.name.span,
             )
-            .with_help("every building block has the places begin.1, abort.1, ok.1 and fail.1 (seed 4.3)"),
+            .with_help(
+                "every building block has the places begin.1, abort.1, ok.1 and fail.1 (seed 4.3)",
+            ),
         );
     }
     for t in &net.transitions {
-        let iface = t.interface.as_ref().and_then(|n| nonneg_int(cx, n, "an interface id")).unwrap_or(0);
+        let iface = t
+            .interface
+            .as_ref()
+            .and_then(|n| nonneg_int(cx, n, "an interface id"))
+            .unwrap_or(0);
         if let Some(Delay::Fixed(n)) = &t.delay {
             if n.value() < 0.0 || !n.value().is_finite() {
-                cx.out.push(Diagnostic::error(codes::BAD_NUMBER_IN_PATTERN, "a delay must be a number of seconds >= 0", n.span));
+                cx.out.push(Diagnostic::error(
+                    codes::BAD_NUMBER_IN_PATTERN,
+                    "a delay must be a number of seconds >= 0",
+                    n.span,
+                ));
             }
         }
         declare(cx, &t.name, Node::Transition, iface);
@@ -123,7 +180,10 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
                 None => {
                     let d = Diagnostic::error(
                         codes::UNDEFINED_NODE,
-                        format!("`{}` is not a place or transition of pattern `{}`", end.name.text, p.name.text),
+                        format!(
+                            "`{}` is not a place or transition of pattern `{}`",
+                            end.name.text, p.name.text
+                        ),
                         end.name.span,
                     )
                     .with_label(end.name.span, "not declared in `places` or `transitions`");
@@ -137,10 +197,17 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
                             cx.out.push(
                                 Diagnostic::error(
                                     codes::INTERFACE_MISMATCH,
-                                    format!("`{}` is declared on interface {iface}, not {}", end.name.text, n.text),
+                                    format!(
+                                        "`{}` is declared on interface {iface}, not {}",
+                                        end.name.text, n.text
+                                    ),
                                     n.span,
                                 )
-                                .with_help(if iface == 0 { format!("write `{}`", end.name.text) } else { format!("write `{}.{iface}`", end.name.text) }),
+                                .with_help(if iface == 0 {
+                                    format!("write `{}`", end.name.text)
+                                } else {
+                                    format!("write `{}.{iface}`", end.name.text)
+                                }),
                             );
                         }
                     }
@@ -150,16 +217,30 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
         }
         if let (Some(a), Some(b)) = (ends[0], ends[1]) {
             if a == b {
-                let what = if a == Node::Place { "two places" } else { "two transitions" };
+                let what = if a == Node::Place {
+                    "two places"
+                } else {
+                    "two transitions"
+                };
                 cx.out.push(
-                    Diagnostic::error(codes::BAD_ARC, format!("an arc cannot join {what}"), arc.span)
-                        .with_help("arcs go from a place to a transition or from a transition to a place"),
+                    Diagnostic::error(
+                        codes::BAD_ARC,
+                        format!("an arc cannot join {what}"),
+                        arc.span,
+                    )
+                    .with_help(
+                        "arcs go from a place to a transition or from a transition to a place",
+                    ),
                 );
             }
         }
         if let Some(w) = &arc.weight {
             if nonneg_int(cx, w, "an arc weight") == Some(0) {
-                cx.out.push(Diagnostic::error(codes::BAD_NUMBER_IN_PATTERN, "an arc weight must be at least 1", w.span));
+                cx.out.push(Diagnostic::error(
+                    codes::BAD_NUMBER_IN_PATTERN,
+                    "an arc weight must be at least 1",
+                    w.span,
+                ));
             }
         }
     }

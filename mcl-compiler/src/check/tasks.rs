@@ -23,8 +23,12 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
     for p in &t.params {
         if let Some(prev) = params.insert(&p.text, p.span) {
             cx.out.push(
-                Diagnostic::error(codes::DUPLICATE_PARAMETER, format!("parameter `{}` is declared twice", p.text), p.span)
-                    .with_label(prev, "first declared here"),
+                Diagnostic::error(
+                    codes::DUPLICATE_PARAMETER,
+                    format!("parameter `{}` is declared twice", p.text),
+                    p.span,
+                )
+                .with_label(prev, "first declared here"),
             );
         }
     }
@@ -33,15 +37,26 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
     let net = match &t.pattern {
         None => {
             cx.out.push(
-                Diagnostic::error(codes::UNDEFINED_PATTERN, format!("task `{}` names no pattern", t.name.text), t.name.span)
-                    .with_help(format!("write the pattern after the header: `{}( ... ): AchieveOneGoal {{ ... }}`", t.name.text)),
+                Diagnostic::error(
+                    codes::UNDEFINED_PATTERN,
+                    format!("task `{}` names no pattern", t.name.text),
+                    t.name.span,
+                )
+                .with_help(format!(
+                    "write the pattern after the header: `{}( ... ): AchieveOneGoal {{ ... }}`",
+                    t.name.text
+                )),
             );
             None
         }
         Some(pn) => match cx.scope.first(DefKind::Pattern, &pn.text) {
             None => {
-                let d = Diagnostic::error(codes::UNDEFINED_PATTERN, format!("cannot find pattern `{}`", pn.text), pn.span)
-                    .with_label(pn.span, "not defined in this file or its imports");
+                let d = Diagnostic::error(
+                    codes::UNDEFINED_PATTERN,
+                    format!("cannot find pattern `{}`", pn.text),
+                    pn.span,
+                )
+                .with_label(pn.span, "not defined in this file or its imports");
                 let d = cx.suggest(d, &pn.text, cx.scope.names(DefKind::Pattern));
                 cx.out.push(d);
                 None
@@ -55,9 +70,17 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
             }
         },
     };
-    let transitions: FxHashMap<&str, &TransitionDef> =
-        net.map(|(_, n)| n.transitions.iter().map(|t| (t.name.text.as_str(), t)).collect()).unwrap_or_default();
-    let places: FxHashSet<&str> = net.map(|(_, n)| n.places.iter().map(|p| p.name.text.as_str()).collect()).unwrap_or_default();
+    let transitions: FxHashMap<&str, &TransitionDef> = net
+        .map(|(_, n)| {
+            n.transitions
+                .iter()
+                .map(|t| (t.name.text.as_str(), t))
+                .collect()
+        })
+        .unwrap_or_default();
+    let places: FxHashSet<&str> = net
+        .map(|(_, n)| n.places.iter().map(|p| p.name.text.as_str()).collect())
+        .unwrap_or_default();
 
     // Timed transitions whose delay is a task parameter.
     if let Some((pat, n)) = net {
@@ -88,9 +111,17 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
         };
         match cx.scope.first(defkind, &b.target.text) {
             None => {
-                let code = if b.kind == BindingKind::Action { codes::UNDEFINED_ACTION } else { codes::UNDEFINED_EVENT };
-                let d = Diagnostic::error(code, format!("cannot find {kind} `{}`", b.target.text), b.target.span)
-                    .with_label(b.target.span, format!("no {kind} with this name"));
+                let code = if b.kind == BindingKind::Action {
+                    codes::UNDEFINED_ACTION
+                } else {
+                    codes::UNDEFINED_EVENT
+                };
+                let d = Diagnostic::error(
+                    code,
+                    format!("cannot find {kind} `{}`", b.target.text),
+                    b.target.span,
+                )
+                .with_label(b.target.span, format!("no {kind} with this name"));
                 let d = cx.suggest(d, &b.target.text, cx.scope.names(defkind));
                 let d = if d.help.is_none() {
                     d.with_help(format!("declare it in an `{kind}s {{ ... }}` block"))
@@ -126,11 +157,15 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     None => {
                         let pat = t.pattern.as_ref().map(|p| p.text.as_str()).unwrap_or("?");
                         let msg = if places.contains(tr.text.as_str()) {
-                            format!("`{}` is a place of pattern `{pat}`, not a transition", tr.text)
+                            format!(
+                                "`{}` is a place of pattern `{pat}`, not a transition",
+                                tr.text
+                            )
                         } else {
                             format!("pattern `{pat}` has no transition `{}`", tr.text)
                         };
-                        let d = Diagnostic::error(codes::NOT_A_TRANSITION, msg, tr.span).with_label(tr.span, format!("{kind}s are bound to transitions"));
+                        let d = Diagnostic::error(codes::NOT_A_TRANSITION, msg, tr.span)
+                            .with_label(tr.span, format!("{kind}s are bound to transitions"));
                         let d = cx.suggest(d, &tr.text, transitions.keys().copied());
                         cx.out.push(d);
                         continue;

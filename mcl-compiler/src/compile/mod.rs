@@ -1,0 +1,522 @@
+//! Composition of a mission into one Petri net (seed 4.5, Definition 4.5.1,
+//! Extract 5.6).
+//!
+//! Composition is done by construction: a parent block creates the places of
+//! its internal interfaces and hands each one to a child as the child's
+//! external interface, which *is* the fusion of Definition 4.5.1. Tasks are
+//! not replicated: each task has one net, guarded by a lock place, and every
+//! call site gets a small adapter block (see [`call_adapter`]) that takes the
+//! lock, binds the call's arguments, starts the task and routes the task's
+//! outcome back to that call only. Two calls of one task that are active at
+//! the same time therefore run one after the other, each with its own
+//! parameters and its own outcome (seed Figure 4.13, SEED-NOTES item 3).
+
+pub mod builder;
+pub mod dot;
+pub mod structures;
+pub mod verify;
+
+use crate::db::{Db, SourceFile};
+use crate::scope::{self, DefKind, Scope};
+use builder::{Builder, Iface};
+use mcl_net::{ActionRef, CallBinding, Net, NetError, Provenance, SourceSpan, TransitionKind};
+use mcl_syntax::ast::*;
+use rustc_hash::FxHashMap;
+use structures::Structure;
+
+/// The places of the external interface of the compiled mission.
+pub const MISSION_BEGIN: &str = "mission.begin";
+pub const MISSION_ABORT: &str = "mission.abort";
+pub const MISSION_OK: &str = "mission.ok";
+pub const MISSION_FAIL: &str = "mission.fail";
+
+/// Why a mission could not be compiled (the checker reports the details).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum CompileError {
+    /// The program has errors; run `mcl check`.
+    HasErrors,
+    /// A pattern is read from a PNML file that could not be loaded.
+    Pattern(String),
+    /// The generated net is inconsistent (a compiler bug).
+    Net(String),
+}
+
+impl std::fmt::Display for CompileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CompileError::HasErrors => write!(f, "the program has errors"),
+            CompileError::Pattern(m) => write!(f, "{m}"),
+            CompileError::Net(m) => write!(f, "internal error while building the net: {m}"),
+        }
+    }
+}
+
+impl From<NetError> for CompileError {
+    fn from(e: NetError) -> Self {
+        CompileError::Net(e.to_string())
+    }
+}
+
+/// Compiles one mission of the program rooted at `root` into a net.
+/// The program must be free of errors.
+pub fn compile_mission(
+    db: &dyn Db,
+    root: SourceFile,
+    mission: &Mission,
+    mission_file: SourceFile,
+) -> Result<Net, CompileError> {
+    let name = mission
+        .name
+        .as_ref()
+        .map(|n| n.text.clone())
+        .unwrap_or_else(|| "mission".to_string());
+    let mut cx = Composer {
+        db,
+        scope: scope::scope(db, root),
+        b: Builder::new(&name),
+        file: mission_file,
+        tasks: FxHashMap::default(),
+        calls: 0,
+        error: None,
+    };
+    cx.b.net.name(&name);
+    for p in &mission.params {
+        cx.b.net.property("mission_param", &p.text);
+    }
+    cx.b.provenance = cx.prov("mission", "m", mission.span);
+    let ext = Iface {
+        begin: cx.b.net.add_place(
+            mcl_net::Place::new(MISSION_BEGIN)
+                .with_tokens(1)
+                .with_interface(1)
+                .with_provenance(cx.b.provenance.clone()),
+        ),
+        abort: cx.b.net.add_place(
+            mcl_net::Place::new(MISSION_ABORT)
+                .with_interface(1)
+                .with_provenance(cx.b.provenance.clone()),
+        ),
+        ok: cx.b.net.add_place(
+            mcl_net::Place::new(MISSION_OK)
+                .with_interface(1)
+                .with_provenance(cx.b.provenance.clone()),
+        ),
+        fail: cx.b.net.add_place(
+            mcl_net::Place::new(MISSION_FAIL)
+                .with_interface(1)
+                .with_provenance(cx.b.provenance.clone()),
+        ),
+    };
+    cx.block(&mission.body, ext, "m");
+    if let Some(e) = cx.error {
+        return Err(e);
+    }
+    Ok(cx.b.net.build()?)
+}
+
+struct TaskNet {
+    iface: Iface,
+    lock: mcl_net::PlaceId,
+    params: Vec<String>,
+}
+
+struct Composer<'a> {
+    db: &'a dyn Db,
+    scope: &'a Scope,
+    b: Builder,
+    file: SourceFile,
+    tasks: FxHashMap<String, TaskNet>,
+    calls: u32,
+    error: Option<CompileError>,
+}
+
+impl Composer<'_> {
+    fn prov(&self, structure: &str, path: &str, span: mcl_syntax::Span) -> Provenance {
+        Provenance {
+            task: None,
+            call_site: None,
+            structure: Some(structure.to_string()),
+            path: Some(path.to_string()),
+            span: Some(SourceSpan {
+                file: self.file.path(self.db).display().to_string(),
+                start: span.start,
+                end: span.end,
+            }),
+        }
+    }
+
+    fn block(&mut self, block: &Block, ext: Iface, path: &str) {
+        match block.stmts.as_slice() {
+            [single] => self.stmt(single, ext, path),
+            stmts => {
+                self.b.provenance = self.prov("sequence", path, block.span);
+                let kids =
+                    structures::build(&mut self.b, &Structure::Sequence(stmts.len()), ext, path);
+                for (i, (s, k)) in stmts.iter().zip(kids).enumerate() {
+                    self.stmt(s, k, &format!("{path}.{i}"));
+                }
+            }
+        }
+    }
+
+    fn structure(
+        &mut self,
+        s: Structure,
+        span: mcl_syntax::Span,
+        ext: Iface,
+        path: &str,
+        children: &[&Block],
+    ) {
+        self.b.provenance = self.prov(s.name(), path, span);
+        let kids = structures::build(&mut self.b, &s, ext, path);
+        for (i, (blk, k)) in children.iter().zip(kids).enumerate() {
+            self.block(blk, k, &format!("{path}.{i}"));
+        }
+    }
+
+    fn stmt(&mut self, s: &Stmt, ext: Iface, path: &str) {
+        match &s.kind {
+            StmtKind::Call(c) => self.call(c, ext, path),
+            StmtKind::While { cond, body, .. } => {
+                self.structure(Structure::While, s.span, ext, path, &[cond, body])
+            }
+            StmtKind::If {
+                cond,
+                then,
+                otherwise: None,
+                ..
+            } => self.structure(Structure::IfThen, s.span, ext, path, &[cond, then]),
+            StmtKind::If {
+                cond,
+                then,
+                otherwise: Some(o),
+                ..
+            } => self.structure(Structure::IfThenElse, s.span, ext, path, &[cond, then, o]),
+            StmtKind::Try { body, catch, .. } => {
+                self.structure(Structure::TryCatch, s.span, ext, path, &[body, catch])
+            }
+            StmtKind::Not { body, .. } => {
+                self.structure(Structure::Not, s.span, ext, path, &[body])
+            }
+            StmtKind::Parallel { branches, ops, .. } => {
+                let n = branches.len();
+                let st = if ops.iter().all(|(o, _)| *o == ParallelOp::And) {
+                    Structure::ParallelAnd(n)
+                } else {
+                    Structure::ParallelOr(n)
+                };
+                let children: Vec<&Block> = branches.iter().collect();
+                self.structure(st, s.span, ext, path, &children)
+            }
+            StmtKind::Monitor { body, handlers, .. } => {
+                let kinds = handlers.iter().map(|h| h.kind).collect();
+                let mut children = vec![body];
+                for h in handlers {
+                    children.push(&h.condition);
+                    children.push(&h.action);
+                }
+                self.structure(Structure::Monitor(kinds), s.span, ext, path, &children)
+            }
+            StmtKind::Error => self.error = Some(CompileError::HasErrors),
+        }
+    }
+
+    /// The adapter of one call site (see the module documentation).
+    fn call(&mut self, c: &Call, ext: Iface, path: &str) {
+        let Some(task) = self.task_net(&c.name.text) else {
+            self.error.get_or_insert(CompileError::HasErrors);
+            return;
+        };
+        let (tiface, lock, params) = (task.iface, task.lock, task.params.clone());
+        self.calls += 1;
+        let id = self.calls;
+        let mut prov = self.prov("call", path, c.span);
+        prov.task = Some(c.name.text.clone());
+        prov.call_site = Some(id);
+        self.b.provenance = prov;
+        let p = format!("call{id}");
+        let run = self.b.place(&format!("{p}.run"), 0);
+        let stopping = self.b.place(&format!("{p}.stopping"), 0);
+        let start = self.b.imm(
+            &format!("{p}.start"),
+            &[ext.begin, lock],
+            &[run, tiface.begin],
+        );
+        let args: Vec<(String, String)> = params
+            .iter()
+            .cloned()
+            .zip(c.args.iter().map(value_json))
+            .collect();
+        let label = c.label.as_ref().map(|l| l.text.clone());
+        if let Some(t) = self.b.net.transition_mut(start) {
+            t.binding = Some(CallBinding {
+                task: c.name.text.clone(),
+                call_site: id,
+                label,
+                args,
+            });
+        }
+        self.b
+            .imm(&format!("{p}.ok"), &[run, tiface.ok], &[ext.ok, lock]);
+        self.b
+            .imm(&format!("{p}.fail"), &[run, tiface.fail], &[ext.fail, lock]);
+        self.b
+            .imm(&format!("{p}.cancel"), &[ext.abort, ext.begin], &[]);
+        self.b.imm(
+            &format!("{p}.abort"),
+            &[ext.abort, run],
+            &[tiface.abort, stopping],
+        );
+        self.b
+            .deferred(&format!("{p}.release"), &[stopping], &[lock]);
+    }
+
+    /// The net of a task, created on first use.
+    fn task_net(&mut self, name: &str) -> Option<&TaskNet> {
+        if !self.tasks.contains_key(name) {
+            let net = self.instantiate_task(name)?;
+            self.tasks.insert(name.to_string(), net);
+        }
+        self.tasks.get(name)
+    }
+
+    fn instantiate_task(&mut self, name: &str) -> Option<TaskNet> {
+        let (iface, params) = match add_task_net(
+            self.db,
+            self.scope,
+            &mut self.b,
+            name,
+            &format!("task.{name}."),
+        ) {
+            Ok(x) => x?,
+            Err(e) => {
+                self.error = Some(e);
+                return None;
+            }
+        };
+        self.b.provenance = Provenance {
+            task: Some(name.to_string()),
+            ..Default::default()
+        };
+        let lock = self.b.place(&format!("task.{name}.idle"), 1);
+        Some(TaskNet {
+            iface,
+            lock,
+            params,
+        })
+    }
+}
+
+/// Adds the net of task `name` (its pattern with its actions, events and
+/// delays) with node ids `prefix + pattern name`. Returns its interface and
+/// its parameters.
+#[allow(clippy::type_complexity)]
+pub fn add_task_net(
+    db: &dyn Db,
+    scope: &Scope,
+    b: &mut Builder,
+    name: &str,
+    prefix: &str,
+) -> Result<Option<(Iface, Vec<String>)>, CompileError> {
+    {
+        let tid = match scope.first(DefKind::Task, name) {
+            Some(t) => t,
+            None => return Ok(None),
+        };
+        let Some(task) = scope::task(db, tid) else {
+            return Ok(None);
+        };
+        let Some(pid) = task
+            .pattern
+            .as_ref()
+            .and_then(|p| scope.first(DefKind::Pattern, &p.text))
+        else {
+            return Ok(None);
+        };
+        let Some(pattern) = scope::pattern(db, pid) else {
+            return Ok(None);
+        };
+        let PatternBody::Net(net) = &pattern.body else {
+            return Err(CompileError::Pattern(format!(
+                "pattern `{}` is read from a PNML file, which this compiler cannot load yet",
+                pattern.name.text
+            )));
+        };
+        let file_path = tid.file.path(db).display().to_string();
+        let prov = |span: mcl_syntax::Span| Provenance {
+            task: Some(name.to_string()),
+            call_site: None,
+            structure: None,
+            path: None,
+            span: Some(SourceSpan {
+                file: file_path.clone(),
+                start: span.start,
+                end: span.end,
+            }),
+        };
+
+        let mut places = FxHashMap::default();
+        for pl in &net.places {
+            b.provenance = prov(pl.span);
+            let iface = pl.interface.as_ref().and_then(Number::as_u32).unwrap_or(0);
+            let tokens = pl.tokens.as_ref().and_then(Number::as_u32).unwrap_or(0);
+            let id = b.net.add_place(
+                mcl_net::Place::new(format!("{prefix}{}", pl.name.text))
+                    .with_tokens(tokens)
+                    .with_interface(iface)
+                    .with_provenance(b.provenance.clone()),
+            );
+            places.insert(pl.name.text.as_str(), id);
+        }
+        let (Some(&begin), Some(&abort), Some(&ok), Some(&fail)) = (
+            places.get("begin"),
+            places.get("abort"),
+            places.get("ok"),
+            places.get("fail"),
+        ) else {
+            return Ok(None);
+        };
+        let iface = Iface {
+            begin,
+            abort,
+            ok,
+            fail,
+        };
+        // Bindings of this task: events and actions per transition.
+        let mut events: FxHashMap<&str, &str> = FxHashMap::default();
+        let mut actions: FxHashMap<&str, Vec<ActionRef>> = FxHashMap::default();
+        for bd in &task.bindings {
+            for tr in &bd.transitions {
+                match bd.kind {
+                    BindingKind::Event => {
+                        events.insert(&tr.text, &bd.target.text);
+                    }
+                    BindingKind::Action => {
+                        if let Some(a) = scope
+                            .first(DefKind::Action, &bd.target.text)
+                            .and_then(|id| scope::action(db, id))
+                        {
+                            actions.entry(&tr.text).or_default().push(action_ref(a));
+                        }
+                    }
+                }
+            }
+        }
+        let mut transitions = FxHashMap::default();
+        for t in &net.transitions {
+            b.provenance = prov(t.span);
+            let kind = match (events.get(t.name.text.as_str()), &t.delay) {
+                (Some(e), _) => TransitionKind::Event(e.to_string()),
+                (None, Some(Delay::Fixed(n))) => {
+                    TransitionKind::Timed(mcl_net::Delay::Fixed(n.value()))
+                }
+                (None, Some(Delay::Param(p))) => {
+                    TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone()))
+                }
+                (None, None) => TransitionKind::Immediate,
+            };
+            let tid = b.transition(&format!("{prefix}{}", t.name.text), kind, &[], &[]);
+            if let Some(tr) = b.net.transition_mut(tid) {
+                tr.actions = actions.remove(t.name.text.as_str()).unwrap_or_default();
+            }
+            transitions.insert(t.name.text.as_str(), tid);
+        }
+        for arc in &net.arcs {
+            let w = arc
+                .weight
+                .as_ref()
+                .and_then(Number::as_u32)
+                .unwrap_or(1)
+                .max(1);
+            let (s, d) = (arc.source.name.text.as_str(), arc.target.name.text.as_str());
+            match (
+                places.get(s),
+                transitions.get(d),
+                transitions.get(s),
+                places.get(d),
+            ) {
+                (Some(&p), Some(&t), _, _) => {
+                    b.net.add_input(p, t, w);
+                }
+                (_, _, Some(&t), Some(&p)) => {
+                    b.net.add_output(t, p, w);
+                }
+                _ => return Err(CompileError::HasErrors),
+            }
+        }
+        let params = task.params.iter().map(|p| p.text.clone()).collect();
+        Ok(Some((iface, params)))
+    }
+}
+
+fn action_ref(a: &ActionDef) -> ActionRef {
+    ActionRef {
+        action: a.name.text.clone(),
+        primitive: a.primitive.text.clone(),
+        command: a
+            .command
+            .as_ref()
+            .map(|c| c.text.clone())
+            .unwrap_or_default(),
+        params: a
+            .params
+            .iter()
+            .enumerate()
+            .map(|(i, v)| match &v.kind {
+                // A task parameter: resolved from the call's binding when the action is sent.
+                ValueKind::Ident(n) => (
+                    n.text.clone(),
+                    serde_json::json!({ "param": n.text }).to_string(),
+                ),
+                _ => (format!("v{i}"), value_json(v)),
+            })
+            .collect(),
+    }
+}
+
+/// A call argument or constant as JSON text: numbers, strings, lists; an
+/// identifier is a symbol given to the vehicle as a string, except the
+/// parameters of a parametrised mission, which stay references (`{"param": x}`)
+/// until the mission is instantiated.
+pub fn value_json(v: &Value) -> String {
+    fn go(v: &Value) -> serde_json::Value {
+        match &v.kind {
+            ValueKind::Number(n) => {
+                serde_json::from_str(&n.text).unwrap_or(serde_json::Value::Null)
+            }
+            ValueKind::Str(s) => serde_json::Value::String(s.clone()),
+            ValueKind::Ident(n) => serde_json::Value::String(n.text.clone()),
+            ValueKind::List { items, .. } => {
+                serde_json::Value::Array(items.iter().map(go).collect())
+            }
+            ValueKind::Error => serde_json::Value::Null,
+        }
+    }
+    go(v).to_string()
+}
+
+/// A compiled mission.
+pub struct CompiledMission {
+    /// The mission's name (`mission` for an anonymous one).
+    pub name: String,
+    pub net: Net,
+}
+
+/// Compiles every mission defined in `file` (not those of imported files),
+/// in source order. Fails if the program has errors.
+pub fn compile_file(db: &dyn Db, file: SourceFile) -> Result<Vec<CompiledMission>, CompileError> {
+    if crate::check::has_errors(crate::check::check_file(db, file)) {
+        return Err(CompileError::HasErrors);
+    }
+    let mut out = Vec::new();
+    for item in &crate::queries::parse(db, file).file.items {
+        if let Item::Mission(m) = item {
+            let net = compile_mission(db, file, m, file)?;
+            out.push(CompiledMission {
+                name: net.name().to_string(),
+                net,
+            });
+        }
+    }
+    Ok(out)
+}

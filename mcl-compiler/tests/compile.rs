@@ -1,0 +1,213 @@
+//! The seed's example missions compile to nets whose whole state space, with
+//! every task free to end ok, fail or never, is 1-safe, reaches only valid
+//! final markings and leaves every task at rest.
+
+use mcl_compiler::compile::{compile_file, verify};
+use mcl_compiler::{Database, Db};
+use std::path::PathBuf;
+
+fn examples() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples")
+}
+
+fn verify_example(name: &str) -> Vec<(String, usize)> {
+    let db = Database::new();
+    let file = db.file(&examples().join(name));
+    let missions = compile_file(&db, file).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert!(!missions.is_empty(), "{name} has no mission");
+    missions
+        .into_iter()
+        .map(|m| {
+            let h = verify::mission_harness(m.net).expect("mission interface");
+            let v = h.verify(3_000_000);
+            assert!(v.ok(), "{name} / {}: {:#?}", m.name, v.violations);
+            (m.name, v.states)
+        })
+        .collect()
+}
+
+#[test]
+fn extract_5_4_verifies() {
+    verify_example("extract-5-4.mcl");
+}
+
+#[test]
+fn survey_verifies() {
+    verify_example("survey.mcl");
+}
+
+#[test]
+fn dam_inspection_verifies() {
+    verify_example("dam-inspection.mcl");
+}
+
+#[test]
+fn cable_tracking_verifies() {
+    verify_example("cable-tracking.mcl");
+}
+
+#[test]
+fn mission_operators_verify() {
+    verify_example("mission-operators.mcl");
+}
+
+#[test]
+fn appendix_c_verifies() {
+    verify_example("appendix-c.mcl");
+}
+
+#[test]
+#[ignore = "prints state counts"]
+fn print_state_counts() {
+    for f in [
+        "extract-5-4.mcl",
+        "survey.mcl",
+        "dam-inspection.mcl",
+        "cable-tracking.mcl",
+        "mission-operators.mcl",
+        "appendix-c.mcl",
+    ] {
+        let t = std::time::Instant::now();
+        let r = verify_example(f);
+        println!("{f}: {r:?} in {:?}", t.elapsed());
+    }
+}
+
+/// Runs a net with the MCL rule: immediate transitions to quiescence, then
+/// deferred (zero-delay) ones, then the next scripted event. Returns the
+/// actions sent, with task parameters resolved from the current call.
+fn run(
+    net: &mcl_net::Net,
+    seed: u64,
+    mut events: impl FnMut(&[String]) -> Option<String>,
+) -> (Vec<String>, String) {
+    use mcl_net::{Delay, Executor, TransitionKind};
+    use std::collections::HashMap;
+    let mut ex = Executor::new(net, seed);
+    let mut sent: Vec<String> = Vec::new();
+    let mut args: HashMap<String, Vec<(String, String)>> = HashMap::new();
+    let mut log = |t: mcl_net::TransitionId, sent: &mut Vec<String>| {
+        let tr = net.transition(t).unwrap();
+        if let Some(b) = &tr.binding {
+            args.insert(b.task.clone(), b.args.clone());
+        }
+        let task = tr.provenance.task.clone().unwrap_or_default();
+        for a in &tr.actions {
+            let params: Vec<String> = a
+                .params
+                .iter()
+                .map(|(name, v)| {
+                    if v.contains("\"param\"") {
+                        args[&task]
+                            .iter()
+                            .find(|(p, _)| p == name)
+                            .unwrap()
+                            .1
+                            .clone()
+                    } else {
+                        v.clone()
+                    }
+                })
+                .collect();
+            sent.push(format!("{}({})", a.action, params.join(",")));
+        }
+    };
+    for _ in 0..1000 {
+        for t in ex.settle(10_000).unwrap() {
+            log(t, &mut sent);
+        }
+        let deferred = ex.ready().into_iter().find(|&t| matches!(&net.transition(t).unwrap().kind, TransitionKind::Timed(Delay::Fixed(d)) if *d == 0.0));
+        if let Some(t) = deferred {
+            ex.fire_timed(t).unwrap();
+            log(t, &mut sent);
+            continue;
+        }
+        let Some(e) = events(&sent) else { break };
+        if let Some(t) = ex.fire_event(&e).unwrap() {
+            log(t, &mut sent);
+        }
+    }
+    let m = ex.marking();
+    let ok = m.get(net.place_by_id("mission.ok").unwrap()) == 1;
+    let fail = m.get(net.place_by_id("mission.fail").unwrap()) == 1;
+    (
+        sent,
+        if ok {
+            "ok".into()
+        } else if fail {
+            "fail".into()
+        } else {
+            "stuck".into()
+        },
+    )
+}
+
+/// SEED-NOTES item 3: two call sites of one task active at once each get
+/// their own parameters and their own outcome, one failing while the other
+/// succeeds.
+#[test]
+fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
+    let mut db = Database::new();
+    let dir = std::path::Path::new("/virtual/calls");
+    db.set_text(&dir.join("v.mcl"), r#"
+        actions { enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
+                  enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable ); }
+        events { aOk; aFail; bOk; bFail; }
+        tasks { A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
+                B(): AchieveOneGoal { a: enableB -> T0; a: disableB -> T1, T6, T7; e: bOk -> T2; e: bFail -> T3; } }
+    "#);
+    let f = db.set_text(
+        &dir.join("m.mcl"),
+        "import \"v.mcl\";\nmission { parallel { try { A( 1 ) } catch { B() } } and { A( 2 ) } }\n",
+    );
+    let net = compile_file(&db, f).unwrap().remove(0).net;
+    let mut seen = std::collections::HashSet::new();
+    for seed in 0..40 {
+        // The first A to run fails, the second succeeds, B succeeds.
+        let mut a_events = vec!["aOk", "aFail"];
+        let mut seen_actions = 0;
+        let mut pending = std::collections::VecDeque::new();
+        let (sent, result) = run(&net, seed, |sent| {
+            for s in &sent[seen_actions..] {
+                if s.starts_with("enableA") {
+                    pending.extend(a_events.pop().map(String::from));
+                } else if s.starts_with("enableB") {
+                    pending.push_back("bOk".to_string());
+                }
+            }
+            seen_actions = sent.len();
+            pending.pop_front()
+        });
+        let first = sent
+            .iter()
+            .find(|s| s.starts_with("enableA"))
+            .unwrap()
+            .clone();
+        let enables: Vec<&String> = sent.iter().filter(|s| s.starts_with("enable")).collect();
+        if first == "enableA(1)" {
+            // A(1) failed: its catch ran B; A(2) then ran with its own parameter and succeeded.
+            assert_eq!(enables[0], "enableA(1)");
+            assert!(enables.iter().any(|e| *e == "enableB()"), "{sent:?}");
+            assert!(enables.iter().any(|e| *e == "enableA(2)"), "{sent:?}");
+            assert_eq!(result, "ok", "{sent:?}");
+        } else {
+            // A(2) failed: no catch for it, A(1) succeeded, the parallel-and fails.
+            assert_eq!(first, "enableA(2)");
+            assert!(!enables.iter().any(|e| *e == "enableB()"), "{sent:?}");
+            assert!(enables.iter().any(|e| *e == "enableA(1)"), "{sent:?}");
+            assert_eq!(result, "fail", "{sent:?}");
+        }
+        // Never two enables of A without a disable in between (the task is not replicated).
+        let mut running = false;
+        for s in &sent {
+            if s.starts_with("enableA") {
+                assert!(!running, "{sent:?}");
+                running = true;
+            } else if s.starts_with("disableA") {
+                running = false;
+            }
+        }
+        seen.insert(first);
+    }
+    assert_eq!(seen.len(), 2, "both orders are exercised over the seeds");
+}

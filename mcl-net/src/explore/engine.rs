@@ -1,0 +1,648 @@
+//! The breadth-first exploration engine.
+//!
+//! * **Packed markings.** Every place gets a bit field of `b` bits, `b` in
+//!   {1, 2, 4, 8, 16, 32} (a power of two so that no field straddles two
+//!   64-bit words). Exploration starts with the smallest `b` that holds the
+//!   initial marking and restarts with `2b` if a place overflows; 1-safe nets
+//!   thus use one bit per place.
+//! * **Flat arena.** States are appended to one `Vec<u64>` in discovery order,
+//!   which is also the BFS queue; `parent`/`via` give shortest paths.
+//! * **Incremental hash.** `h(m) = Σ m(p)·R(p) mod 2^64` with random odd
+//!   `R(p)`, so a successor's hash is `h(m) + D(t)` with `D(t)` precomputed.
+//! * **Inline table.** Open addressing, linear probing; a slot holds the
+//!   packed marking and a word with 32 hash bits and the state index, so a
+//!   lookup touches one or two adjacent cache lines.
+//! * **Batches.** Successors of several states are generated first, then the
+//!   table slots they hash to are read in a tight loop of independent loads
+//!   (their cache and TLB misses overlap), and only then looked up in order.
+//! * **Trigger places.** A transition is only tested when one designated input
+//!   place is marked; unmarked parts of the net cost nothing.
+
+use super::{Options, Semantics, StateSpace, StopReason};
+use crate::model::{Net, TransitionId};
+use crate::semantics::{self, MarkingClass};
+
+pub(super) const NO_PARENT: u32 = u32::MAX;
+
+/// Successors gathered before probing the table.
+pub(super) const BATCH: usize = 512;
+
+/// How markings are packed.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Layout {
+    pub places: usize,
+    pub bits: u32,
+    pub words: usize,
+    per_word: usize,
+    mask: u64,
+}
+
+impl Layout {
+    fn new(places: usize, bits: u32) -> Self {
+        let per_word = (64 / bits) as usize;
+        Layout {
+            places,
+            bits,
+            words: places.div_ceil(per_word).max(1),
+            per_word,
+            mask: (1u64 << bits) - 1,
+        }
+    }
+
+    #[inline]
+    fn locate(&self, p: usize) -> (usize, u32) {
+        (p / self.per_word, (p % self.per_word) as u32 * self.bits)
+    }
+
+    /// Tokens of place `p` in a packed state.
+    #[inline]
+    pub fn get(&self, state: &[u64], p: usize) -> u32 {
+        let (w, s) = self.locate(p);
+        state.get(w).map_or(0, |x| ((x >> s) & self.mask) as u32)
+    }
+
+    fn pack(&self, m: &[u32]) -> Vec<u64> {
+        let mut v = vec![0u64; self.words];
+        for (p, &x) in m.iter().enumerate() {
+            let (w, s) = self.locate(p);
+            v[w] |= u64::from(x) << s;
+        }
+        v
+    }
+}
+
+/// Ranges of one transition's entries in the lists of [`Compiled`].
+#[derive(Clone, Copy, Debug, Default)]
+struct TransInfo {
+    pre: (u32, u32),
+    pre_mask: (u32, u32),
+    grow: (u32, u32),
+    wdelta: (u32, u32),
+    /// Some input weight exceeds the field maximum: never enabled.
+    never: bool,
+}
+
+#[inline]
+fn range(r: (u32, u32)) -> std::ops::Range<usize> {
+    r.0 as usize..r.1 as usize
+}
+
+/// Net data for one layout, arranged for the inner loop.
+pub(super) struct Compiled {
+    pub(super) layout: Layout,
+    /// Where the lists of each transition are, in one record per transition.
+    trans: Vec<TransInfo>,
+    /// (word, shift, weight) of each input place.
+    pre: Vec<(u32, u32, u64)>,
+    /// With one bit per place: (word, bits that must all be set).
+    pre_mask: Vec<(u32, u64)>,
+    /// (word, shift, increase, place) of each place a transition adds to, to
+    /// detect overflow and track bounds.
+    grow: Vec<(u32, u32, u64, u32)>,
+    /// (word, value added modulo 2^64): as no field leaves its range, one
+    /// wrapping add per word updates all its fields.
+    wdelta: Vec<(u32, u64)>,
+    /// Transitions to test when place p is marked: `trig[trig_off[p]..]`.
+    trig_off: Vec<u32>,
+    trig: Vec<u32>,
+    /// Transitions without input places (always enabled).
+    sources: Vec<u32>,
+    /// Hash change of each transition.
+    pub(super) dhash: Vec<u64>,
+    pub(super) initial_hash: u64,
+    pub(super) initial: Vec<u64>,
+    /// Whether the MCL rule can remove enabled transitions.
+    mcl_rule: bool,
+    pub(super) semantics: Semantics,
+}
+
+fn splitmix(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// MurmurHash3 finalizer: spreads the linear hash over all bits.
+#[inline]
+pub(super) fn mix(h: u64) -> u64 {
+    let mut h = h;
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xC4CE_B9FE_1A85_EC53);
+    h ^ (h >> 33)
+}
+
+impl Compiled {
+    fn new(net: &Net, semantics: Semantics, bits: u32) -> Self {
+        let np = net.place_count();
+        let layout = Layout::new(np, bits);
+        let mut seed = 0x6D63_6C2D_6E65_7421u64;
+        let coef: Vec<u64> = (0..np).map(|_| splitmix(&mut seed) | 1).collect();
+        let loc = |p: usize| {
+            let (w, s) = layout.locate(p);
+            (w as u32, s)
+        };
+        let mut trans = Vec::with_capacity(net.transition_count());
+        let mut pre = Vec::new();
+        let mut pre_mask: Vec<(u32, u64)> = Vec::new();
+        let mut grow = Vec::new();
+        let mut wdelta: Vec<(u32, u64)> = Vec::new();
+        let mut dhash = Vec::new();
+        let mut trig_rows: Vec<Vec<u32>> = vec![Vec::new(); np];
+        let mut sources = Vec::new();
+        for t in net.transition_ids() {
+            let row = net.pre(t);
+            let mut info = TransInfo {
+                pre: (pre.len() as u32, 0),
+                pre_mask: (pre_mask.len() as u32, 0),
+                grow: (grow.len() as u32, 0),
+                wdelta: (wdelta.len() as u32, 0),
+                // A weight above the field maximum can never be met.
+                never: row.iter().any(|&(_, w)| u64::from(w) > layout.mask),
+            };
+            let start = pre_mask.len();
+            for &(p, w) in row {
+                let (wi, s) = loc(p.index());
+                pre.push((wi, s, u64::from(w)));
+                match pre_mask[start..].iter_mut().find(|(x, _)| *x == wi) {
+                    Some(e) => e.1 |= 1 << s,
+                    None => pre_mask.push((wi, 1 << s)),
+                }
+            }
+            let mut dh = 0u64;
+            let start = wdelta.len();
+            for &(p, d) in net.delta(t) {
+                let (wi, s) = loc(p.index());
+                if d > 0 {
+                    grow.push((wi, s, d as u64, p.0));
+                }
+                let add = (d as u64).wrapping_shl(s);
+                match wdelta[start..].iter_mut().find(|(x, _)| *x == wi) {
+                    Some(e) => e.1 = e.1.wrapping_add(add),
+                    None => wdelta.push((wi, add)),
+                }
+                dh = dh.wrapping_add((d as u64).wrapping_mul(coef[p.index()]));
+            }
+            info.pre.1 = pre.len() as u32;
+            info.pre_mask.1 = pre_mask.len() as u32;
+            info.grow.1 = grow.len() as u32;
+            info.wdelta.1 = wdelta.len() as u32;
+            trans.push(info);
+            dhash.push(dh);
+            // Trigger: the input place with the largest weight (least often sufficient).
+            match row.iter().max_by_key(|&&(p, w)| (w, std::cmp::Reverse(p))) {
+                Some(&(p, _)) => trig_rows[p.index()].push(t.0),
+                None => sources.push(t.0),
+            }
+        }
+        let mut trig_off = vec![0u32];
+        let mut trig = Vec::new();
+        for r in trig_rows {
+            trig.extend(r);
+            trig_off.push(trig.len() as u32);
+        }
+        let initial_marking: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+        let initial_hash = initial_marking.iter().zip(&coef).fold(0u64, |h, (&x, &c)| {
+            h.wrapping_add(u64::from(x).wrapping_mul(c))
+        });
+        Compiled {
+            layout,
+            trans,
+            pre,
+            pre_mask,
+            grow,
+            wdelta,
+            trig_off,
+            trig,
+            sources,
+            dhash,
+            initial_hash,
+            initial: layout.pack(&initial_marking),
+            // With only immediate, unprioritized transitions the MCL rule keeps
+            // every enabled transition: skip it.
+            mcl_rule: semantics == Semantics::Mcl
+                && net
+                    .transitions()
+                    .iter()
+                    .any(|t| !t.kind.is_immediate() || t.priority.is_some()),
+            semantics,
+        }
+    }
+}
+
+/// Place bounds and the largest token total, gathered while exploring.
+///
+/// Bounds only grow where a transition adds tokens, so they are raised in
+/// [`Compiled::successor`]; totals are summed with SWAR arithmetic when a
+/// state is expanded.
+#[derive(Clone, Debug)]
+pub(super) struct Stats {
+    pub bounds: Vec<u32>,
+    pub max_total: u64,
+}
+
+impl Stats {
+    pub fn new(net: &Net) -> Self {
+        Stats {
+            bounds: net.places().iter().map(|p| p.initial).collect(),
+            max_total: 0,
+        }
+    }
+
+    /// Accounts for the token total of a packed state.
+    #[inline]
+    pub fn observe(&mut self, l: &Layout, state: &[u64]) {
+        let total: u64 = state.iter().map(|&x| field_sum(x, l.bits)).sum();
+        self.max_total = self.max_total.max(total);
+    }
+
+    pub fn merge(&mut self, other: &Stats) {
+        for (a, &b) in self.bounds.iter_mut().zip(&other.bounds) {
+            *a = (*a).max(b);
+        }
+        self.max_total = self.max_total.max(other.max_total);
+    }
+}
+
+/// Sum of the `bits`-wide fields of `x`, by folding neighbouring fields into
+/// fields twice as wide (no carry can cross a field).
+#[inline]
+fn field_sum(x: u64, bits: u32) -> u64 {
+    const MASKS: [u64; 6] = [
+        0x5555_5555_5555_5555,
+        0x3333_3333_3333_3333,
+        0x0F0F_0F0F_0F0F_0F0F,
+        0x00FF_00FF_00FF_00FF,
+        0x0000_FFFF_0000_FFFF,
+        0x0000_0000_FFFF_FFFF,
+    ];
+    if bits == 1 {
+        return u64::from(x.count_ones());
+    }
+    let mut v = x;
+    let mut w = bits;
+    for (i, &m) in MASKS.iter().enumerate() {
+        if 1u32 << i == w {
+            v = (v & m) + ((v >> w) & m);
+            w *= 2;
+        }
+    }
+    v
+}
+
+/// A place would overflow its bit field.
+pub(super) enum Overflow {
+    /// Retry with wider fields.
+    Widen,
+    /// Fields are already 32 bits wide: stop exploring.
+    Stop,
+}
+
+impl Compiled {
+    /// Fills `ready` with the transitions that may fire in `cur` (all enabled
+    /// ones, filtered by the MCL rule under [`Semantics::Mcl`]); returns
+    /// whether the state is vanishing.
+    #[inline]
+    pub(super) fn ready_in(&self, net: &Net, cur: &[u64], ready: &mut Vec<TransitionId>) -> bool {
+        let l = &self.layout;
+        ready.clear();
+        ready.extend(self.sources.iter().map(|&t| TransitionId(t)));
+        for (wi, &word) in cur.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                let field = x.trailing_zeros() / l.bits;
+                x &= !(l.mask << (field * l.bits));
+                let p = wi * l.per_word + field as usize;
+                let (a, b) = (self.trig_off[p] as usize, self.trig_off[p + 1] as usize);
+                for &t in &self.trig[a..b] {
+                    if self.enabled(cur, t as usize) {
+                        ready.push(TransitionId(t));
+                    }
+                }
+            }
+        }
+        if self.mcl_rule {
+            semantics::select_ready(net, ready) == MarkingClass::Vanishing
+        } else {
+            // Only immediate transitions: every live marking is vanishing.
+            self.semantics == Semantics::Mcl && !ready.is_empty()
+        }
+    }
+
+    /// Turns `state` (a copy of the source state) into the successor by `t`.
+    /// Raises `bounds` to the new token counts of the places `t` adds to.
+    #[inline]
+    pub(super) fn successor(
+        &self,
+        state: &mut [u64],
+        t: usize,
+        bounds: &mut [u32],
+    ) -> Result<(), Overflow> {
+        let l = &self.layout;
+        let Some(info) = self.trans.get(t) else {
+            return Ok(());
+        };
+        for &(gw, sh, d, p) in &self.grow[range(info.grow)] {
+            let v = ((state[gw as usize] >> sh) & l.mask) + d;
+            if v > l.mask {
+                return Err(if l.bits == 32 {
+                    Overflow::Stop
+                } else {
+                    Overflow::Widen
+                });
+            }
+            if let Some(b) = bounds.get_mut(p as usize) {
+                *b = (*b).max(v as u32);
+            }
+        }
+        for &(dw, add) in &self.wdelta[range(info.wdelta)] {
+            let word = &mut state[dw as usize];
+            *word = word.wrapping_add(add);
+        }
+        Ok(())
+    }
+
+    /// Whether transition `t` is enabled in the packed state `cur`.
+    #[inline]
+    fn enabled(&self, cur: &[u64], t: usize) -> bool {
+        let l = &self.layout;
+        let Some(info) = self.trans.get(t) else {
+            return false;
+        };
+        if l.bits == 1 {
+            !info.never
+                && self.pre_mask[range(info.pre_mask)]
+                    .iter()
+                    .all(|&(w, m)| cur[w as usize] & m == m)
+        } else {
+            self.pre[range(info.pre)]
+                .iter()
+                .all(|&(w, sh, wt)| (cur[w as usize] >> sh) & l.mask >= wt)
+        }
+    }
+}
+
+/// Open-addressing hash set of packed markings, stored inline.
+///
+/// Slot `i` is `slots[i * stride..(i + 1) * stride]`: the marking's `words`
+/// words, then a meta word `(low 32 bits of the mixed hash) << 32 | (state
+/// index + 1)`, 0 when empty. The slot position is the low bits of the mixed
+/// hash, so growing needs nothing but the table (capacity ≤ 2^32).
+pub(super) struct Table {
+    slots: Vec<u64>,
+    stride: usize,
+    words: usize,
+    mask: usize,
+    pub(super) len: usize,
+}
+
+impl Table {
+    pub(super) fn new(words: usize) -> Self {
+        let cap = 1usize << 12;
+        Table {
+            slots: vec![0; cap * (words + 1)],
+            stride: words + 1,
+            words,
+            mask: cap - 1,
+            len: 0,
+        }
+    }
+
+    pub(super) fn capacity(&self) -> usize {
+        self.mask + 1
+    }
+
+    /// Doubles the capacity. Entries are placed by the hash bits kept in
+    /// their meta word and visited in slot order, so that the writes go to
+    /// two nearly sequential streams.
+    pub(super) fn grow(&mut self) {
+        let cap = self.capacity() * 2;
+        let mask = cap - 1;
+        let mut slots = vec![0u64; cap * self.stride];
+        for old in self.slots.chunks_exact(self.stride) {
+            let meta = old[self.words];
+            if meta == 0 {
+                continue;
+            }
+            let mut pos = (meta >> 32) as usize & mask;
+            while slots[pos * self.stride + self.words] != 0 {
+                pos = (pos + 1) & mask;
+            }
+            slots[pos * self.stride..(pos + 1) * self.stride].copy_from_slice(old);
+        }
+        self.slots = slots;
+        self.mask = mask;
+    }
+
+    /// Reads the first and the meta word of the home slot of `mixed`, to pull
+    /// them into the cache ahead of [`Table::find`] (a slot may straddle two
+    /// cache lines).
+    #[inline]
+    pub(super) fn touch(&self, mixed: u64) -> u64 {
+        let base = (mixed as usize & self.mask) * self.stride;
+        self.slots[base] ^ self.slots[base + self.words]
+    }
+
+    /// Finds `key`; returns `Ok(state index)` or `Err(free slot position)`.
+    #[inline]
+    pub(super) fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize> {
+        let tag = mixed << 32;
+        let mut pos = mixed as usize & self.mask;
+        loop {
+            let base = pos * self.stride;
+            let meta = self.slots[base + self.words];
+            if meta == 0 {
+                return Err(pos);
+            }
+            if meta & 0xFFFF_FFFF_0000_0000 == tag
+                && key
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &k)| self.slots[base + i] == k)
+            {
+                return Ok(meta as u32 - 1);
+            }
+            pos = (pos + 1) & self.mask;
+        }
+    }
+
+    #[inline]
+    pub(super) fn insert_at(&mut self, pos: usize, key: &[u64], mixed: u64, idx: u32) {
+        let slot = &mut self.slots[pos * self.stride..(pos + 1) * self.stride];
+        slot[..self.words].copy_from_slice(key);
+        slot[self.words] = (mixed << 32) | (u64::from(idx) + 1);
+        self.len += 1;
+    }
+}
+
+/// Smallest field width that holds `x` tokens.
+fn bits_for(x: u32) -> u32 {
+    [1, 2, 4, 8, 16, 32]
+        .into_iter()
+        .find(|&b| b == 32 || x < (1u32 << b))
+        .unwrap_or(32)
+}
+
+pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
+    let max = opts.max_states.clamp(1, (u32::MAX - 1) as usize);
+    let initial_max = net.places().iter().map(|p| p.initial).max().unwrap_or(0);
+    let mut bits = bits_for(initial_max);
+    loop {
+        let c = Compiled::new(net, opts.semantics, bits);
+        let result = match opts.threads {
+            1 => match c.layout.words {
+                1 => super::fixed::run::<1>(&c, net, max),
+                2 => super::fixed::run::<2>(&c, net, max),
+                3 => super::fixed::run::<3>(&c, net, max),
+                4 => super::fixed::run::<4>(&c, net, max),
+                5 => super::fixed::run::<5>(&c, net, max),
+                6 => super::fixed::run::<6>(&c, net, max),
+                7 => super::fixed::run::<7>(&c, net, max),
+                8 => super::fixed::run::<8>(&c, net, max),
+                _ => run(&c, net, max),
+            },
+            n => super::parallel::run(&c, net, max, if n == 0 { default_threads() } else { n }),
+        };
+        match result {
+            Some(ss) => return ss,
+            // A place overflowed its field: restart with wider fields.
+            None if bits < 32 => bits *= 2,
+            // 32-bit fields report overflow as a stop, never as `None`; should
+            // that change, answer with the initial marking rather than loop.
+            None => {
+                return StateSpace {
+                    semantics: c.semantics,
+                    layout: c.layout,
+                    arena: c.initial.clone(),
+                    parent: vec![NO_PARENT],
+                    via: vec![0],
+                    dead: Vec::new(),
+                    vanishing: Vec::new(),
+                    edges: 0,
+                    stop: Some(StopReason::TokenOverflow),
+                    bounds: net.places().iter().map(|p| p.initial).collect(),
+                    max_total: net.places().iter().map(|p| u64::from(p.initial)).sum(),
+                }
+            }
+        }
+    }
+}
+
+/// Worker threads when [`Options::threads`] is 0: the available cores, at most 8.
+fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().min(8))
+}
+
+/// Runs BFS; `None` means a place overflowed its bit field (retry wider).
+fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
+    let l = c.layout;
+    let w = l.words;
+    let mut arena: Vec<u64> = c.initial.clone();
+    let mut hashes: Vec<u64> = vec![c.initial_hash];
+    let mut parent: Vec<u32> = vec![NO_PARENT];
+    let mut via: Vec<u32> = vec![0];
+    let mut table = Table::new(w);
+    let m0 = mix(c.initial_hash);
+    if let Err(pos) = table.find(&c.initial, m0) {
+        table.insert_at(pos, &c.initial, m0, 0);
+    }
+    let mut stats = Stats::new(net);
+    let mut dead = Vec::new();
+    let mut vanishing: Vec<u64> = Vec::new();
+    let mut edges: u64 = 0;
+    let mut stop = None;
+
+    let mut cur: Vec<u64> = vec![0; w];
+    let mut enabled: Vec<TransitionId> = Vec::new();
+    let mut succs: Vec<u64> = Vec::with_capacity(BATCH * w);
+    // Per successor: (linear hash, mixed hash, source state, transition).
+    let mut meta: Vec<(u64, u64, u32, u32)> = Vec::with_capacity(BATCH);
+    let mut next = 0usize;
+
+    'bfs: while next < parent.len() {
+        // 1. Expand queued states until the batch is full.
+        succs.clear();
+        meta.clear();
+        while next < parent.len() && meta.len() < BATCH {
+            let s = next;
+            next += 1;
+            cur.copy_from_slice(&arena[s * w..(s + 1) * w]);
+            stats.observe(&l, &cur);
+            let h = hashes[s];
+
+            let is_vanishing = c.ready_in(net, &cur, &mut enabled);
+            if is_vanishing {
+                if vanishing.len() <= s / 64 {
+                    vanishing.resize(s / 64 + 1, 0);
+                }
+                vanishing[s / 64] |= 1u64 << (s % 64);
+            }
+            if enabled.is_empty() {
+                dead.push(s as u32);
+                continue;
+            }
+            edges += enabled.len() as u64;
+            for &t in &enabled {
+                let base = succs.len();
+                succs.extend_from_slice(&cur);
+                match c.successor(&mut succs[base..], t.index(), &mut stats.bounds) {
+                    Ok(()) => {}
+                    Err(Overflow::Widen) => return None,
+                    Err(Overflow::Stop) => {
+                        stop = Some(StopReason::TokenOverflow);
+                        break 'bfs;
+                    }
+                }
+                let h2 = h.wrapping_add(c.dhash[t.index()]);
+                meta.push((h2, mix(h2), s as u32, t.0));
+            }
+        }
+
+        // 2. Read the home slot of every successor: independent loads whose
+        //    misses overlap, so that step 3 finds them in cache.
+        while (table.len + meta.len()) * 4 > table.capacity() * 3 {
+            table.grow();
+        }
+        let mut sink = 0u64;
+        for m in &meta {
+            sink ^= table.touch(m.1);
+        }
+        std::hint::black_box(sink);
+
+        // 3. Look up and insert, in BFS order.
+        for (i, &(h2, mixed, s, t)) in meta.iter().enumerate() {
+            let key = &succs[i * w..(i + 1) * w];
+            let pos = match table.find(key, mixed) {
+                Ok(_) => continue,
+                Err(pos) => pos,
+            };
+            if parent.len() >= max_states {
+                stop = Some(StopReason::StateLimit);
+                break 'bfs;
+            }
+            let idx = parent.len() as u32;
+            table.insert_at(pos, key, mixed, idx);
+            arena.extend_from_slice(key);
+            hashes.push(h2);
+            parent.push(s);
+            via.push(t);
+        }
+    }
+
+    Some(StateSpace {
+        semantics: c.semantics,
+        layout: l,
+        arena,
+        parent,
+        via,
+        dead,
+        vanishing,
+        edges,
+        stop,
+        bounds: stats.bounds,
+        max_total: stats.max_total,
+    })
+}

@@ -1,0 +1,46 @@
+//! Petri nets for MCL: the net model shared by the compiler, the verifier and
+//! the on-board player.
+//!
+//! * [`model`]: [`Net`], its builder, MCL annotations and provenance;
+//! * [`pnml`]: PNML 2009 reading and writing, with MCL data in
+//!   `<toolspecific tool="mcl">`;
+//! * [`semantics`]: the one firing rule (immediate first, random choice) and an
+//!   incremental enabled-set tracker;
+//! * [`mod@explore`]: explicit-state reachability analysis;
+//! * [`structural`]: incidence matrix, invariants, siphons and traps.
+//!
+//! ```
+//! use mcl_net::{analyze, NetBuilder, Options, Place, Transition};
+//!
+//! let mut b = NetBuilder::new("ping");
+//! let idle = b.add_place(Place::new("idle").with_tokens(1));
+//! let busy = b.add_place(Place::new("busy"));
+//! let start = b.add_transition(Transition::new("start"));
+//! let stop = b.add_transition(Transition::new("stop"));
+//! b.add_input(idle, start, 1).add_output(start, busy, 1);
+//! b.add_input(busy, stop, 1).add_output(stop, idle, 1);
+//! let net = b.build().unwrap();
+//!
+//! let report = analyze(&net, &Options::plain());
+//! assert_eq!((report.states, report.edges, report.deadlock), (2, 2, false));
+//! let xml = mcl_net::write_pnml(&net).unwrap();
+//! assert_eq!(mcl_net::read_pnml(&xml).unwrap(), net);
+//! ```
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod explore;
+pub mod model;
+pub mod pnml;
+pub mod semantics;
+pub mod structural;
+mod xml;
+
+pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
+pub use model::{
+    ActionRef, Arc, CallBinding, Delay, Marking, Net, NetBuilder, NetError, NodeId, Place, PlaceId,
+    Provenance, SourceSpan, Transition, TransitionId, TransitionKind,
+};
+pub use pnml::{read_pnml, read_pnml_nets, write_pnml, PnmlError};
+pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};

@@ -1,0 +1,787 @@
+//! PNML 2009 P/T nets, read and written with quick-xml.
+//!
+//! Reading accepts `http://www.pnml.org/version-2009/grammar/ptnet` nets with
+//! one or more (possibly nested) pages, which are flattened. Names,
+//! `initialMarking` and arc `inscription` are read from their `<text>`;
+//! graphics and unknown labels are ignored, as are `<toolspecific>` blocks of
+//! other tools (e.g. `tool="nupn"`). Reference nodes (`referencePlace`,
+//! `referenceTransition`) are rejected.
+//!
+//! MCL data lives in `<toolspecific tool="mcl" version="1">` inside `net`,
+//! `place` and `transition`:
+//!
+//! ```xml
+//! <toolspecific tool="mcl" version="1">          <!-- in a net -->
+//!   <property key="mission" value="auv"/>
+//! </toolspecific>
+//! <toolspecific tool="mcl" version="1">          <!-- in a place -->
+//!   <interface id="1"/>
+//!   <provenance task="Goto" callSite="3" structure="sequence" path="0.1"
+//!               file="m.mcl" start="10" end="42"/>
+//! </toolspecific>
+//! <toolspecific tool="mcl" version="1">          <!-- in a transition -->
+//!   <kind type="event" event="ok"/>   <!-- or type="immediate", or
+//!        type="timed" delay="2.5" (seconds), or type="timed" param="timeout" -->
+//!   <priority value="2"/>
+//!   <action action="Goto" primitive="goto" command="enable">
+//!     <param name="x" value="24"/>
+//!   </action>
+//!   <binding task="Goto" callSite="3" label="first">   <!-- a call's start -->
+//!     <arg name="way-point" value="[24, 12]"/>
+//!   </binding>
+//!   <provenance task="Goto"/>
+//! </toolspecific>
+//! ```
+//!
+//! A net without MCL data has only immediate transitions. [`write_pnml`]
+//! followed by [`read_pnml`] gives back an equal [`Net`].
+
+use std::borrow::Cow;
+use std::collections::HashSet;
+use std::fmt;
+
+use quick_xml::events::attributes::Attribute;
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
+use quick_xml::name::QName;
+use quick_xml::Writer;
+
+use crate::model::{
+    ActionRef, Arc, CallBinding, Delay, Net, NetBuilder, NodeId, Place, Provenance, SourceSpan,
+    Transition, TransitionKind,
+};
+use crate::xml::{self, Element};
+
+/// The PNML 2009 P/T net type.
+pub const PTNET_TYPE: &str = "http://www.pnml.org/version-2009/grammar/ptnet";
+/// The PNML 2009 document namespace.
+pub const PNML_NAMESPACE: &str = "http://www.pnml.org/version-2009/grammar/pnml";
+/// `tool` attribute of MCL tool-specific blocks.
+pub const MCL_TOOL: &str = "mcl";
+/// `version` attribute of MCL tool-specific blocks written by this crate.
+pub const MCL_TOOL_VERSION: &str = "1";
+
+/// A PNML reading or writing error, with its location in the input.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PnmlError {
+    /// 1-based line, or 0 when the error has no location.
+    pub line: usize,
+    /// 1-based column in characters, or 0 when the error has no location.
+    pub column: usize,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl PnmlError {
+    pub(crate) fn at(input: &str, pos: usize, message: impl Into<String>) -> Self {
+        let (line, column) = xml::line_col(input, pos);
+        PnmlError {
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    fn nowhere(message: impl Into<String>) -> Self {
+        PnmlError {
+            line: 0,
+            column: 0,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for PnmlError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            write!(f, "{}", self.message)
+        } else {
+            write!(
+                f,
+                "line {}, column {}: {}",
+                self.line, self.column, self.message
+            )
+        }
+    }
+}
+
+impl std::error::Error for PnmlError {}
+
+/// Reads a document holding exactly one net.
+pub fn read_pnml(input: &str) -> Result<Net, PnmlError> {
+    let mut nets = read_pnml_nets(input)?;
+    match nets.len() {
+        1 => Ok(nets.remove(0)),
+        0 => Err(PnmlError::at(input, 0, "the document holds no <net>")),
+        n => Err(PnmlError::at(
+            input,
+            0,
+            format!("the document holds {n} nets; use read_pnml_nets"),
+        )),
+    }
+}
+
+/// Reads every net of a document.
+pub fn read_pnml_nets(input: &str) -> Result<Vec<Net>, PnmlError> {
+    let root = xml::parse(input)?;
+    if root.name != "pnml" {
+        return Err(PnmlError::at(
+            input,
+            root.pos,
+            format!("root element is <{}>, expected <pnml>", root.name),
+        ));
+    }
+    let r = Ctx { input };
+    root.children_named("net").map(|n| r.net(n)).collect()
+}
+
+struct Ctx<'a> {
+    input: &'a str,
+}
+
+/// Raw arc before node ids are resolved.
+struct RawArc<'e> {
+    el: &'e Element,
+    source: &'e str,
+    target: &'e str,
+    weight: u32,
+}
+
+impl<'a> Ctx<'a> {
+    fn err(&self, el: &Element, message: impl Into<String>) -> PnmlError {
+        PnmlError::at(self.input, el.pos, message)
+    }
+
+    fn required<'e>(&self, el: &'e Element, key: &str) -> Result<&'e str, PnmlError> {
+        el.attr(key)
+            .ok_or_else(|| self.err(el, format!("<{}> has no `{key}` attribute", el.name)))
+    }
+
+    /// The single child named `name`, if any (two are an error).
+    fn single<'e>(&self, el: &'e Element, name: &'e str) -> Result<Option<&'e Element>, PnmlError> {
+        let mut it = el.children_named(name);
+        let first = it.next();
+        if let Some(second) = it.next() {
+            return Err(self.err(second, format!("<{}> has more than one <{name}>", el.name)));
+        }
+        Ok(first)
+    }
+
+    /// Text of `<label><text>…</text></label>`.
+    fn label_text<'e>(
+        &self,
+        el: &'e Element,
+        label: &'e str,
+    ) -> Result<Option<&'e str>, PnmlError> {
+        let Some(l) = self.single(el, label)? else {
+            return Ok(None);
+        };
+        match self.single(l, "text")? {
+            Some(t) => Ok(Some(t.text.as_str())),
+            None => Err(self.err(l, format!("<{label}> has no <text>"))),
+        }
+    }
+
+    fn label_number(&self, el: &Element, label: &str) -> Result<Option<u32>, PnmlError> {
+        let Some(text) = self.label_text(el, label)? else {
+            return Ok(None);
+        };
+        let at = self.single(el, label)?.unwrap_or(el);
+        let t = text.trim();
+        t.parse::<u32>().map(Some).map_err(|_| {
+            self.err(
+                at,
+                format!(
+                    "<{label}> must be a whole number from 0 to {}, found `{t}`",
+                    u32::MAX
+                ),
+            )
+        })
+    }
+
+    fn number<T: std::str::FromStr>(
+        &self,
+        el: &Element,
+        key: &str,
+    ) -> Result<Option<T>, PnmlError> {
+        match el.attr(key) {
+            None => Ok(None),
+            Some(v) => v.trim().parse::<T>().map(Some).map_err(|_| {
+                self.err(
+                    el,
+                    format!(
+                        "attribute `{key}` of <{}> is not a valid number: `{v}`",
+                        el.name
+                    ),
+                )
+            }),
+        }
+    }
+
+    /// The MCL tool-specific block of `el`, if any.
+    fn mcl_block<'e>(&self, el: &'e Element) -> Result<Option<&'e Element>, PnmlError> {
+        let mut found = None;
+        for ts in el.children_named("toolspecific") {
+            if ts.attr("tool") != Some(MCL_TOOL) {
+                continue;
+            }
+            if found.is_some() {
+                return Err(self.err(
+                    ts,
+                    format!("<{}> has more than one MCL <toolspecific>", el.name),
+                ));
+            }
+            let version = ts.attr("version").unwrap_or("");
+            if version != MCL_TOOL_VERSION {
+                return Err(self.err(
+                    ts,
+                    format!("unsupported MCL tool-specific version `{version}` (expected `{MCL_TOOL_VERSION}`)"),
+                ));
+            }
+            found = Some(ts);
+        }
+        Ok(found)
+    }
+
+    fn net(&self, el: &Element) -> Result<Net, PnmlError> {
+        let id = self.required(el, "id")?;
+        let ty = self.required(el, "type")?.trim();
+        if ty != PTNET_TYPE {
+            return Err(self.err(
+                el,
+                format!("unsupported net type `{ty}`: only P/T nets ({PTNET_TYPE}) are supported"),
+            ));
+        }
+        let mut b = NetBuilder::new(id);
+        if let Some(name) = self.label_text(el, "name")? {
+            b.name(name);
+        }
+        if let Some(ts) = self.mcl_block(el)? {
+            for c in &ts.children {
+                match c.name.as_str() {
+                    "property" => {
+                        b.property(self.required(c, "key")?, self.required(c, "value")?);
+                    }
+                    other => return Err(self.err(c, format!("unknown MCL net data <{other}>"))),
+                }
+            }
+        }
+        let mut arcs = Vec::new();
+        let mut place_els = Vec::new();
+        let mut trans_els = Vec::new();
+        let mut pages: Vec<&Element> = el.children_named("page").collect();
+        if pages.is_empty() {
+            return Err(self.err(el, "<net> has no <page>"));
+        }
+        // Depth-first, in document order.
+        pages.reverse();
+        while let Some(page) = pages.pop() {
+            let mut nested = Vec::new();
+            for c in &page.children {
+                match c.name.as_str() {
+                    "place" => {
+                        b.add_place(self.place(c)?);
+                        place_els.push(c);
+                    }
+                    "transition" => {
+                        b.add_transition(self.transition(c)?);
+                        trans_els.push(c);
+                    }
+                    "arc" => arcs.push(self.arc(c)?),
+                    "page" => nested.push(c),
+                    "referencePlace" | "referenceTransition" => {
+                        return Err(self.err(
+                            c,
+                            format!(
+                                "<{}> is not supported: flatten reference nodes before loading",
+                                c.name
+                            ),
+                        ))
+                    }
+                    _ => {}
+                }
+            }
+            pages.extend(nested.into_iter().rev());
+        }
+        self.resolve(b, arcs, &place_els, &trans_els)
+    }
+
+    fn resolve(
+        &self,
+        mut b: NetBuilder,
+        arcs: Vec<RawArc<'_>>,
+        places: &[&Element],
+        transitions: &[&Element],
+    ) -> Result<Net, PnmlError> {
+        // Check ids here so that errors point at the offending element.
+        let mut ids = std::collections::HashMap::new();
+        let nodes = places
+            .iter()
+            .enumerate()
+            .map(|(i, el)| (el, NodeId::Place(crate::PlaceId(i as u32))))
+            .chain(
+                transitions
+                    .iter()
+                    .enumerate()
+                    .map(|(i, el)| (el, NodeId::Transition(crate::TransitionId(i as u32)))),
+            );
+        for (el, node) in nodes {
+            let id = self.required(el, "id")?;
+            if id.is_empty() {
+                return Err(self.err(el, "empty node id"));
+            }
+            if ids.insert(id, node).is_some() {
+                return Err(self.err(el, format!("duplicate node id `{id}`")));
+            }
+        }
+        for a in &arcs {
+            let src = ids.get(a.source).copied().ok_or_else(|| {
+                self.err(
+                    a.el,
+                    format!("arc source `{}` is not a place or transition", a.source),
+                )
+            })?;
+            let dst = ids.get(a.target).copied().ok_or_else(|| {
+                self.err(
+                    a.el,
+                    format!("arc target `{}` is not a place or transition", a.target),
+                )
+            })?;
+            match (src, dst) {
+                (NodeId::Place(p), NodeId::Transition(t)) => {
+                    b.add_input(p, t, a.weight);
+                }
+                (NodeId::Transition(t), NodeId::Place(p)) => {
+                    b.add_output(t, p, a.weight);
+                }
+                _ => {
+                    return Err(self.err(
+                        a.el,
+                        format!(
+                            "arc `{}` -> `{}` must join a place and a transition",
+                            a.source, a.target
+                        ),
+                    ))
+                }
+            }
+        }
+        b.build().map_err(|e| PnmlError::nowhere(e.to_string()))
+    }
+
+    fn place(&self, el: &Element) -> Result<Place, PnmlError> {
+        let id = self.required(el, "id")?;
+        let mut p = Place::new(id);
+        if let Some(name) = self.label_text(el, "name")? {
+            p.name = name.to_string();
+        }
+        p.initial = self.label_number(el, "initialMarking")?.unwrap_or(0);
+        if let Some(ts) = self.mcl_block(el)? {
+            for c in &ts.children {
+                match c.name.as_str() {
+                    "interface" => {
+                        p.interface = self
+                            .number(c, "id")?
+                            .ok_or_else(|| self.err(c, "<interface> has no `id` attribute"))?
+                    }
+                    "provenance" => p.provenance = self.provenance(c)?,
+                    other => return Err(self.err(c, format!("unknown MCL place data <{other}>"))),
+                }
+            }
+        }
+        Ok(p)
+    }
+
+    fn transition(&self, el: &Element) -> Result<Transition, PnmlError> {
+        let id = self.required(el, "id")?;
+        let mut t = Transition::new(id);
+        if let Some(name) = self.label_text(el, "name")? {
+            t.name = name.to_string();
+        }
+        if let Some(ts) = self.mcl_block(el)? {
+            for c in &ts.children {
+                match c.name.as_str() {
+                    "kind" => t.kind = self.kind(c)?,
+                    "priority" => {
+                        t.priority =
+                            Some(self.number(c, "value")?.ok_or_else(|| {
+                                self.err(c, "<priority> has no `value` attribute")
+                            })?)
+                    }
+                    "action" => t.actions.push(self.action(c)?),
+                    "binding" => {
+                        if t.binding.is_some() {
+                            return Err(self.err(c, "a transition has at most one <binding>"));
+                        }
+                        t.binding = Some(self.binding(c)?);
+                    }
+                    "provenance" => t.provenance = self.provenance(c)?,
+                    other => {
+                        return Err(self.err(c, format!("unknown MCL transition data <{other}>")))
+                    }
+                }
+            }
+        }
+        Ok(t)
+    }
+
+    fn kind(&self, el: &Element) -> Result<TransitionKind, PnmlError> {
+        match self.required(el, "type")? {
+            "immediate" => Ok(TransitionKind::Immediate),
+            "event" => Ok(TransitionKind::Event(
+                self.required(el, "event")?.to_string(),
+            )),
+            "timed" => match (el.attr("delay"), el.attr("param")) {
+                (Some(_), None) => {
+                    let d: f64 = self.number(el, "delay")?.unwrap_or(f64::NAN);
+                    if d.is_finite() && d >= 0.0 {
+                        Ok(TransitionKind::Timed(Delay::Fixed(d)))
+                    } else {
+                        Err(self.err(el, "delay must be a finite number of seconds ≥ 0"))
+                    }
+                }
+                (None, Some(p)) => Ok(TransitionKind::Timed(Delay::Param(p.to_string()))),
+                _ => Err(self.err(el, "a timed <kind> needs exactly one of `delay` or `param`")),
+            },
+            other => Err(self.err(
+                el,
+                format!("unknown transition kind `{other}` (expected immediate, event or timed)"),
+            )),
+        }
+    }
+
+    fn action(&self, el: &Element) -> Result<ActionRef, PnmlError> {
+        let mut a = ActionRef {
+            action: self.required(el, "action")?.to_string(),
+            primitive: el.attr("primitive").unwrap_or("").to_string(),
+            command: el.attr("command").unwrap_or("").to_string(),
+            params: Vec::new(),
+        };
+        for c in &el.children {
+            if c.name != "param" {
+                return Err(self.err(c, format!("unknown MCL action data <{}>", c.name)));
+            }
+            a.params.push((
+                self.required(c, "name")?.to_string(),
+                self.required(c, "value")?.to_string(),
+            ));
+        }
+        Ok(a)
+    }
+
+    fn binding(&self, el: &Element) -> Result<CallBinding, PnmlError> {
+        let mut b = CallBinding {
+            task: self.required(el, "task")?.to_string(),
+            call_site: self
+                .number(el, "callSite")?
+                .ok_or_else(|| self.err(el, "<binding> has no `callSite` attribute"))?,
+            label: el.attr("label").map(str::to_string),
+            args: Vec::new(),
+        };
+        for c in &el.children {
+            if c.name != "arg" {
+                return Err(self.err(c, format!("unknown MCL binding data <{}>", c.name)));
+            }
+            b.args.push((
+                self.required(c, "name")?.to_string(),
+                self.required(c, "value")?.to_string(),
+            ));
+        }
+        Ok(b)
+    }
+
+    fn provenance(&self, el: &Element) -> Result<Provenance, PnmlError> {
+        let span = match el.attr("file") {
+            None => None,
+            Some(file) => Some(SourceSpan {
+                file: file.to_string(),
+                start: self
+                    .number(el, "start")?
+                    .ok_or_else(|| self.err(el, "<provenance> with `file` needs `start`"))?,
+                end: self
+                    .number(el, "end")?
+                    .ok_or_else(|| self.err(el, "<provenance> with `file` needs `end`"))?,
+            }),
+        };
+        Ok(Provenance {
+            task: el.attr("task").map(str::to_string),
+            call_site: self.number(el, "callSite")?,
+            structure: el.attr("structure").map(str::to_string),
+            path: el.attr("path").map(str::to_string),
+            span,
+        })
+    }
+
+    fn arc<'e>(&self, el: &'e Element) -> Result<RawArc<'e>, PnmlError> {
+        let source = self.required(el, "source")?;
+        let target = self.required(el, "target")?;
+        let weight = self.label_number(el, "inscription")?.unwrap_or(1);
+        if weight == 0 {
+            return Err(self.err(el, "arc inscription must be at least 1"));
+        }
+        Ok(RawArc {
+            el,
+            source,
+            target,
+            weight,
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Writing
+
+type W = Writer<Vec<u8>>;
+
+struct Out {
+    w: W,
+}
+
+fn io_err(e: std::io::Error) -> PnmlError {
+    PnmlError::nowhere(format!("cannot write PNML: {e}"))
+}
+
+fn check_chars(what: &str, s: &str) -> Result<(), PnmlError> {
+    match s.chars().find(|&c| !xml::is_xml_char(c)) {
+        None => Ok(()),
+        Some(c) => Err(PnmlError::nowhere(format!(
+            "{what} `{}` contains character U+{:04X}, which XML 1.0 cannot represent",
+            s.escape_debug(),
+            c as u32
+        ))),
+    }
+}
+
+impl Out {
+    fn start(&mut self, name: &str, attrs: &[(&str, &str)]) -> Result<(), PnmlError> {
+        let e = elem(name, attrs)?;
+        self.w.write_event(Event::Start(e)).map_err(io_err)
+    }
+
+    fn empty(&mut self, name: &str, attrs: &[(&str, &str)]) -> Result<(), PnmlError> {
+        let e = elem(name, attrs)?;
+        self.w.write_event(Event::Empty(e)).map_err(io_err)
+    }
+
+    fn end(&mut self, name: &str) -> Result<(), PnmlError> {
+        self.w
+            .write_event(Event::End(BytesEnd::new(name)))
+            .map_err(io_err)
+    }
+
+    /// `<label><text>value</text></label>`
+    fn label(&mut self, label: &str, value: &str) -> Result<(), PnmlError> {
+        check_chars(label, value)?;
+        self.start(label, &[])?;
+        self.w
+            .create_element("text")
+            .write_text_content(BytesText::from_escaped(xml::escape_text(value)))
+            .map_err(io_err)?;
+        self.end(label)
+    }
+
+    fn toolspecific_start(&mut self) -> Result<(), PnmlError> {
+        self.start(
+            "toolspecific",
+            &[("tool", MCL_TOOL), ("version", MCL_TOOL_VERSION)],
+        )
+    }
+
+    fn provenance(&mut self, p: &Provenance) -> Result<(), PnmlError> {
+        let call_site = p.call_site.map(|c| c.to_string());
+        let (start, end) = match &p.span {
+            Some(s) => (Some(s.start.to_string()), Some(s.end.to_string())),
+            None => (None, None),
+        };
+        let mut attrs: Vec<(&str, &str)> = Vec::new();
+        let pairs = [
+            ("task", p.task.as_deref()),
+            ("callSite", call_site.as_deref()),
+            ("structure", p.structure.as_deref()),
+            ("path", p.path.as_deref()),
+            ("file", p.span.as_ref().map(|s| s.file.as_str())),
+            ("start", start.as_deref()),
+            ("end", end.as_deref()),
+        ];
+        for (k, v) in pairs {
+            if let Some(v) = v {
+                attrs.push((k, v));
+            }
+        }
+        self.empty("provenance", &attrs)
+    }
+}
+
+fn elem<'a>(name: &'a str, attrs: &[(&str, &str)]) -> Result<BytesStart<'a>, PnmlError> {
+    let mut e = BytesStart::new(name);
+    for &(k, v) in attrs {
+        check_chars(&format!("attribute `{k}`"), v)?;
+        e.push_attribute(Attribute {
+            key: QName(k),
+            value: Cow::Owned(xml::escape_attr(v)),
+        });
+    }
+    Ok(e)
+}
+
+/// A node id not used by any place or transition of `net`, built from `base`.
+fn fresh_id(used: &HashSet<&str>, base: &str, n: usize) -> String {
+    let mut id = format!("{base}{n}");
+    while used.contains(id.as_str()) {
+        id.push('_');
+    }
+    id
+}
+
+/// Writes `net` as a PNML 2009 document (2-space indentation).
+///
+/// Fails only if a string of the net contains a character XML 1.0 cannot
+/// represent (such as U+0000).
+pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
+    let mut out = Out {
+        w: Writer::new_with_indent(Vec::new(), b' ', 2),
+    };
+    out.w
+        .write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .map_err(io_err)?;
+    out.start("pnml", &[("xmlns", PNML_NAMESPACE)])?;
+    out.start("net", &[("id", net.id()), ("type", PTNET_TYPE)])?;
+    out.label("name", net.name())?;
+    if !net.properties().is_empty() {
+        out.toolspecific_start()?;
+        for (k, v) in net.properties() {
+            out.empty("property", &[("key", k), ("value", v)])?;
+        }
+        out.end("toolspecific")?;
+    }
+    let mut used: HashSet<&str> = net.places().iter().map(|p| p.id.as_str()).collect();
+    used.extend(net.transitions().iter().map(|t| t.id.as_str()));
+    used.insert(net.id());
+    let page_id = fresh_id(&used, "page", 0);
+    out.start("page", &[("id", &page_id)])?;
+
+    for p in net.places() {
+        out.start("place", &[("id", &p.id)])?;
+        out.label("name", &p.name)?;
+        if p.initial > 0 {
+            out.label("initialMarking", &p.initial.to_string())?;
+        }
+        if p.interface != 0 || !p.provenance.is_empty() {
+            out.toolspecific_start()?;
+            if p.interface != 0 {
+                out.empty("interface", &[("id", &p.interface.to_string())])?;
+            }
+            if !p.provenance.is_empty() {
+                out.provenance(&p.provenance)?;
+            }
+            out.end("toolspecific")?;
+        }
+        out.end("place")?;
+    }
+
+    for t in net.transitions() {
+        out.start("transition", &[("id", &t.id)])?;
+        out.label("name", &t.name)?;
+        let has_data = !t.kind.is_immediate()
+            || !t.actions.is_empty()
+            || t.priority.is_some()
+            || t.binding.is_some()
+            || !t.provenance.is_empty();
+        if has_data {
+            out.toolspecific_start()?;
+            match &t.kind {
+                TransitionKind::Immediate => {}
+                TransitionKind::Event(e) => {
+                    out.empty("kind", &[("type", "event"), ("event", e)])?
+                }
+                TransitionKind::Timed(Delay::Fixed(d)) => {
+                    // `{}` prints the shortest string that parses back to the same f64.
+                    out.empty("kind", &[("type", "timed"), ("delay", &format!("{d}"))])?
+                }
+                TransitionKind::Timed(Delay::Param(p)) => {
+                    out.empty("kind", &[("type", "timed"), ("param", p)])?
+                }
+            }
+            if let Some(prio) = t.priority {
+                out.empty("priority", &[("value", &prio.to_string())])?;
+            }
+            for a in &t.actions {
+                let attrs = [
+                    ("action", a.action.as_str()),
+                    ("primitive", a.primitive.as_str()),
+                    ("command", a.command.as_str()),
+                ];
+                if a.params.is_empty() {
+                    out.empty("action", &attrs)?;
+                } else {
+                    out.start("action", &attrs)?;
+                    for (k, v) in &a.params {
+                        out.empty("param", &[("name", k), ("value", v)])?;
+                    }
+                    out.end("action")?;
+                }
+            }
+            if let Some(b) = &t.binding {
+                let call_site = b.call_site.to_string();
+                let mut attrs = vec![("task", b.task.as_str()), ("callSite", call_site.as_str())];
+                if let Some(label) = &b.label {
+                    attrs.push(("label", label));
+                }
+                if b.args.is_empty() {
+                    out.empty("binding", &attrs)?;
+                } else {
+                    out.start("binding", &attrs)?;
+                    for (k, v) in &b.args {
+                        out.empty("arg", &[("name", k), ("value", v)])?;
+                    }
+                    out.end("binding")?;
+                }
+            }
+            if !t.provenance.is_empty() {
+                out.provenance(&t.provenance)?;
+            }
+            out.end("toolspecific")?;
+        }
+        out.end("transition")?;
+    }
+
+    used.insert(page_id.as_str());
+    for (i, arc) in net.arcs().iter().enumerate() {
+        let (src, dst, w) = match *arc {
+            Arc::Input {
+                place,
+                transition,
+                weight,
+            } => (
+                net.place(place).map(|p| p.id.as_str()),
+                net.transition(transition).map(|t| t.id.as_str()),
+                weight,
+            ),
+            Arc::Output {
+                transition,
+                place,
+                weight,
+            } => (
+                net.transition(transition).map(|t| t.id.as_str()),
+                net.place(place).map(|p| p.id.as_str()),
+                weight,
+            ),
+        };
+        let (Some(src), Some(dst)) = (src, dst) else {
+            return Err(PnmlError::nowhere("arc refers to a missing node"));
+        };
+        let id = fresh_id(&used, "a", i);
+        let attrs = [("id", id.as_str()), ("source", src), ("target", dst)];
+        if w == 1 {
+            out.empty("arc", &attrs)?;
+        } else {
+            out.start("arc", &attrs)?;
+            out.label("inscription", &w.to_string())?;
+            out.end("arc")?;
+        }
+    }
+    out.end("page")?;
+    out.end("net")?;
+    out.end("pnml")?;
+    let mut bytes = out.w.into_inner();
+    bytes.push(b'\n');
+    String::from_utf8(bytes).map_err(|e| PnmlError::nowhere(format!("cannot write PNML: {e}")))
+}
