@@ -65,6 +65,24 @@ enum Command {
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
+    /// Explore the state space of a PNML net (ours or any other tool's).
+    ///
+    /// Reports reachable and dead markings, place bounds and 1-safeness.
+    Analyze {
+        /// A PNML 2009 P/T net.
+        net: PathBuf,
+        #[arg(long, value_enum, default_value = "human")]
+        format: Format,
+        /// Stop after this many states and report the net as larger.
+        #[arg(long, default_value_t = mcl_net::explore::DEFAULT_MAX_STATES)]
+        max_states: usize,
+        /// Firing rule.
+        #[arg(long, value_enum, default_value = "auto")]
+        semantics: cmd::analyze::SemanticsChoice,
+        /// Worker threads (0: one per core).
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
+    },
     /// Explain a diagnostic code, with an example of the error and its fix.
     Explain {
         /// A code such as E0101; without one, lists every code.
@@ -87,6 +105,7 @@ fn main() -> ExitCode {
             color,
         } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
+        Command::Analyze { net, format, max_states, semantics, threads } => cmd::analyze::run(&net, format, max_states, semantics, threads),
         Command::Compile {
             file,
             output,

@@ -1,0 +1,58 @@
+//! `mcl analyze`: the state space of any PNML net.
+
+use crate::Format;
+use mcl_net::{analyze, Options, Semantics};
+use std::path::Path;
+
+/// Which firing rule to explore with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SemanticsChoice {
+    /// MCL rule for nets with MCL data (events, timers), plain otherwise.
+    Auto,
+    /// Every enabled transition may fire.
+    Plain,
+    /// Immediate transitions first; events and timers in tangible markings.
+    Mcl,
+}
+
+pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsChoice, threads: usize) -> u8 {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: cannot read `{}`: {e}", path.display());
+            return 2;
+        }
+    };
+    let net = match mcl_net::read_pnml(&text) {
+        Ok(n) => n,
+        Err(e) => {
+            eprintln!("error: {}: {e}", path.display());
+            return 2;
+        }
+    };
+    let semantics = match semantics {
+        SemanticsChoice::Plain => Semantics::Plain,
+        SemanticsChoice::Mcl => Semantics::Mcl,
+        SemanticsChoice::Auto if net.has_non_immediate() => Semantics::Mcl,
+        SemanticsChoice::Auto => Semantics::Plain,
+    };
+    let opts = Options { semantics, max_states, threads, ..Options::default() };
+    let r = analyze(&net, &opts);
+    match format {
+        Format::Json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_else(|_| "{}".into())),
+        Format::Human => {
+            println!("net `{}`: {} places, {} transitions", net.name(), net.place_count(), net.transition_count());
+            let more = if r.complete { String::new() } else { format!(" (stopped at the limit of {max_states} states: the net is larger)") };
+            println!("reachable markings: {}{more}", r.states);
+            println!("edges: {}", r.edges);
+            println!("dead markings: {}", r.dead_markings);
+            println!("1-safe: {}", if r.one_safe { "yes" } else { "no" });
+            println!("largest bound: {}", r.max_tokens_in_place);
+            for d in r.dead_examples.iter().take(3) {
+                let m: Vec<String> = d.marking.iter().map(|(p, k)| if *k == 1 { p.clone() } else { format!("{p}×{k}") }).collect();
+                println!("  dead: {{{}}} after {}", m.join(", "), if d.path_names.is_empty() { "no firing".into() } else { d.path_names.join(" → ") });
+            }
+        }
+    }
+    0
+}
