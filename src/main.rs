@@ -8,11 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(
-    name = "mcl",
-    version,
-    about = "Mission Control Language toolchain: check, compile and run AUV missions"
-)]
+#[command(name = "mcl", version, about = "Mission Control Language toolchain: check, compile and run AUV missions")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -99,19 +95,12 @@ fn main() -> ExitCode {
         }
     };
     let code = match cli.command {
-        Command::Check {
-            paths,
-            format,
-            color,
-        } => cmd::check::run(&paths, format, color),
+        Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
-        Command::Analyze { net, format, max_states, semantics, threads } => cmd::analyze::run(&net, format, max_states, semantics, threads),
-        Command::Compile {
-            file,
-            output,
-            dot,
-            out_dir,
-        } => {
+        Command::Analyze { net, format, max_states, semantics, threads } => {
+            cmd::analyze::run(&net, format, max_states, semantics, threads)
+        }
+        Command::Compile { file, output, dot, out_dir } => {
             if dot.as_ref().is_some_and(|d| d.as_os_str().is_empty()) && out_dir.is_none() {
                 eprintln!("error: --dot needs a path unless --out-dir is given");
                 return ExitCode::from(2);

@@ -113,10 +113,7 @@ registry! {
 /// Looks a code up (case-insensitive, `e101` and `E0101` both work).
 pub fn lookup(code: &str) -> Option<&'static CodeInfo> {
     let c = code.trim().to_ascii_uppercase();
-    let normalized = match (
-        c.chars().next(),
-        c.get(1..).and_then(|d| d.parse::<u32>().ok()),
-    ) {
+    let normalized = match (c.chars().next(), c.get(1..).and_then(|d| d.parse::<u32>().ok())) {
         (Some(l @ ('E' | 'W')), Some(n)) => format!("{l}{n:04}"),
         _ => c,
     };

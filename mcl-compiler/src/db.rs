@@ -50,10 +50,7 @@ impl Db for Database {
             return *f;
         }
         let text = read(&path);
-        *self
-            .files
-            .entry(path.clone())
-            .or_insert_with(|| SourceFile::new(self, path, text))
+        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text))
     }
 
     fn stdlib(&self) -> SourceFile {
@@ -61,10 +58,7 @@ impl Db for Database {
         if let Some(f) = self.files.get(&path) {
             return *f;
         }
-        *self
-            .files
-            .entry(path.clone())
-            .or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
+        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
     }
 }
 
@@ -126,11 +120,8 @@ pub fn normalize(path: &Path) -> PathBuf {
     if let Ok(p) = path.canonicalize() {
         return p;
     }
-    let abs = if path.is_absolute() {
-        path.to_path_buf()
-    } else {
-        std::env::current_dir().unwrap_or_default().join(path)
-    };
+    let abs =
+        if path.is_absolute() { path.to_path_buf() } else { std::env::current_dir().unwrap_or_default().join(path) };
     let mut out = PathBuf::new();
     for c in abs.components() {
         match c {

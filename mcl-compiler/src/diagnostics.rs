@@ -61,11 +61,7 @@ pub fn render_human(db: &dyn Db, diags: &[FileDiagnostic], color: bool) -> Strin
             Severity::Warning => ReportKind::Warning,
             Severity::Info | Severity::Hint => ReportKind::Advice,
         };
-        let main_color = if d.is_error() {
-            Color::Red
-        } else {
-            Color::Yellow
-        };
+        let main_color = if d.is_error() { Color::Red } else { Color::Yellow };
         let mut sources: Vec<(String, String)> = vec![(path.clone(), text.clone())];
         let char_offsets = |t: &str, r: std::ops::Range<usize>| {
             let s = t[..r.start].chars().count();
@@ -76,15 +72,10 @@ pub fn render_human(db: &dyn Db, diags: &[FileDiagnostic], color: bool) -> Strin
             .with_config(Config::default().with_color(color))
             .with_code(d.code)
             .with_message(&d.message);
-        let has_main_label = d
-            .labels
-            .iter()
-            .any(|l| l.file.is_none() && l.span == d.span);
+        let has_main_label = d.labels.iter().any(|l| l.file.is_none() && l.span == d.span);
         if !has_main_label {
             report = report.with_label(
-                Label::new((path.clone(), char_offsets(&text, main)))
-                    .with_message("here")
-                    .with_color(main_color),
+                Label::new((path.clone(), char_offsets(&text, main))).with_message("here").with_color(main_color),
             );
         }
         for l in &d.labels {
@@ -102,16 +93,9 @@ pub fn render_human(db: &dyn Db, diags: &[FileDiagnostic], color: bool) -> Strin
                 }
             };
             let r = clamp(&ltext, l.span);
-            let c = if l.file.is_none() && l.span == d.span {
-                main_color
-            } else {
-                Color::Blue
-            };
-            report = report.with_label(
-                Label::new((lpath, char_offsets(&ltext, r)))
-                    .with_message(&l.message)
-                    .with_color(c),
-            );
+            let c = if l.file.is_none() && l.span == d.span { main_color } else { Color::Blue };
+            report =
+                report.with_label(Label::new((lpath, char_offsets(&ltext, r))).with_message(&l.message).with_color(c));
         }
         if let Some(h) = &d.help {
             report = report.with_help(h);

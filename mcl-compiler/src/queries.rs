@@ -13,11 +13,7 @@ use std::path::{Path, PathBuf};
 pub fn parse(db: &dyn Db, file: SourceFile) -> Parse {
     match file.text(db) {
         Some(text) => mcl_syntax::parse(text),
-        None => Parse {
-            file: Default::default(),
-            comments: Vec::new(),
-            errors: Vec::new(),
-        },
+        None => Parse { file: Default::default(), comments: Vec::new(), errors: Vec::new() },
     }
 }
 
@@ -40,11 +36,7 @@ pub struct ResolvedImport {
 
 /// Resolves a path written in `file` relative to `file`'s folder.
 pub fn resolve_relative(db: &dyn Db, file: SourceFile, written: &str) -> PathBuf {
-    let base = file
-        .path(db)
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
+    let base = file.path(db).parent().map(Path::to_path_buf).unwrap_or_default();
     normalize(&base.join(written))
 }
 
@@ -113,20 +105,13 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
                 .with_label(imp.path_span, "no readable file at this path")
                 .with_help("import paths are relative to the folder of the importing file")
             };
-            diagnostics.push(FileDiagnostic {
-                file: root,
-                diag: d,
-            });
+            diagnostics.push(FileDiagnostic { file: root, diag: d });
             continue;
         }
         if imp.target == root {
             diagnostics.push(FileDiagnostic {
                 file: root,
-                diag: Diagnostic::error(
-                    codes::IMPORT_CYCLE,
-                    "a file cannot import itself",
-                    imp.path_span,
-                ),
+                diag: Diagnostic::error(codes::IMPORT_CYCLE, "a file cannot import itself", imp.path_span),
             });
             continue;
         }
@@ -142,26 +127,14 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
             });
         }
     }
-    Program {
-        root,
-        files,
-        diagnostics,
-    }
+    Program { root, files, diagnostics }
 }
 
 fn file_name(db: &dyn Db, f: SourceFile) -> String {
-    f.path(db)
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default()
+    f.path(db).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
-fn post_order(
-    db: &dyn Db,
-    f: SourceFile,
-    seen: &mut rustc_hash::FxHashSet<SourceFile>,
-    out: &mut Vec<SourceFile>,
-) {
+fn post_order(db: &dyn Db, f: SourceFile, seen: &mut rustc_hash::FxHashSet<SourceFile>, out: &mut Vec<SourceFile>) {
     if !seen.insert(f) {
         return;
     }

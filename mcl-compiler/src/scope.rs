@@ -51,9 +51,7 @@ pub struct Scope {
 impl Scope {
     /// The definitions of `name` as a `kind` (more than one is a duplicate).
     pub fn get(&self, kind: DefKind, name: &str) -> &[DefId] {
-        self.defs
-            .get(&(kind, name.to_string()))
-            .map_or(&[], Vec::as_slice)
+        self.defs.get(&(kind, name.to_string())).map_or(&[], Vec::as_slice)
     }
     /// The definition `name` refers to: the first one of the program, or the
     /// standard library's when the program defines none.
@@ -63,10 +61,7 @@ impl Scope {
     }
     /// All names defined as `kind`.
     pub fn names(&self, kind: DefKind) -> impl Iterator<Item = &str> {
-        self.defs
-            .keys()
-            .filter(move |(k, _)| *k == kind)
-            .map(|(_, n)| n.as_str())
+        self.defs.keys().filter(move |(k, _)| *k == kind).map(|(_, n)| n.as_str())
     }
 }
 
@@ -75,13 +70,7 @@ impl Scope {
 pub fn scope(db: &dyn Db, root: SourceFile) -> Scope {
     let mut scope = Scope::default();
     for &file in &program(db, root).files {
-        for_each_def(db, file, |id, name| {
-            scope
-                .defs
-                .entry((id.kind, name.to_string()))
-                .or_default()
-                .push(id)
-        });
+        for_each_def(db, file, |id, name| scope.defs.entry((id.kind, name.to_string())).or_default().push(id));
     }
     scope
 }
@@ -92,40 +81,16 @@ pub fn for_each_def(db: &dyn Db, file: SourceFile, mut f: impl FnMut(DefId, &str
     let in_stdlib = file == db.stdlib();
     for (i, item) in ast.items.iter().enumerate() {
         let mk = |kind, index: usize, n: &Name| {
-            (
-                DefId {
-                    kind,
-                    file,
-                    item: i as u32,
-                    index: index as u32,
-                    name_span: n.span,
-                    in_stdlib,
-                },
-                n.text.clone(),
-            )
+            (DefId { kind, file, item: i as u32, index: index as u32, name_span: n.span, in_stdlib }, n.text.clone())
         };
         let mut emit = |(id, name): (DefId, String)| f(id, &name);
         match item {
-            Item::Actions(b) => b
-                .actions
-                .iter()
-                .enumerate()
-                .for_each(|(j, a)| emit(mk(DefKind::Action, j, &a.name))),
-            Item::Events(b) => b
-                .events
-                .iter()
-                .enumerate()
-                .for_each(|(j, e)| emit(mk(DefKind::Event, j, e))),
-            Item::Patterns(b) => b
-                .patterns
-                .iter()
-                .enumerate()
-                .for_each(|(j, p)| emit(mk(DefKind::Pattern, j, &p.name))),
-            Item::Tasks(b) => b
-                .tasks
-                .iter()
-                .enumerate()
-                .for_each(|(j, t)| emit(mk(DefKind::Task, j, &t.name))),
+            Item::Actions(b) => b.actions.iter().enumerate().for_each(|(j, a)| emit(mk(DefKind::Action, j, &a.name))),
+            Item::Events(b) => b.events.iter().enumerate().for_each(|(j, e)| emit(mk(DefKind::Event, j, e))),
+            Item::Patterns(b) => {
+                b.patterns.iter().enumerate().for_each(|(j, p)| emit(mk(DefKind::Pattern, j, &p.name)))
+            }
+            Item::Tasks(b) => b.tasks.iter().enumerate().for_each(|(j, t)| emit(mk(DefKind::Task, j, &t.name))),
             Item::Mission(m) => {
                 if let Some(n) = &m.name {
                     emit(mk(DefKind::Mission, 0, n));

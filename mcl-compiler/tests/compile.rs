@@ -76,11 +76,7 @@ fn print_state_counts() {
 /// Runs a net with the MCL rule: immediate transitions to quiescence, then
 /// deferred (zero-delay) ones, then the next scripted event. Returns the
 /// actions sent, with task parameters resolved from the current call.
-fn run(
-    net: &mcl_net::Net,
-    seed: u64,
-    mut events: impl FnMut(&[String]) -> Option<String>,
-) -> (Vec<String>, String) {
+fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Option<String>) -> (Vec<String>, String) {
     use mcl_net::{Delay, Executor, TransitionKind};
     use std::collections::HashMap;
     let mut ex = Executor::new(net, seed);
@@ -98,12 +94,7 @@ fn run(
                 .iter()
                 .map(|(name, v)| {
                     if v.contains("\"param\"") {
-                        args[&task]
-                            .iter()
-                            .find(|(p, _)| p == name)
-                            .unwrap()
-                            .1
-                            .clone()
+                        args[&task].iter().find(|(p, _)| p == name).unwrap().1.clone()
                     } else {
                         v.clone()
                     }
@@ -116,7 +107,10 @@ fn run(
         for t in ex.settle(10_000).unwrap() {
             log(t, &mut sent);
         }
-        let deferred = ex.ready().into_iter().find(|&t| matches!(&net.transition(t).unwrap().kind, TransitionKind::Timed(Delay::Fixed(d)) if *d == 0.0));
+        let deferred = ex
+            .ready()
+            .into_iter()
+            .find(|&t| matches!(&net.transition(t).unwrap().kind, TransitionKind::Timed(Delay::Fixed(d)) if *d == 0.0));
         if let Some(t) = deferred {
             ex.fire_timed(t).unwrap();
             log(t, &mut sent);
@@ -149,13 +143,16 @@ fn run(
 fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
     let mut db = Database::new();
     let dir = std::path::Path::new("/virtual/calls");
-    db.set_text(&dir.join("v.mcl"), r#"
+    db.set_text(
+        &dir.join("v.mcl"),
+        r#"
         actions { enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
                   enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable ); }
         events { aOk; aFail; bOk; bFail; }
         tasks { A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
                 B(): AchieveOneGoal { a: enableB -> T0; a: disableB -> T1, T6, T7; e: bOk -> T2; e: bFail -> T3; } }
-    "#);
+    "#,
+    );
     let f = db.set_text(
         &dir.join("m.mcl"),
         "import \"v.mcl\";\nmission { parallel { try { A( 1 ) } catch { B() } } and { A( 2 ) } }\n",
@@ -178,11 +175,7 @@ fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
             seen_actions = sent.len();
             pending.pop_front()
         });
-        let first = sent
-            .iter()
-            .find(|s| s.starts_with("enableA"))
-            .unwrap()
-            .clone();
+        let first = sent.iter().find(|s| s.starts_with("enableA")).unwrap().clone();
         let enables: Vec<&String> = sent.iter().filter(|s| s.starts_with("enable")).collect();
         if first == "enableA(1)" {
             // A(1) failed: its catch ran B; A(2) then ran with its own parameter and succeeded.

@@ -12,11 +12,8 @@ const VEHICLE: &str = include_str!("../../examples/vehicle.mcl");
 
 /// A folder that does not exist on disk: every file in it comes from `set_text`.
 fn virtual_dir(code: &str, section: &str) -> PathBuf {
-    let root = if cfg!(windows) {
-        PathBuf::from(r"C:\mcl-explain-virtual")
-    } else {
-        PathBuf::from("/mcl-explain-virtual")
-    };
+    let root =
+        if cfg!(windows) { PathBuf::from(r"C:\mcl-explain-virtual") } else { PathBuf::from("/mcl-explain-virtual") };
     root.join(code).join(section.to_ascii_lowercase())
 }
 
@@ -61,15 +58,9 @@ fn mcl_blocks(text: &str) -> Vec<String> {
 
 /// The one ```mcl block of a section.
 fn program_of(info: &CodeInfo, name: &str) -> String {
-    let text = section(info.explanation, name)
-        .unwrap_or_else(|| panic!("{}: no `## {name}` section", info.code));
+    let text = section(info.explanation, name).unwrap_or_else(|| panic!("{}: no `## {name}` section", info.code));
     let mut blocks = mcl_blocks(text);
-    assert_eq!(
-        blocks.len(),
-        1,
-        "{}: `## {name}` must hold exactly one ```mcl block",
-        info.code
-    );
+    assert_eq!(blocks.len(), 1, "{}: `## {name}` must hold exactly one ```mcl block", info.code);
     blocks.remove(0)
 }
 
@@ -95,14 +86,7 @@ fn check(code: &str, section: &str, src: &str) -> Vec<FileDiagnostic> {
 fn describe(diags: &[FileDiagnostic]) -> String {
     diags
         .iter()
-        .map(|d| {
-            format!(
-                "  {} {}: {}",
-                d.diag.severity.as_str(),
-                d.diag.code,
-                d.diag.message
-            )
-        })
+        .map(|d| format!("  {} {}: {}", d.diag.severity.as_str(), d.diag.code, d.diag.message))
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -121,10 +105,9 @@ fn every_code_has_an_explanation_with_example_and_fix() {
         for name in ["Example", "Fix"] {
             match section(info.explanation, name) {
                 None => problems.push(format!("{}: no `## {name}` section", info.code)),
-                Some(text) if mcl_blocks(text).len() != 1 => problems.push(format!(
-                    "{}: `## {name}` must hold exactly one ```mcl block",
-                    info.code
-                )),
+                Some(text) if mcl_blocks(text).len() != 1 => {
+                    problems.push(format!("{}: `## {name}` must hold exactly one ```mcl block", info.code))
+                }
                 Some(_) => {}
             }
         }
@@ -132,10 +115,7 @@ fn every_code_has_an_explanation_with_example_and_fix() {
         let fix = info.explanation.find("## Fix");
         if let (Some(e), Some(f)) = (example, fix) {
             if e > f {
-                problems.push(format!(
-                    "{}: `## Example` must come before `## Fix`",
-                    info.code
-                ));
+                problems.push(format!("{}: `## Example` must come before `## Fix`", info.code));
             }
         }
     }
@@ -158,15 +138,8 @@ fn examples_trigger_their_code_and_fixes_remove_it() {
         }
         let fix = program_of(info, "Fix");
         let diags = check(info.code, "Fix", &fix);
-        if diags
-            .iter()
-            .any(|d| d.diag.code == info.code || d.diag.is_error())
-        {
-            problems.push(format!(
-                "{}: the fix still produces:\n{}",
-                info.code,
-                describe(&diags)
-            ));
+        if diags.iter().any(|d| d.diag.code == info.code || d.diag.is_error()) {
+            problems.push(format!("{}: the fix still produces:\n{}", info.code, describe(&diags)));
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
@@ -179,10 +152,7 @@ fn codes_are_sorted_unique_and_well_formed() {
     let mut sorted = all.clone();
     sorted.sort_by_key(|c| (c[1..].to_string(), c.to_string()));
     sorted.dedup_by_key(|c| c[1..].to_string());
-    assert_eq!(
-        all, sorted,
-        "codes::ALL must be sorted by number, each number once"
-    );
+    assert_eq!(all, sorted, "codes::ALL must be sorted by number, each number once");
     for c in &all {
         assert_eq!(c.len(), 5, "{c}");
         assert!(c.starts_with('E') || c.starts_with('W'), "{c}");
@@ -200,18 +170,14 @@ fn lookup_is_lenient() {
     assert!(codes::lookup("mission").is_none());
     assert!(codes::lookup("").is_none());
     for info in codes::ALL {
-        assert_eq!(
-            codes::lookup(&info.code.to_ascii_lowercase()).map(|c| c.code),
-            Some(info.code)
-        );
+        assert_eq!(codes::lookup(&info.code.to_ascii_lowercase()).map(|c| c.code), Some(info.code));
     }
 }
 
 #[test]
 fn the_virtual_folder_resolves_imports() {
     // Guards the harness itself: a mission that uses the vehicle is clean.
-    let src =
-        "import \"vehicle.mcl\";\n\nmission {\n    Depth( 15, \"achieve\" ) ;\n    Surface()\n}\n";
+    let src = "import \"vehicle.mcl\";\n\nmission {\n    Depth( 15, \"achieve\" ) ;\n    Surface()\n}\n";
     let diags = check("harness", "Fix", src);
     assert!(diags.is_empty(), "{}", describe(&diags));
     assert_eq!(file_name("// survey.mcl\nmission { Void() }"), "survey.mcl");

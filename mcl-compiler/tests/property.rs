@@ -40,22 +40,16 @@ fn stmt() -> impl Strategy<Value = String> {
             (block.clone(), block.clone()).prop_map(|(a, b)| format!("if ( {a} ) {{ {b} }}")),
             (block.clone(), block.clone(), block.clone())
                 .prop_map(|(a, b, c)| format!("if ( {a} ) {{ {b} }} else {{ {c} }}")),
-            (block.clone(), block.clone())
-                .prop_map(|(a, b)| format!("try {{ {a} }} catch {{ {b} }}")),
+            (block.clone(), block.clone()).prop_map(|(a, b)| format!("try {{ {a} }} catch {{ {b} }}")),
             block.clone().prop_map(|a| format!("not ( {a} )")),
             // A loop needs a condition that can end it: B() ends fail eventually.
-            block
-                .clone()
-                .prop_map(|b| format!("while ( B() ) {{ {b} }}")),
-            prop::collection::vec(block.clone(), 2..4)
-                .prop_map(|v| format!("parallel {{ {} }}", v.join(" } and { "))),
-            prop::collection::vec(block.clone(), 2..4)
-                .prop_map(|v| format!("parallel {{ {} }}", v.join(" } or { "))),
+            block.clone().prop_map(|b| format!("while ( B() ) {{ {b} }}")),
+            prop::collection::vec(block.clone(), 2..4).prop_map(|v| format!("parallel {{ {} }}", v.join(" } and { "))),
+            prop::collection::vec(block.clone(), 2..4).prop_map(|v| format!("parallel {{ {} }}", v.join(" } or { "))),
             (block.clone(), block.clone(), block.clone())
                 .prop_map(|(a, b, c)| format!("monitor {{ {a} }} condition ( {b} ) do {{ {c} }}")),
-            (block.clone(), block.clone()).prop_map(|(a, c)| format!(
-                "monitor {{ {a} }} while_condition ( B() ) do {{ {c} }}"
-            )),
+            (block.clone(), block.clone())
+                .prop_map(|(a, c)| format!("monitor {{ {a} }} while_condition ( B() ) do {{ {c} }}")),
         ]
     })
 }
@@ -64,20 +58,12 @@ fn check_mission(body: &str) -> Result<(), TestCaseError> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/property");
     db.set_text(&dir.join("vehicle.mcl"), VEHICLE);
-    let file = db.set_text(
-        &dir.join("m.mcl"),
-        format!("import \"vehicle.mcl\";\nmission {{ {body} }}\n"),
-    );
+    let file = db.set_text(&dir.join("m.mcl"), format!("import \"vehicle.mcl\";\nmission {{ {body} }}\n"));
     let diags = check_file(&db, file);
-    prop_assert!(
-        !mcl_compiler::has_errors(diags),
-        "generated program has errors: {diags:?}\n{body}"
-    );
+    prop_assert!(!mcl_compiler::has_errors(diags), "generated program has errors: {diags:?}\n{body}");
     let missions = compile_file(&db, file).map_err(|e| TestCaseError::fail(e.to_string()))?;
     for m in missions {
-        let v = verify::mission_harness(m.net)
-            .expect("mission interface")
-            .verify(400_000);
+        let v = verify::mission_harness(m.net).expect("mission interface").verify(400_000);
         if v.violations.iter().any(|x| x.property == "size") {
             // Too large to explore exhaustively: not a counterexample.
             continue;

@@ -15,10 +15,7 @@ const NETS: [&str; 3] = ["SharedMemory-PT-000010", "Kanban-PT-00005", "FMS-PT-00
 fn explore_large_nets(c: &mut Criterion) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/mcc");
     let mut group = c.benchmark_group("explore");
-    group
-        .sample_size(10)
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(20));
+    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(20));
     for name in NETS {
         let Ok(text) = std::fs::read_to_string(dir.join(format!("{name}.pnml"))) else {
             eprintln!("note: {name} not found in {}; skipped", dir.display());
@@ -34,9 +31,7 @@ fn explore_large_nets(c: &mut Criterion) {
         let opts = Options::plain();
         let states = analyze(&net, &opts).states;
         group.throughput(Throughput::Elements(states));
-        group.bench_function(name, |b| {
-            b.iter(|| std::hint::black_box(analyze(&net, &opts)))
-        });
+        group.bench_function(name, |b| b.iter(|| std::hint::black_box(analyze(&net, &opts))));
     }
     group.finish();
 }

@@ -69,14 +69,8 @@ fn main() -> ExitCode {
     };
     if let Some(obj) = json.as_object_mut() {
         obj.insert("seconds".into(), seconds.into());
-        obj.insert(
-            "states_per_second".into(),
-            (report.states as f64 / seconds).into(),
-        );
+        obj.insert("states_per_second".into(), (report.states as f64 / seconds).into());
     }
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&json).unwrap_or_default()
-    );
+    println!("{}", serde_json::to_string_pretty(&json).unwrap_or_default());
     ExitCode::SUCCESS
 }

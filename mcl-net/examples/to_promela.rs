@@ -20,20 +20,9 @@ use mcl_net::{read_pnml, Net};
 fn promela(net: &Net, wide: bool) -> String {
     let mut out = String::new();
     let ty = if wide { "int" } else { "byte" };
-    let _ = writeln!(
-        out,
-        "/* {} : {} places, {} transitions */",
-        net.id(),
-        net.place_count(),
-        net.transition_count()
-    );
+    let _ = writeln!(out, "/* {} : {} places, {} transitions */", net.id(), net.place_count(), net.transition_count());
     for (i, p) in net.places().iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "{ty} p{i} = {}; /* {} */",
-            p.initial,
-            p.id.replace("*/", "* /")
-        );
+        let _ = writeln!(out, "{ty} p{i} = {}; /* {} */", p.initial, p.id.replace("*/", "* /"));
     }
     let _ = writeln!(out, "\nactive proctype net() {{\n  do");
     for t in net.transition_ids() {
@@ -41,31 +30,23 @@ fn promela(net: &Net, wide: bool) -> String {
         let guard = if pre.is_empty() {
             "true".to_string()
         } else {
-            pre.iter()
-                .map(|&(p, w)| format!("p{} >= {w}", p.0))
-                .collect::<Vec<_>>()
-                .join(" && ")
+            pre.iter().map(|&(p, w)| format!("p{} >= {w}", p.0)).collect::<Vec<_>>().join(" && ")
         };
         let updates: Vec<String> = net
             .delta(t)
             .iter()
-            .map(|&(p, d)| {
-                if d > 0 {
-                    format!("p{0} = p{0} + {d}", p.0)
-                } else {
-                    format!("p{0} = p{0} - {1}", p.0, -d)
-                }
-            })
+            .map(
+                |&(p, d)| {
+                    if d > 0 {
+                        format!("p{0} = p{0} + {d}", p.0)
+                    } else {
+                        format!("p{0} = p{0} - {1}", p.0, -d)
+                    }
+                },
+            )
             .collect();
-        let body = if updates.is_empty() {
-            "skip".to_string()
-        } else {
-            updates.join("; ")
-        };
-        let name = net
-            .transition(t)
-            .map_or("", |tr| tr.id.as_str())
-            .replace("*/", "* /");
+        let body = if updates.is_empty() { "skip".to_string() } else { updates.join("; ") };
+        let name = net.transition(t).map_or("", |tr| tr.id.as_str()).replace("*/", "* /");
         let _ = writeln!(out, "  :: atomic {{ ({guard}) -> {body} }} /* {name} */");
     }
     let _ = writeln!(out, "  od\n}}");
@@ -90,9 +71,7 @@ fn main() -> ExitCode {
         }
     };
     let small = net.places().iter().all(|p| p.initial < 256)
-        && net
-            .transition_ids()
-            .all(|t| net.pre(t).iter().chain(net.post(t)).all(|&(_, w)| w < 256));
+        && net.transition_ids().all(|t| net.pre(t).iter().chain(net.post(t)).all(|&(_, w)| w < 256));
     print!("{}", promela(&net, wide || !small));
     ExitCode::SUCCESS
 }

@@ -39,8 +39,8 @@ mod xml;
 
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{
-    ActionRef, Arc, CallBinding, Delay, Marking, Net, NetBuilder, NetError, NodeId, Place, PlaceId,
-    Provenance, SourceSpan, Transition, TransitionId, TransitionKind,
+    ActionRef, Arc, CallBinding, Delay, Marking, Net, NetBuilder, NetError, NodeId, Place, PlaceId, Provenance,
+    SourceSpan, Transition, TransitionId, TransitionKind,
 };
 pub use pnml::{read_pnml, read_pnml_nets, write_pnml, PnmlError};
 pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};

@@ -93,13 +93,7 @@ impl Place {
     /// A place with the given id (also used as name), no tokens and no interface.
     pub fn new(id: impl Into<String>) -> Self {
         let id = id.into();
-        Place {
-            name: id.clone(),
-            id,
-            initial: 0,
-            interface: INTERFACE_NONE,
-            provenance: Provenance::default(),
-        }
+        Place { name: id.clone(), id, initial: 0, interface: INTERFACE_NONE, provenance: Provenance::default() }
     }
 
     /// Sets the name.
@@ -181,6 +175,10 @@ pub struct CallBinding {
     pub label: Option<String>,
     /// (task parameter, value as JSON text), in header order.
     pub args: Vec<(String, String)>,
+    /// Where the call sits when that matters to a mock vehicle:
+    /// `monitor_condition` (inside the condition of a monitor) or
+    /// `while_condition` (inside the condition of a while loop).
+    pub role: Option<String>,
 }
 
 /// A transition.
@@ -353,16 +351,13 @@ impl fmt::Display for NetError {
             NetError::ZeroWeight { place, transition } => {
                 write!(f, "arc between `{place}` and `{transition}` has weight 0")
             }
-            NetError::WeightOverflow { place, transition } => write!(
-                f,
-                "parallel arcs between `{place}` and `{transition}` add up to more than {}",
-                u32::MAX
-            ),
+            NetError::WeightOverflow { place, transition } => {
+                write!(f, "parallel arcs between `{place}` and `{transition}` add up to more than {}", u32::MAX)
+            }
             NetError::UnknownNode(what) => write!(f, "arc refers to unknown {what}"),
-            NetError::InvalidDelay { transition } => write!(
-                f,
-                "transition `{transition}` has a delay that is negative, infinite or NaN"
-            ),
+            NetError::InvalidDelay { transition } => {
+                write!(f, "transition `{transition}` has a delay that is negative, infinite or NaN")
+            }
             NetError::TooLarge => write!(f, "net has more than 2^32 - 1 nodes"),
         }
     }
@@ -569,11 +564,7 @@ impl Marking {
 
     /// Non-zero entries.
     pub fn support(&self) -> impl Iterator<Item = (PlaceId, u32)> + '_ {
-        self.0
-            .iter()
-            .enumerate()
-            .filter(|(_, &n)| n > 0)
-            .map(|(i, &n)| (PlaceId(i as u32), n))
+        self.0.iter().enumerate().filter(|(_, &n)| n > 0).map(|(i, &n)| (PlaceId(i as u32), n))
     }
 
     /// Renders the non-zero entries as `name` or `name*k`, using place names of `net`.
@@ -613,11 +604,7 @@ impl NetBuilder {
     /// A builder for a net with this id (also used as name).
     pub fn new(id: impl Into<String>) -> Self {
         let id = id.into();
-        NetBuilder {
-            name: id.clone(),
-            id,
-            ..Default::default()
-        }
+        NetBuilder { name: id.clone(), id, ..Default::default() }
     }
 
     /// Sets the net name.
@@ -645,32 +632,14 @@ impl NetBuilder {
     }
 
     /// Adds an input arc `place -> transition`.
-    pub fn add_input(
-        &mut self,
-        place: PlaceId,
-        transition: TransitionId,
-        weight: u32,
-    ) -> &mut Self {
-        self.arcs.push(Arc::Input {
-            place,
-            transition,
-            weight,
-        });
+    pub fn add_input(&mut self, place: PlaceId, transition: TransitionId, weight: u32) -> &mut Self {
+        self.arcs.push(Arc::Input { place, transition, weight });
         self
     }
 
     /// Adds an output arc `transition -> place`.
-    pub fn add_output(
-        &mut self,
-        transition: TransitionId,
-        place: PlaceId,
-        weight: u32,
-    ) -> &mut Self {
-        self.arcs.push(Arc::Output {
-            transition,
-            place,
-            weight,
-        });
+    pub fn add_output(&mut self, transition: TransitionId, place: PlaceId, weight: u32) -> &mut Self {
+        self.arcs.push(Arc::Output { transition, place, weight });
         self
     }
 
@@ -682,6 +651,33 @@ impl NetBuilder {
     /// The transition added with this index, to amend it.
     pub fn transition_mut(&mut self, t: TransitionId) -> Option<&mut Transition> {
         self.transitions.get_mut(t.index())
+    }
+
+    /// The transition added with this index.
+    pub fn transition_ref(&self, t: TransitionId) -> Option<&Transition> {
+        self.transitions.get(t.index())
+    }
+
+    /// Places that transition `t` puts tokens in (arcs added so far; a linear scan).
+    pub fn postset(&self, t: TransitionId) -> Vec<PlaceId> {
+        self.arcs
+            .iter()
+            .filter_map(|a| match *a {
+                Arc::Output { transition, place, .. } if transition == t => Some(place),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Transitions that take tokens from place `p` (arcs added so far; a linear scan).
+    pub fn consumers_of(&self, p: PlaceId) -> Vec<TransitionId> {
+        self.arcs
+            .iter()
+            .filter_map(|a| match *a {
+                Arc::Input { place, transition, .. } if place == p => Some(transition),
+                _ => None,
+            })
+            .collect()
     }
 
     /// Number of places added so far.
@@ -706,10 +702,7 @@ impl NetBuilder {
             if p.id.is_empty() {
                 return Err(NetError::EmptyId);
             }
-            if by_id
-                .insert(p.id.clone(), NodeId::Place(PlaceId(i as u32)))
-                .is_some()
-            {
+            if by_id.insert(p.id.clone(), NodeId::Place(PlaceId(i as u32))).is_some() {
                 return Err(NetError::DuplicateId(p.id.clone()));
             }
         }
@@ -719,17 +712,12 @@ impl NetBuilder {
                 return Err(NetError::EmptyId);
             }
             let tid = TransitionId(i as u32);
-            if by_id
-                .insert(t.id.clone(), NodeId::Transition(tid))
-                .is_some()
-            {
+            if by_id.insert(t.id.clone(), NodeId::Transition(tid)).is_some() {
                 return Err(NetError::DuplicateId(t.id.clone()));
             }
             match &t.kind {
                 TransitionKind::Timed(Delay::Fixed(d)) if !(d.is_finite() && *d >= 0.0) => {
-                    return Err(NetError::InvalidDelay {
-                        transition: t.id.clone(),
-                    })
+                    return Err(NetError::InvalidDelay { transition: t.id.clone() })
                 }
                 TransitionKind::Event(e) => by_event.entry(e.clone()).or_default().push(tid),
                 _ => {}
@@ -741,42 +729,24 @@ impl NetBuilder {
         let mut seen: HashMap<(bool, u32, u32), usize> = HashMap::with_capacity(self.arcs.len());
         for arc in &self.arcs {
             let (input, p, t, w) = match *arc {
-                Arc::Input {
-                    place,
-                    transition,
-                    weight,
-                } => (true, place, transition, weight),
-                Arc::Output {
-                    transition,
-                    place,
-                    weight,
-                } => (false, place, transition, weight),
+                Arc::Input { place, transition, weight } => (true, place, transition, weight),
+                Arc::Output { transition, place, weight } => (false, place, transition, weight),
             };
-            let place = self
-                .places
-                .get(p.index())
-                .ok_or_else(|| NetError::UnknownNode(format!("place #{}", p.0)))?;
-            let trans = self
-                .transitions
-                .get(t.index())
-                .ok_or_else(|| NetError::UnknownNode(format!("transition #{}", t.0)))?;
+            let place = self.places.get(p.index()).ok_or_else(|| NetError::UnknownNode(format!("place #{}", p.0)))?;
+            let trans =
+                self.transitions.get(t.index()).ok_or_else(|| NetError::UnknownNode(format!("transition #{}", t.0)))?;
             if w == 0 {
-                return Err(NetError::ZeroWeight {
-                    place: place.id.clone(),
-                    transition: trans.id.clone(),
-                });
+                return Err(NetError::ZeroWeight { place: place.id.clone(), transition: trans.id.clone() });
             }
             match seen.get(&(input, p.0, t.0)) {
                 Some(&k) => {
                     let slot = match &mut arcs[k] {
                         Arc::Input { weight, .. } | Arc::Output { weight, .. } => weight,
                     };
-                    *slot = slot
-                        .checked_add(w)
-                        .ok_or_else(|| NetError::WeightOverflow {
-                            place: place.id.clone(),
-                            transition: trans.id.clone(),
-                        })?;
+                    *slot = slot.checked_add(w).ok_or_else(|| NetError::WeightOverflow {
+                        place: place.id.clone(),
+                        transition: trans.id.clone(),
+                    })?;
                 }
                 None => {
                     seen.insert((input, p.0, t.0), arcs.len());
@@ -791,19 +761,11 @@ impl NetBuilder {
         let mut producers = vec![Vec::new(); np];
         for arc in &arcs {
             match *arc {
-                Arc::Input {
-                    place,
-                    transition,
-                    weight,
-                } => {
+                Arc::Input { place, transition, weight } => {
                     pre[transition.index()].push((place, weight));
                     consumers[place.index()].push(transition);
                 }
-                Arc::Output {
-                    transition,
-                    place,
-                    weight,
-                } => {
+                Arc::Output { transition, place, weight } => {
                     post[transition.index()].push((place, weight));
                     producers[place.index()].push(transition);
                 }
@@ -835,10 +797,8 @@ impl NetBuilder {
         let affected: Vec<Vec<TransitionId>> = delta
             .iter()
             .map(|d| {
-                let mut a: Vec<TransitionId> = d
-                    .iter()
-                    .flat_map(|&(p, _)| consumers[p.index()].iter().copied())
-                    .collect();
+                let mut a: Vec<TransitionId> =
+                    d.iter().flat_map(|&(p, _)| consumers[p.index()].iter().copied()).collect();
                 a.sort_unstable();
                 a.dedup();
                 a
@@ -874,10 +834,7 @@ mod tests {
         let p = b.add_place(Place::new("p").with_tokens(2));
         let q = b.add_place(Place::new("q"));
         let t = b.add_transition(Transition::new("t"));
-        b.add_input(p, t, 1)
-            .add_input(p, t, 1)
-            .add_output(t, q, 1)
-            .add_output(t, p, 1);
+        b.add_input(p, t, 1).add_input(p, t, 1).add_output(t, q, 1).add_output(t, p, 1);
         let net = b.build().unwrap();
         assert_eq!(net.arcs().len(), 3);
         assert_eq!(net.pre(t), &[(p, 2)]);
@@ -909,9 +866,7 @@ mod tests {
         assert!(matches!(b.build(), Err(NetError::UnknownNode(_))));
 
         let mut b = NetBuilder::new("n");
-        b.add_transition(
-            Transition::new("t").with_kind(TransitionKind::Timed(Delay::Fixed(f64::NAN))),
-        );
+        b.add_transition(Transition::new("t").with_kind(TransitionKind::Timed(Delay::Fixed(f64::NAN))));
         assert!(matches!(b.build(), Err(NetError::InvalidDelay { .. })));
 
         let mut b = NetBuilder::new("n");

@@ -26,7 +26,8 @@
 //!   <action action="Goto" primitive="goto" command="enable">
 //!     <param name="x" value="24"/>
 //!   </action>
-//!   <binding task="Goto" callSite="3" label="first">   <!-- a call's start -->
+//!   <binding task="Goto" callSite="3" label="first">   <!-- a call's start;
+//!        optional role="monitor_condition" or "while_condition" -->
 //!     <arg name="way-point" value="[24, 12]"/>
 //!   </binding>
 //!   <provenance task="Goto"/>
@@ -46,8 +47,8 @@ use quick_xml::name::QName;
 use quick_xml::Writer;
 
 use crate::model::{
-    ActionRef, Arc, CallBinding, Delay, Net, NetBuilder, NodeId, Place, Provenance, SourceSpan,
-    Transition, TransitionKind,
+    ActionRef, Arc, CallBinding, Delay, Net, NetBuilder, NodeId, Place, Provenance, SourceSpan, Transition,
+    TransitionKind,
 };
 use crate::xml::{self, Element};
 
@@ -74,19 +75,11 @@ pub struct PnmlError {
 impl PnmlError {
     pub(crate) fn at(input: &str, pos: usize, message: impl Into<String>) -> Self {
         let (line, column) = xml::line_col(input, pos);
-        PnmlError {
-            line,
-            column,
-            message: message.into(),
-        }
+        PnmlError { line, column, message: message.into() }
     }
 
     fn nowhere(message: impl Into<String>) -> Self {
-        PnmlError {
-            line: 0,
-            column: 0,
-            message: message.into(),
-        }
+        PnmlError { line: 0, column: 0, message: message.into() }
     }
 }
 
@@ -95,11 +88,7 @@ impl fmt::Display for PnmlError {
         if self.line == 0 {
             write!(f, "{}", self.message)
         } else {
-            write!(
-                f,
-                "line {}, column {}: {}",
-                self.line, self.column, self.message
-            )
+            write!(f, "line {}, column {}: {}", self.line, self.column, self.message)
         }
     }
 }
@@ -112,11 +101,7 @@ pub fn read_pnml(input: &str) -> Result<Net, PnmlError> {
     match nets.len() {
         1 => Ok(nets.remove(0)),
         0 => Err(PnmlError::at(input, 0, "the document holds no <net>")),
-        n => Err(PnmlError::at(
-            input,
-            0,
-            format!("the document holds {n} nets; use read_pnml_nets"),
-        )),
+        n => Err(PnmlError::at(input, 0, format!("the document holds {n} nets; use read_pnml_nets"))),
     }
 }
 
@@ -124,11 +109,7 @@ pub fn read_pnml(input: &str) -> Result<Net, PnmlError> {
 pub fn read_pnml_nets(input: &str) -> Result<Vec<Net>, PnmlError> {
     let root = xml::parse(input)?;
     if root.name != "pnml" {
-        return Err(PnmlError::at(
-            input,
-            root.pos,
-            format!("root element is <{}>, expected <pnml>", root.name),
-        ));
+        return Err(PnmlError::at(input, root.pos, format!("root element is <{}>, expected <pnml>", root.name)));
     }
     let r = Ctx { input };
     root.children_named("net").map(|n| r.net(n)).collect()
@@ -152,8 +133,7 @@ impl<'a> Ctx<'a> {
     }
 
     fn required<'e>(&self, el: &'e Element, key: &str) -> Result<&'e str, PnmlError> {
-        el.attr(key)
-            .ok_or_else(|| self.err(el, format!("<{}> has no `{key}` attribute", el.name)))
+        el.attr(key).ok_or_else(|| self.err(el, format!("<{}> has no `{key}` attribute", el.name)))
     }
 
     /// The single child named `name`, if any (two are an error).
@@ -167,11 +147,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// Text of `<label><text>…</text></label>`.
-    fn label_text<'e>(
-        &self,
-        el: &'e Element,
-        label: &'e str,
-    ) -> Result<Option<&'e str>, PnmlError> {
+    fn label_text<'e>(&self, el: &'e Element, label: &'e str) -> Result<Option<&'e str>, PnmlError> {
         let Some(l) = self.single(el, label)? else {
             return Ok(None);
         };
@@ -187,33 +163,19 @@ impl<'a> Ctx<'a> {
         };
         let at = self.single(el, label)?.unwrap_or(el);
         let t = text.trim();
-        t.parse::<u32>().map(Some).map_err(|_| {
-            self.err(
-                at,
-                format!(
-                    "<{label}> must be a whole number from 0 to {}, found `{t}`",
-                    u32::MAX
-                ),
-            )
-        })
+        t.parse::<u32>()
+            .map(Some)
+            .map_err(|_| self.err(at, format!("<{label}> must be a whole number from 0 to {}, found `{t}`", u32::MAX)))
     }
 
-    fn number<T: std::str::FromStr>(
-        &self,
-        el: &Element,
-        key: &str,
-    ) -> Result<Option<T>, PnmlError> {
+    fn number<T: std::str::FromStr>(&self, el: &Element, key: &str) -> Result<Option<T>, PnmlError> {
         match el.attr(key) {
             None => Ok(None),
-            Some(v) => v.trim().parse::<T>().map(Some).map_err(|_| {
-                self.err(
-                    el,
-                    format!(
-                        "attribute `{key}` of <{}> is not a valid number: `{v}`",
-                        el.name
-                    ),
-                )
-            }),
+            Some(v) => {
+                v.trim().parse::<T>().map(Some).map_err(|_| {
+                    self.err(el, format!("attribute `{key}` of <{}> is not a valid number: `{v}`", el.name))
+                })
+            }
         }
     }
 
@@ -225,10 +187,7 @@ impl<'a> Ctx<'a> {
                 continue;
             }
             if found.is_some() {
-                return Err(self.err(
-                    ts,
-                    format!("<{}> has more than one MCL <toolspecific>", el.name),
-                ));
+                return Err(self.err(ts, format!("<{}> has more than one MCL <toolspecific>", el.name)));
             }
             let version = ts.attr("version").unwrap_or("");
             if version != MCL_TOOL_VERSION {
@@ -246,10 +205,9 @@ impl<'a> Ctx<'a> {
         let id = self.required(el, "id")?;
         let ty = self.required(el, "type")?.trim();
         if ty != PTNET_TYPE {
-            return Err(self.err(
-                el,
-                format!("unsupported net type `{ty}`: only P/T nets ({PTNET_TYPE}) are supported"),
-            ));
+            return Err(
+                self.err(el, format!("unsupported net type `{ty}`: only P/T nets ({PTNET_TYPE}) are supported"))
+            );
         }
         let mut b = NetBuilder::new(id);
         if let Some(name) = self.label_text(el, "name")? {
@@ -289,13 +247,8 @@ impl<'a> Ctx<'a> {
                     "arc" => arcs.push(self.arc(c)?),
                     "page" => nested.push(c),
                     "referencePlace" | "referenceTransition" => {
-                        return Err(self.err(
-                            c,
-                            format!(
-                                "<{}> is not supported: flatten reference nodes before loading",
-                                c.name
-                            ),
-                        ))
+                        return Err(self
+                            .err(c, format!("<{}> is not supported: flatten reference nodes before loading", c.name)))
                     }
                     _ => {}
                 }
@@ -314,16 +267,9 @@ impl<'a> Ctx<'a> {
     ) -> Result<Net, PnmlError> {
         // Check ids here so that errors point at the offending element.
         let mut ids = std::collections::HashMap::new();
-        let nodes = places
-            .iter()
-            .enumerate()
-            .map(|(i, el)| (el, NodeId::Place(crate::PlaceId(i as u32))))
-            .chain(
-                transitions
-                    .iter()
-                    .enumerate()
-                    .map(|(i, el)| (el, NodeId::Transition(crate::TransitionId(i as u32)))),
-            );
+        let nodes = places.iter().enumerate().map(|(i, el)| (el, NodeId::Place(crate::PlaceId(i as u32)))).chain(
+            transitions.iter().enumerate().map(|(i, el)| (el, NodeId::Transition(crate::TransitionId(i as u32)))),
+        );
         for (el, node) in nodes {
             let id = self.required(el, "id")?;
             if id.is_empty() {
@@ -334,18 +280,14 @@ impl<'a> Ctx<'a> {
             }
         }
         for a in &arcs {
-            let src = ids.get(a.source).copied().ok_or_else(|| {
-                self.err(
-                    a.el,
-                    format!("arc source `{}` is not a place or transition", a.source),
-                )
-            })?;
-            let dst = ids.get(a.target).copied().ok_or_else(|| {
-                self.err(
-                    a.el,
-                    format!("arc target `{}` is not a place or transition", a.target),
-                )
-            })?;
+            let src = ids
+                .get(a.source)
+                .copied()
+                .ok_or_else(|| self.err(a.el, format!("arc source `{}` is not a place or transition", a.source)))?;
+            let dst = ids
+                .get(a.target)
+                .copied()
+                .ok_or_else(|| self.err(a.el, format!("arc target `{}` is not a place or transition", a.target)))?;
             match (src, dst) {
                 (NodeId::Place(p), NodeId::Transition(t)) => {
                     b.add_input(p, t, a.weight);
@@ -354,13 +296,8 @@ impl<'a> Ctx<'a> {
                     b.add_output(t, p, a.weight);
                 }
                 _ => {
-                    return Err(self.err(
-                        a.el,
-                        format!(
-                            "arc `{}` -> `{}` must join a place and a transition",
-                            a.source, a.target
-                        ),
-                    ))
+                    return Err(self
+                        .err(a.el, format!("arc `{}` -> `{}` must join a place and a transition", a.source, a.target)))
                 }
             }
         }
@@ -378,9 +315,8 @@ impl<'a> Ctx<'a> {
             for c in &ts.children {
                 match c.name.as_str() {
                     "interface" => {
-                        p.interface = self
-                            .number(c, "id")?
-                            .ok_or_else(|| self.err(c, "<interface> has no `id` attribute"))?
+                        p.interface =
+                            self.number(c, "id")?.ok_or_else(|| self.err(c, "<interface> has no `id` attribute"))?
                     }
                     "provenance" => p.provenance = self.provenance(c)?,
                     other => return Err(self.err(c, format!("unknown MCL place data <{other}>"))),
@@ -401,10 +337,10 @@ impl<'a> Ctx<'a> {
                 match c.name.as_str() {
                     "kind" => t.kind = self.kind(c)?,
                     "priority" => {
-                        t.priority =
-                            Some(self.number(c, "value")?.ok_or_else(|| {
-                                self.err(c, "<priority> has no `value` attribute")
-                            })?)
+                        t.priority = Some(
+                            self.number(c, "value")?
+                                .ok_or_else(|| self.err(c, "<priority> has no `value` attribute"))?,
+                        )
                     }
                     "action" => t.actions.push(self.action(c)?),
                     "binding" => {
@@ -414,9 +350,7 @@ impl<'a> Ctx<'a> {
                         t.binding = Some(self.binding(c)?);
                     }
                     "provenance" => t.provenance = self.provenance(c)?,
-                    other => {
-                        return Err(self.err(c, format!("unknown MCL transition data <{other}>")))
-                    }
+                    other => return Err(self.err(c, format!("unknown MCL transition data <{other}>"))),
                 }
             }
         }
@@ -426,9 +360,7 @@ impl<'a> Ctx<'a> {
     fn kind(&self, el: &Element) -> Result<TransitionKind, PnmlError> {
         match self.required(el, "type")? {
             "immediate" => Ok(TransitionKind::Immediate),
-            "event" => Ok(TransitionKind::Event(
-                self.required(el, "event")?.to_string(),
-            )),
+            "event" => Ok(TransitionKind::Event(self.required(el, "event")?.to_string())),
             "timed" => match (el.attr("delay"), el.attr("param")) {
                 (Some(_), None) => {
                     let d: f64 = self.number(el, "delay")?.unwrap_or(f64::NAN);
@@ -441,10 +373,9 @@ impl<'a> Ctx<'a> {
                 (None, Some(p)) => Ok(TransitionKind::Timed(Delay::Param(p.to_string()))),
                 _ => Err(self.err(el, "a timed <kind> needs exactly one of `delay` or `param`")),
             },
-            other => Err(self.err(
-                el,
-                format!("unknown transition kind `{other}` (expected immediate, event or timed)"),
-            )),
+            other => {
+                Err(self.err(el, format!("unknown transition kind `{other}` (expected immediate, event or timed)")))
+            }
         }
     }
 
@@ -459,10 +390,7 @@ impl<'a> Ctx<'a> {
             if c.name != "param" {
                 return Err(self.err(c, format!("unknown MCL action data <{}>", c.name)));
             }
-            a.params.push((
-                self.required(c, "name")?.to_string(),
-                self.required(c, "value")?.to_string(),
-            ));
+            a.params.push((self.required(c, "name")?.to_string(), self.required(c, "value")?.to_string()));
         }
         Ok(a)
     }
@@ -475,15 +403,13 @@ impl<'a> Ctx<'a> {
                 .ok_or_else(|| self.err(el, "<binding> has no `callSite` attribute"))?,
             label: el.attr("label").map(str::to_string),
             args: Vec::new(),
+            role: el.attr("role").map(str::to_string),
         };
         for c in &el.children {
             if c.name != "arg" {
                 return Err(self.err(c, format!("unknown MCL binding data <{}>", c.name)));
             }
-            b.args.push((
-                self.required(c, "name")?.to_string(),
-                self.required(c, "value")?.to_string(),
-            ));
+            b.args.push((self.required(c, "name")?.to_string(), self.required(c, "value")?.to_string()));
         }
         Ok(b)
     }
@@ -496,9 +422,7 @@ impl<'a> Ctx<'a> {
                 start: self
                     .number(el, "start")?
                     .ok_or_else(|| self.err(el, "<provenance> with `file` needs `start`"))?,
-                end: self
-                    .number(el, "end")?
-                    .ok_or_else(|| self.err(el, "<provenance> with `file` needs `end`"))?,
+                end: self.number(el, "end")?.ok_or_else(|| self.err(el, "<provenance> with `file` needs `end`"))?,
             }),
         };
         Ok(Provenance {
@@ -517,12 +441,7 @@ impl<'a> Ctx<'a> {
         if weight == 0 {
             return Err(self.err(el, "arc inscription must be at least 1"));
         }
-        Ok(RawArc {
-            el,
-            source,
-            target,
-            weight,
-        })
+        Ok(RawArc { el, source, target, weight })
     }
 }
 
@@ -562,9 +481,7 @@ impl Out {
     }
 
     fn end(&mut self, name: &str) -> Result<(), PnmlError> {
-        self.w
-            .write_event(Event::End(BytesEnd::new(name)))
-            .map_err(io_err)
+        self.w.write_event(Event::End(BytesEnd::new(name))).map_err(io_err)
     }
 
     /// `<label><text>value</text></label>`
@@ -579,10 +496,7 @@ impl Out {
     }
 
     fn toolspecific_start(&mut self) -> Result<(), PnmlError> {
-        self.start(
-            "toolspecific",
-            &[("tool", MCL_TOOL), ("version", MCL_TOOL_VERSION)],
-        )
+        self.start("toolspecific", &[("tool", MCL_TOOL), ("version", MCL_TOOL_VERSION)])
     }
 
     fn provenance(&mut self, p: &Provenance) -> Result<(), PnmlError> {
@@ -614,10 +528,7 @@ fn elem<'a>(name: &'a str, attrs: &[(&str, &str)]) -> Result<BytesStart<'a>, Pnm
     let mut e = BytesStart::new(name);
     for &(k, v) in attrs {
         check_chars(&format!("attribute `{k}`"), v)?;
-        e.push_attribute(Attribute {
-            key: QName(k),
-            value: Cow::Owned(xml::escape_attr(v)),
-        });
+        e.push_attribute(Attribute { key: QName(k), value: Cow::Owned(xml::escape_attr(v)) });
     }
     Ok(e)
 }
@@ -636,12 +547,8 @@ fn fresh_id(used: &HashSet<&str>, base: &str, n: usize) -> String {
 /// Fails only if a string of the net contains a character XML 1.0 cannot
 /// represent (such as U+0000).
 pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
-    let mut out = Out {
-        w: Writer::new_with_indent(Vec::new(), b' ', 2),
-    };
-    out.w
-        .write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
-        .map_err(io_err)?;
+    let mut out = Out { w: Writer::new_with_indent(Vec::new(), b' ', 2) };
+    out.w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).map_err(io_err)?;
     out.start("pnml", &[("xmlns", PNML_NAMESPACE)])?;
     out.start("net", &[("id", net.id()), ("type", PTNET_TYPE)])?;
     out.label("name", net.name())?;
@@ -689,16 +596,12 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
             out.toolspecific_start()?;
             match &t.kind {
                 TransitionKind::Immediate => {}
-                TransitionKind::Event(e) => {
-                    out.empty("kind", &[("type", "event"), ("event", e)])?
-                }
+                TransitionKind::Event(e) => out.empty("kind", &[("type", "event"), ("event", e)])?,
                 TransitionKind::Timed(Delay::Fixed(d)) => {
                     // `{}` prints the shortest string that parses back to the same f64.
                     out.empty("kind", &[("type", "timed"), ("delay", &format!("{d}"))])?
                 }
-                TransitionKind::Timed(Delay::Param(p)) => {
-                    out.empty("kind", &[("type", "timed"), ("param", p)])?
-                }
+                TransitionKind::Timed(Delay::Param(p)) => out.empty("kind", &[("type", "timed"), ("param", p)])?,
             }
             if let Some(prio) = t.priority {
                 out.empty("priority", &[("value", &prio.to_string())])?;
@@ -725,6 +628,9 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
                 if let Some(label) = &b.label {
                     attrs.push(("label", label));
                 }
+                if let Some(role) = &b.role {
+                    attrs.push(("role", role));
+                }
                 if b.args.is_empty() {
                     out.empty("binding", &attrs)?;
                 } else {
@@ -746,24 +652,12 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     used.insert(page_id.as_str());
     for (i, arc) in net.arcs().iter().enumerate() {
         let (src, dst, w) = match *arc {
-            Arc::Input {
-                place,
-                transition,
-                weight,
-            } => (
-                net.place(place).map(|p| p.id.as_str()),
-                net.transition(transition).map(|t| t.id.as_str()),
-                weight,
-            ),
-            Arc::Output {
-                transition,
-                place,
-                weight,
-            } => (
-                net.transition(transition).map(|t| t.id.as_str()),
-                net.place(place).map(|p| p.id.as_str()),
-                weight,
-            ),
+            Arc::Input { place, transition, weight } => {
+                (net.place(place).map(|p| p.id.as_str()), net.transition(transition).map(|t| t.id.as_str()), weight)
+            }
+            Arc::Output { transition, place, weight } => {
+                (net.transition(transition).map(|t| t.id.as_str()), net.place(place).map(|p| p.id.as_str()), weight)
+            }
         };
         let (Some(src), Some(dst)) = (src, dst) else {
             return Err(PnmlError::nowhere("arc refers to a missing node"));

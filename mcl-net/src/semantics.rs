@@ -75,14 +75,12 @@ impl fmt::Display for FireError {
                 write!(f, "immediate transitions are pending; events and timers must wait")
             }
             FireError::Overflow(p) => write!(f, "place #{} would exceed {} tokens", p.0, u32::MAX),
-            FireError::MarkingSize { expected, found } => write!(
-                f,
-                "marking has {found} entries but the net has {expected} places"
-            ),
-            FireError::Livelock(n) => write!(
-                f,
-                "immediate transitions fired {n} times without reaching a tangible marking"
-            ),
+            FireError::MarkingSize { expected, found } => {
+                write!(f, "marking has {found} entries but the net has {expected} places")
+            }
+            FireError::Livelock(n) => {
+                write!(f, "immediate transitions fired {n} times without reaching a tangible marking")
+            }
         }
     }
 }
@@ -97,9 +95,7 @@ pub fn is_enabled(net: &Net, m: &Marking, t: TransitionId) -> bool {
 
 /// All transitions enabled in `m`, in index order.
 pub fn enabled(net: &Net, m: &Marking) -> Vec<TransitionId> {
-    net.transition_ids()
-        .filter(|&t| is_enabled(net, m, t))
-        .collect()
+    net.transition_ids().filter(|&t| is_enabled(net, m, t)).collect()
 }
 
 /// Fires `t` in `m` (plain P/T rule, no immediate/tangible check).
@@ -147,8 +143,7 @@ pub fn select_ready(net: &Net, enabled: &mut Vec<TransitionId>) -> MarkingClass 
         None => MarkingClass::Tangible,
         Some(b) => {
             enabled.retain(|&t| {
-                ts.get(t.index())
-                    .is_some_and(|tr| tr.kind.is_immediate() && tr.effective_priority() == b)
+                ts.get(t.index()).is_some_and(|tr| tr.kind.is_immediate() && tr.effective_priority() == b)
             });
             MarkingClass::Vanishing
         }
@@ -184,10 +179,7 @@ fn check_size(net: &Net, m: &Marking) -> Result<(), FireError> {
     if m.len() == net.place_count() {
         Ok(())
     } else {
-        Err(FireError::MarkingSize {
-            expected: net.place_count(),
-            found: m.len(),
-        })
+        Err(FireError::MarkingSize { expected: net.place_count(), found: m.len() })
     }
 }
 
@@ -202,10 +194,7 @@ const ABSENT: u32 = u32::MAX;
 
 impl IdSet {
     fn new(n: usize) -> Self {
-        IdSet {
-            items: Vec::new(),
-            pos: vec![ABSENT; n],
-        }
+        IdSet { items: Vec::new(), pos: vec![ABSENT; n] }
     }
 
     fn insert(&mut self, t: TransitionId) {
@@ -277,11 +266,7 @@ impl EnabledTracker {
         self.enabled[t.index()] = on;
         self.changed.insert(t);
         let imm = net.transition(t).is_some_and(|tr| tr.kind.is_immediate());
-        let set = if imm {
-            &mut self.immediate
-        } else {
-            &mut self.other
-        };
+        let set = if imm { &mut self.immediate } else { &mut self.other };
         if on {
             set.insert(t);
         } else {
@@ -315,11 +300,8 @@ impl EnabledTracker {
 
     /// Ready transitions by [`select_ready`], sorted by index.
     pub fn ready(&self, net: &Net) -> Vec<TransitionId> {
-        let mut v: Vec<TransitionId> = if self.immediate.items.is_empty() {
-            self.other.items.clone()
-        } else {
-            self.immediate.items.clone()
-        };
+        let mut v: Vec<TransitionId> =
+            if self.immediate.items.is_empty() { self.other.items.clone() } else { self.immediate.items.clone() };
         v.sort_unstable();
         select_ready(net, &mut v);
         v
@@ -372,23 +354,13 @@ impl<N: AsRef<Net>> Executor<N> {
     pub fn new(net: N, seed: u64) -> Self {
         let marking = net.as_ref().initial_marking();
         let tracker = EnabledTracker::scan(net.as_ref(), &marking);
-        Executor {
-            net,
-            marking,
-            tracker,
-            rng: ChaCha8Rng::seed_from_u64(seed),
-        }
+        Executor { net, marking, tracker, rng: ChaCha8Rng::seed_from_u64(seed) }
     }
 
     /// Starts in `marking`.
     pub fn with_marking(net: N, marking: Marking, seed: u64) -> Result<Self, FireError> {
         let tracker = EnabledTracker::new(net.as_ref(), &marking)?;
-        Ok(Executor {
-            net,
-            marking,
-            tracker,
-            rng: ChaCha8Rng::seed_from_u64(seed),
-        })
+        Ok(Executor { net, marking, tracker, rng: ChaCha8Rng::seed_from_u64(seed) })
     }
 
     /// The net.
@@ -475,12 +447,8 @@ impl<N: AsRef<Net>> Executor<N> {
             return Err(FireError::NotTangible);
         }
         let net = self.net.as_ref();
-        let candidates: Vec<TransitionId> = net
-            .event_transitions(event)
-            .iter()
-            .copied()
-            .filter(|&t| self.tracker.is_enabled(t))
-            .collect();
+        let candidates: Vec<TransitionId> =
+            net.event_transitions(event).iter().copied().filter(|&t| self.tracker.is_enabled(t)).collect();
         if candidates.is_empty() {
             return Ok(None);
         }
@@ -521,19 +489,13 @@ mod tests {
     /// Figure A.1 of the seed: T0, T2 immediate; T1, T3 non-immediate.
     fn figure_a1() -> Net {
         let mut b = NetBuilder::new("a1");
-        let p: Vec<_> = (0..4)
-            .map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0))))
-            .collect();
+        let p: Vec<_> =
+            (0..4).map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0)))).collect();
         let t0 = b.add_transition(Transition::new("T0"));
-        let t1 =
-            b.add_transition(Transition::new("T1").with_kind(TransitionKind::Event("e1".into())));
+        let t1 = b.add_transition(Transition::new("T1").with_kind(TransitionKind::Event("e1".into())));
         let t2 = b.add_transition(Transition::new("T2"));
-        let t3 = b.add_transition(
-            Transition::new("T3").with_kind(TransitionKind::Timed(Delay::Fixed(1.0))),
-        );
-        b.add_input(p[0], t0, 1)
-            .add_output(t0, p[1], 1)
-            .add_output(t0, p[2], 1);
+        let t3 = b.add_transition(Transition::new("T3").with_kind(TransitionKind::Timed(Delay::Fixed(1.0))));
+        b.add_input(p[0], t0, 1).add_output(t0, p[1], 1).add_output(t0, p[2], 1);
         b.add_input(p[1], t1, 1);
         b.add_input(p[2], t2, 1).add_output(t2, p[3], 1);
         b.add_input(p[3], t3, 1).add_output(t3, p[0], 1);
@@ -545,10 +507,7 @@ mod tests {
         let net = figure_a1();
         let mut ex = Executor::new(&net, 7);
         assert_eq!(ex.class(), MarkingClass::Vanishing);
-        assert_eq!(
-            ex.fire(TransitionId(1)),
-            Err(FireError::NotEnabled(TransitionId(1)))
-        );
+        assert_eq!(ex.fire(TransitionId(1)), Err(FireError::NotEnabled(TransitionId(1))));
         let fired = ex.settle(10).unwrap();
         assert_eq!(fired, vec![TransitionId(0), TransitionId(2)]);
         assert_eq!(ex.marking().0, vec![0, 1, 0, 1]);
@@ -568,10 +527,7 @@ mod tests {
         let mut ex = Executor::new(&net, 1);
         ex.fire(TransitionId(0)).unwrap(); // {P1, P2}: T1 enabled but T2 immediate
         assert!(ex.is_enabled(TransitionId(1)));
-        assert_eq!(
-            ex.fire(TransitionId(1)),
-            Err(FireError::NotReady(TransitionId(1)))
-        );
+        assert_eq!(ex.fire(TransitionId(1)), Err(FireError::NotReady(TransitionId(1))));
         ex.fire(TransitionId(2)).unwrap();
         ex.fire(TransitionId(1)).unwrap();
     }
@@ -615,18 +571,14 @@ mod tests {
     fn seeded_choice_is_reproducible_and_uniform_enough() {
         let mut b = NetBuilder::new("choice");
         let p = b.add_place(Place::new("p").with_tokens(1));
-        let ts: Vec<_> = (0..4)
-            .map(|i| b.add_transition(Transition::new(format!("t{i}"))))
-            .collect();
+        let ts: Vec<_> = (0..4).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
         for &t in &ts {
             b.add_input(p, t, 1).add_output(t, p, 1);
         }
         let net = b.build().unwrap();
         let run = |seed| {
             let mut ex = Executor::new(&net, seed);
-            (0..400)
-                .map(|_| ex.step().unwrap().unwrap().0)
-                .collect::<Vec<_>>()
+            (0..400).map(|_| ex.step().unwrap().unwrap().0).collect::<Vec<_>>()
         };
         assert_eq!(run(42), run(42));
         assert_ne!(run(42), run(43));
@@ -646,14 +598,8 @@ mod tests {
         let net = b.build().unwrap();
         let mut ex = Executor::new(&net, 0);
         assert_eq!(ex.settle(50), Err(FireError::Livelock(50)));
-        assert_eq!(
-            ex.fire(TransitionId(9)),
-            Err(FireError::UnknownTransition(TransitionId(9)))
-        );
-        assert!(matches!(
-            Executor::with_marking(&net, Marking(vec![]), 0),
-            Err(FireError::MarkingSize { .. })
-        ));
+        assert_eq!(ex.fire(TransitionId(9)), Err(FireError::UnknownTransition(TransitionId(9))));
+        assert!(matches!(Executor::with_marking(&net, Marking(vec![]), 0), Err(FireError::MarkingSize { .. })));
         let mut m = Marking(vec![u32::MAX]);
         let mut b = NetBuilder::new("ovf");
         let p = b.add_place(Place::new("p"));

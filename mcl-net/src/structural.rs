@@ -32,11 +32,7 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits {
-            max_rows: 20_000,
-            max_nodes: 200_000,
-            max_results: 10_000,
-        }
+        Limits { max_rows: 20_000, max_nodes: 200_000, max_results: 10_000 }
     }
 }
 
@@ -84,11 +80,7 @@ pub fn incidence(net: &Net) -> IncidenceMatrix {
             data[p.index() * nt + t.index()] = d;
         }
     }
-    IncidenceMatrix {
-        places: np,
-        transitions: nt,
-        data,
-    }
+    IncidenceMatrix { places: np, transitions: nt, data }
 }
 
 /// A semi-positive invariant: its support with positive integer weights.
@@ -108,15 +100,10 @@ pub struct Invariants<I> {
 /// sums that no firing changes.
 pub fn p_invariants(net: &Net, limits: &Limits) -> Invariants<PlaceId> {
     let c = incidence(net);
-    let rows: Vec<Vec<i64>> = (0..c.places)
-        .map(|p| c.row(PlaceId(p as u32)).to_vec())
-        .collect();
+    let rows: Vec<Vec<i64>> = (0..c.places).map(|p| c.row(PlaceId(p as u32)).to_vec()).collect();
     let (inv, complete) = farkas(&rows, c.transitions, limits);
     Invariants {
-        invariants: inv
-            .into_iter()
-            .map(|v| v.into_iter().map(|(i, w)| (PlaceId(i as u32), w)).collect())
-            .collect(),
+        invariants: inv.into_iter().map(|v| v.into_iter().map(|(i, w)| (PlaceId(i as u32), w)).collect()).collect(),
         complete,
     }
 }
@@ -125,22 +112,13 @@ pub fn p_invariants(net: &Net, limits: &Limits) -> Invariants<PlaceId> {
 /// reproduce a marking.
 pub fn t_invariants(net: &Net, limits: &Limits) -> Invariants<TransitionId> {
     let c = incidence(net);
-    let rows: Vec<Vec<i64>> = (0..c.transitions)
-        .map(|t| {
-            (0..c.places)
-                .map(|p| c.data[p * c.transitions + t])
-                .collect()
-        })
-        .collect();
+    let rows: Vec<Vec<i64>> =
+        (0..c.transitions).map(|t| (0..c.places).map(|p| c.data[p * c.transitions + t]).collect()).collect();
     let (inv, complete) = farkas(&rows, c.places, limits);
     Invariants {
         invariants: inv
             .into_iter()
-            .map(|v| {
-                v.into_iter()
-                    .map(|(i, w)| (TransitionId(i as u32), w))
-                    .collect()
-            })
+            .map(|v| v.into_iter().map(|(i, w)| (TransitionId(i as u32), w)).collect())
             .collect(),
         complete,
     }
@@ -164,11 +142,7 @@ struct Row {
 
 impl Row {
     fn normalize(&mut self) {
-        let g = self
-            .c
-            .iter()
-            .chain(self.y.iter().map(|(_, v)| v))
-            .fold(0i64, |g, &x| gcd(g, x));
+        let g = self.c.iter().chain(self.y.iter().map(|(_, v)| v)).fold(0i64, |g, &x| gcd(g, x));
         if g > 1 {
             self.c.iter_mut().for_each(|x| *x /= g);
             self.y.iter_mut().for_each(|(_, x)| *x /= g);
@@ -194,12 +168,7 @@ impl Row {
 }
 
 /// `a·x + b·y` for sparse sorted vectors, with overflow check.
-fn combine_sparse(
-    a: i64,
-    x: &[(usize, i64)],
-    b: i64,
-    y: &[(usize, i64)],
-) -> Option<Vec<(usize, i64)>> {
+fn combine_sparse(a: i64, x: &[(usize, i64)], b: i64, y: &[(usize, i64)]) -> Option<Vec<(usize, i64)>> {
     let mut out = Vec::with_capacity(x.len() + y.len());
     let (mut i, mut j) = (0, 0);
     while i < x.len() || j < y.len() {
@@ -233,14 +202,7 @@ fn combine_sparse(
 /// Farkas algorithm on `rows` (one per variable, `cols` constraints each).
 /// Returns minimal-support semi-positive solutions of `Σ y_i·rows[i] = 0`.
 fn farkas(rows: &[Vec<i64>], cols: usize, limits: &Limits) -> (Vec<Vec<(usize, u64)>>, bool) {
-    let mut tab: Vec<Row> = rows
-        .iter()
-        .enumerate()
-        .map(|(i, r)| Row {
-            c: r.clone(),
-            y: vec![(i, 1)],
-        })
-        .collect();
+    let mut tab: Vec<Row> = rows.iter().enumerate().map(|(i, r)| Row { c: r.clone(), y: vec![(i, 1)] }).collect();
     let mut done = vec![false; cols];
     let mut complete = true;
     for _ in 0..cols {
@@ -264,10 +226,7 @@ fn farkas(rows: &[Vec<i64>], cols: usize, limits: &Limits) -> (Vec<Vec<(usize, u
             for n in &neg {
                 let (a, b) = (-n.c[j], p.c[j]);
                 let c: Option<Vec<i64>> =
-                    p.c.iter()
-                        .zip(&n.c)
-                        .map(|(&x, &y)| a.checked_mul(x)?.checked_add(b.checked_mul(y)?))
-                        .collect();
+                    p.c.iter().zip(&n.c).map(|(&x, &y)| a.checked_mul(x)?.checked_add(b.checked_mul(y)?)).collect();
                 let (Some(c), Some(y)) = (c, combine_sparse(a, &p.y, b, &n.y)) else {
                     // Coefficients too large for i64: give up on this combination.
                     complete = false;
@@ -276,10 +235,7 @@ fn farkas(rows: &[Vec<i64>], cols: usize, limits: &Limits) -> (Vec<Vec<(usize, u
                 let mut row = Row { c, y };
                 row.normalize();
                 // Martinez–Silva: drop rows whose support contains another's.
-                if next
-                    .iter()
-                    .any(|o| o.support_subset(&row) && (o.y.len() < row.y.len() || *o == row))
-                {
+                if next.iter().any(|o| o.support_subset(&row) && (o.y.len() < row.y.len() || *o == row)) {
                     continue;
                 }
                 next.retain(|o| !(row.support_subset(o) && row.y.len() < o.y.len()));
@@ -296,10 +252,7 @@ fn farkas(rows: &[Vec<i64>], cols: usize, limits: &Limits) -> (Vec<Vec<(usize, u
         }
     }
     // Keep solved rows (c = 0) with minimal supports.
-    let mut sols: Vec<Row> = tab
-        .into_iter()
-        .filter(|r| r.c.iter().all(|&x| x == 0))
-        .collect();
+    let mut sols: Vec<Row> = tab.into_iter().filter(|r| r.c.iter().all(|&x| x == 0)).collect();
     sols.sort_by(|a, b| a.y.len().cmp(&b.y.len()).then_with(|| a.y.cmp(&b.y)));
     let mut kept: Vec<Row> = Vec::new();
     for r in sols {
@@ -307,14 +260,8 @@ fn farkas(rows: &[Vec<i64>], cols: usize, limits: &Limits) -> (Vec<Vec<(usize, u
             kept.push(r);
         }
     }
-    let mut out: Vec<Vec<(usize, u64)>> = kept
-        .into_iter()
-        .map(|r| {
-            r.y.into_iter()
-                .map(|(i, v)| (i, v.unsigned_abs()))
-                .collect()
-        })
-        .collect();
+    let mut out: Vec<Vec<(usize, u64)>> =
+        kept.into_iter().map(|r| r.y.into_iter().map(|(i, v)| (i, v.unsigned_abs())).collect()).collect();
     out.sort();
     (out, complete)
 }
@@ -372,9 +319,7 @@ impl Flow<'_> {
     /// True when `set` (a membership vector) is a siphon of the oriented net.
     fn is_siphon(&self, set: &[bool]) -> bool {
         set.iter().enumerate().filter(|(_, &b)| b).all(|(p, _)| {
-            self.feeders(PlaceId(p as u32))
-                .iter()
-                .all(|&t| self.inputs(t).iter().any(|&(q, _)| set[q.index()]))
+            self.feeders(PlaceId(p as u32)).iter().all(|&t| self.inputs(t).iter().any(|&(q, _)| set[q.index()]))
         })
     }
 
@@ -384,11 +329,7 @@ impl Flow<'_> {
         let nt = self.net.transition_count();
         let mut cnt = vec![0u32; nt];
         for t in self.net.transition_ids() {
-            cnt[t.index()] = self
-                .inputs(t)
-                .iter()
-                .filter(|&&(q, _)| set[q.index()])
-                .count() as u32;
+            cnt[t.index()] = self.inputs(t).iter().filter(|&&(q, _)| set[q.index()]).count() as u32;
         }
         let mut queue = Vec::new();
         for t in self.net.transition_ids() {
@@ -480,10 +421,7 @@ fn contains(set: &[bool], sub: &[bool]) -> bool {
 }
 
 fn members(set: &[bool]) -> Vec<PlaceId> {
-    (0..set.len())
-        .filter(|&p| set[p])
-        .map(|p| PlaceId(p as u32))
-        .collect()
+    (0..set.len()).filter(|&p| set[p]).map(|p| PlaceId(p as u32)).collect()
 }
 
 fn membership(net: &Net, places: &[PlaceId]) -> Vec<bool> {
@@ -499,58 +437,34 @@ fn membership(net: &Net, places: &[PlaceId]) -> Vec<bool> {
 /// True when `places` is a siphon: every transition that puts a token into the
 /// set also takes one from it (•S ⊆ S•). Once empty, a siphon stays empty.
 pub fn is_siphon(net: &Net, places: &[PlaceId]) -> bool {
-    Flow {
-        net,
-        reversed: false,
-    }
-    .is_siphon(&membership(net, places))
+    Flow { net, reversed: false }.is_siphon(&membership(net, places))
 }
 
 /// True when `places` is a trap (S• ⊆ •S). Once marked, a trap stays marked.
 pub fn is_trap(net: &Net, places: &[PlaceId]) -> bool {
-    Flow {
-        net,
-        reversed: true,
-    }
-    .is_siphon(&membership(net, places))
+    Flow { net, reversed: true }.is_siphon(&membership(net, places))
 }
 
 /// The largest siphon contained in `places` (possibly empty).
 pub fn max_siphon_within(net: &Net, places: &[PlaceId]) -> Vec<PlaceId> {
     let mut s = membership(net, places);
-    Flow {
-        net,
-        reversed: false,
-    }
-    .max_siphon(&mut s);
+    Flow { net, reversed: false }.max_siphon(&mut s);
     members(&s)
 }
 
 /// The largest trap contained in `places` (possibly empty).
 pub fn max_trap_within(net: &Net, places: &[PlaceId]) -> Vec<PlaceId> {
     let mut s = membership(net, places);
-    Flow {
-        net,
-        reversed: true,
-    }
-    .max_siphon(&mut s);
+    Flow { net, reversed: true }.max_siphon(&mut s);
     members(&s)
 }
 
 /// All minimal non-empty siphons (capped by `limits`).
 pub fn minimal_siphons(net: &Net, limits: &Limits) -> PlaceSets {
-    Flow {
-        net,
-        reversed: false,
-    }
-    .minimal_siphons(limits)
+    Flow { net, reversed: false }.minimal_siphons(limits)
 }
 
 /// All minimal non-empty traps (capped by `limits`).
 pub fn minimal_traps(net: &Net, limits: &Limits) -> PlaceSets {
-    Flow {
-        net,
-        reversed: true,
-    }
-    .minimal_siphons(limits)
+    Flow { net, reversed: true }.minimal_siphons(limits)
 }

@@ -23,10 +23,7 @@ pub(crate) struct Element {
 
 impl Element {
     pub fn attr(&self, key: &str) -> Option<&str> {
-        self.attrs
-            .iter()
-            .find(|(k, _)| k == key)
-            .map(|(_, v)| v.as_str())
+        self.attrs.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
     pub fn children_named<'a>(&'a self, name: &'a str) -> impl Iterator<Item = &'a Element> + 'a {
@@ -65,13 +62,7 @@ fn start_element(input: &str, e: &BytesStart<'_>, pos: usize) -> Result<Element,
             .map_err(|err| PnmlError::at(input, pos, format!("bad attribute `{key}`: {err}")))?;
         attrs.push((key, value.into_owned()));
     }
-    Ok(Element {
-        name,
-        attrs,
-        children: Vec::new(),
-        text: String::new(),
-        pos,
-    })
+    Ok(Element { name, attrs, children: Vec::new(), text: String::new(), pos })
 }
 
 /// Parses a whole document and returns its root element.
@@ -82,13 +73,9 @@ pub(crate) fn parse(input: &str) -> Result<Element, PnmlError> {
     let mut root: Option<Element> = None;
     loop {
         let pos = reader.buffer_position() as usize;
-        let event = reader.read_event().map_err(|err| {
-            PnmlError::at(
-                input,
-                reader.error_position() as usize,
-                format!("malformed XML: {err}"),
-            )
-        })?;
+        let event = reader
+            .read_event()
+            .map_err(|err| PnmlError::at(input, reader.error_position() as usize, format!("malformed XML: {err}")))?;
         match event {
             Event::Start(e) | Event::Empty(e) if root.is_some() && stack.is_empty() => {
                 let _ = e;
@@ -96,11 +83,7 @@ pub(crate) fn parse(input: &str) -> Result<Element, PnmlError> {
             }
             Event::Start(e) => {
                 if stack.len() >= MAX_DEPTH {
-                    return Err(PnmlError::at(
-                        input,
-                        pos,
-                        format!("elements nested deeper than {MAX_DEPTH} levels"),
-                    ));
+                    return Err(PnmlError::at(input, pos, format!("elements nested deeper than {MAX_DEPTH} levels")));
                 }
                 stack.push(start_element(input, &e, pos)?);
             }
@@ -134,20 +117,14 @@ pub(crate) fn parse(input: &str) -> Result<Element, PnmlError> {
                 None => return Err(PnmlError::at(input, pos, "CDATA outside the root element")),
             },
             Event::GeneralRef(r) => {
-                let ch = r.resolve_char_ref().map_err(|err| {
-                    PnmlError::at(input, pos, format!("bad character reference: {err}"))
-                })?;
+                let ch = r
+                    .resolve_char_ref()
+                    .map_err(|err| PnmlError::at(input, pos, format!("bad character reference: {err}")))?;
                 let text: String = match ch {
                     Some(c) => c.to_string(),
                     None => match resolve_predefined_entity(&r) {
                         Some(s) => s.to_string(),
-                        None => {
-                            return Err(PnmlError::at(
-                                input,
-                                pos,
-                                format!("unknown entity `&{};`", &*r),
-                            ))
-                        }
+                        None => return Err(PnmlError::at(input, pos, format!("unknown entity `&{};`", &*r))),
                     },
                 };
                 match stack.last_mut() {
@@ -163,10 +140,7 @@ pub(crate) fn parse(input: &str) -> Result<Element, PnmlError> {
         return Err(PnmlError::at(
             input,
             open.pos,
-            format!(
-                "element `<{}>` is not closed before the end of the file",
-                open.name
-            ),
+            format!("element `<{}>` is not closed before the end of the file", open.name),
         ));
     }
     root.ok_or_else(|| PnmlError::at(input, input.len(), "no root element"))

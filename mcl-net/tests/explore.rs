@@ -5,8 +5,8 @@ use std::collections::{HashMap, VecDeque};
 use mcl_net::explore::{explore, StopReason};
 use mcl_net::semantics::{self, MarkingClass};
 use mcl_net::{
-    analyze, Delay, Marking, Net, NetBuilder, Options, Place, PlaceId, Semantics, Transition,
-    TransitionId, TransitionKind,
+    analyze, Delay, Marking, Net, NetBuilder, Options, Place, PlaceId, Semantics, Transition, TransitionId,
+    TransitionKind,
 };
 use proptest::prelude::*;
 
@@ -17,17 +17,12 @@ fn event(name: &str) -> TransitionKind {
 /// Seed Figure A.1: P1 is unbounded.
 fn figure_a1() -> Net {
     let mut b = NetBuilder::new("a1");
-    let p: Vec<_> = (0..4)
-        .map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0))))
-        .collect();
+    let p: Vec<_> = (0..4).map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0)))).collect();
     let t0 = b.add_transition(Transition::new("T0"));
     let t1 = b.add_transition(Transition::new("T1").with_kind(event("e")));
     let t2 = b.add_transition(Transition::new("T2"));
-    let t3 =
-        b.add_transition(Transition::new("T3").with_kind(TransitionKind::Timed(Delay::Fixed(1.0))));
-    b.add_input(p[0], t0, 1)
-        .add_output(t0, p[1], 1)
-        .add_output(t0, p[2], 1);
+    let t3 = b.add_transition(Transition::new("T3").with_kind(TransitionKind::Timed(Delay::Fixed(1.0))));
+    b.add_input(p[0], t0, 1).add_output(t0, p[1], 1).add_output(t0, p[2], 1);
     b.add_input(p[1], t1, 1);
     b.add_input(p[2], t2, 1).add_output(t2, p[3], 1);
     b.add_input(p[3], t3, 1).add_output(t3, p[0], 1);
@@ -35,19 +30,13 @@ fn figure_a1() -> Net {
 }
 
 fn opts(semantics: Semantics) -> Options {
-    Options {
-        semantics,
-        ..Options::default()
-    }
+    Options { semantics, ..Options::default() }
 }
 
 #[test]
 fn unbounded_net_stops_at_the_state_limit() {
     let net = figure_a1();
-    let o = Options {
-        max_states: 1000,
-        ..Options::default()
-    };
+    let o = Options { max_states: 1000, ..Options::default() };
     let r = analyze(&net, &o);
     assert!(!r.complete);
     assert_eq!(r.stop_reason, Some(StopReason::StateLimit));
@@ -115,10 +104,7 @@ fn dead_markings_come_with_shortest_paths() {
     let y = b.add_place(Place::new("y"));
     let end = b.add_place(Place::new("end"));
     let names = ["a", "b", "c", "short"];
-    let t: Vec<_> = names
-        .iter()
-        .map(|n| b.add_transition(Transition::new(*n)))
-        .collect();
+    let t: Vec<_> = names.iter().map(|n| b.add_transition(Transition::new(*n))).collect();
     b.add_input(p0, t[0], 1).add_output(t[0], x, 1);
     b.add_input(x, t[1], 1).add_output(t[1], y, 1);
     b.add_input(y, t[2], 1).add_output(t[2], end, 1);
@@ -173,13 +159,7 @@ fn one_bit_fields_widen_on_overflow() {
     assert_eq!(ss.bounds(), &[1, 40]);
 
     // A 1-safe net keeps one bit per place.
-    let ss = explore(
-        &figure_a1(),
-        &Options {
-            max_states: 5,
-            ..Options::default()
-        },
-    );
+    let ss = explore(&figure_a1(), &Options { max_states: 5, ..Options::default() });
     assert_eq!(ss.len(), 5);
     // Four independent 1-token rings of 17 places: 17^4 states, 1-safe,
     // 68 places packed one bit each into two words.
@@ -188,19 +168,15 @@ fn one_bit_fields_widen_on_overflow() {
     assert_eq!(ss.bits_per_place(), 1);
     let r = mcl_net::explore::report(&rings, &ss, 1);
     assert!(r.one_safe && r.complete && !r.deadlock);
-    assert_eq!(
-        (r.states, r.edges, r.max_tokens),
-        (17u64.pow(4), 4 * 17u64.pow(4), 4)
-    );
+    assert_eq!((r.states, r.edges, r.max_tokens), (17u64.pow(4), 4 * 17u64.pow(4), 4));
 }
 
 /// Four independent rings of `n` places with one token each.
 fn rings(n: usize) -> Net {
     let mut b = NetBuilder::new("rings");
     for r in 0..4 {
-        let p: Vec<_> = (0..n)
-            .map(|i| b.add_place(Place::new(format!("r{r}p{i}")).with_tokens(u32::from(i == 0))))
-            .collect();
+        let p: Vec<_> =
+            (0..n).map(|i| b.add_place(Place::new(format!("r{r}p{i}")).with_tokens(u32::from(i == 0)))).collect();
         for i in 0..n {
             let t = b.add_transition(Transition::new(format!("r{r}t{i}")));
             b.add_input(p[i], t, 1).add_output(t, p[(i + 1) % n], 1);
@@ -214,13 +190,7 @@ fn threads_give_the_same_numbered_state_space() {
     let net = rings(13); // 28561 states, levels wide enough to use threads
     let seq = explore(&net, &opts(Semantics::Plain));
     for threads in [2, 4] {
-        let par = explore(
-            &net,
-            &Options {
-                threads,
-                ..opts(Semantics::Plain)
-            },
-        );
+        let par = explore(&net, &Options { threads, ..opts(Semantics::Plain) });
         assert_eq!((par.len(), par.edges()), (seq.len(), seq.edges()));
         for s in seq.states() {
             assert_eq!(par.marking(s), seq.marking(s));
@@ -231,23 +201,12 @@ fn threads_give_the_same_numbered_state_space() {
 
 #[test]
 fn parallel_engine_stops_at_the_state_limit() {
-    let o = Options {
-        max_states: 5000,
-        threads: 2,
-        ..opts(Semantics::Plain)
-    };
+    let o = Options { max_states: 5000, threads: 2, ..opts(Semantics::Plain) };
     let r = analyze(&rings(13), &o);
     assert_eq!(r.states, 5000);
     assert!(!r.complete);
     assert_eq!(r.stop_reason, Some(StopReason::StateLimit));
-    let r = analyze(
-        &figure_a1(),
-        &Options {
-            max_states: 300,
-            threads: 3,
-            ..Options::default()
-        },
-    );
+    let r = analyze(&figure_a1(), &Options { max_states: 300, threads: 3, ..Options::default() });
     assert_eq!((r.states, r.complete), (300, false));
 }
 
@@ -255,9 +214,7 @@ fn parallel_engine_stops_at_the_state_limit() {
 fn wide_markings_use_the_generic_engine() {
     // 70 places of 16 bits: 18 words per marking, beyond the specialised sizes.
     let mut b = NetBuilder::new("wide");
-    let p: Vec<_> = (0..70)
-        .map(|i| b.add_place(Place::new(format!("p{i}")).with_tokens(200)))
-        .collect();
+    let p: Vec<_> = (0..70).map(|i| b.add_place(Place::new(format!("p{i}")).with_tokens(200))).collect();
     let t = b.add_transition(Transition::new("move"));
     let u = b.add_transition(Transition::new("back"));
     b.add_input(p[0], t, 1).add_output(t, p[69], 1);
@@ -269,16 +226,40 @@ fn wide_markings_use_the_generic_engine() {
     let r = reference(&net, Semantics::Plain);
     assert_eq!((seq.len() as u64, seq.edges()), (r.states, r.edges));
     assert_eq!(seq.bounds(), &r.bounds[..]);
-    let par = explore(
-        &net,
-        &Options {
-            threads: 2,
-            ..opts(Semantics::Plain)
-        },
-    );
+    let par = explore(&net, &Options { threads: 2, ..opts(Semantics::Plain) });
     for s in seq.states() {
         assert_eq!(par.marking(s), seq.marking(s));
         assert_eq!(par.path_to(s), seq.path_to(s));
+    }
+}
+
+#[test]
+fn cut_and_coreachability_check_unbounded_blocks() {
+    // Figure A.1: P1 grows without bound; cutting at 1 token keeps it finite.
+    let net = figure_a1();
+    let o = Options { cut_above: Some(1), record_edges: true, ..Options::default() };
+    let ss = explore(&net, &o);
+    assert!(ss.complete());
+    let cut: Vec<_> = ss.cut_states().collect();
+    assert!(!cut.is_empty());
+    for &s in &cut {
+        assert!(ss.marking(s).0.iter().any(|&k| k > 1));
+        assert!(ss.successors(s).is_empty());
+    }
+    let r = mcl_net::explore::report(&net, &ss, 1);
+    assert_eq!(r.cut_states, cut.len() as u64);
+    assert!(!r.one_safe);
+    assert!(!r.deadlock);
+    // Every state can reach a cut state (P1 keeps filling up) ...
+    assert!(ss.coreachable(|s| cut.contains(&s)).into_iter().all(|b| b));
+    // Back to the initial marking: T1 (event) can empty P1 before T3 refills
+    // P0, so {P1, P3} leads home; cut states are never expanded.
+    let back = ss.coreachable(|s| s == mcl_net::StateId(0));
+    assert!(back[0]);
+    let p1p3 = ss.states().find(|&s| ss.marking(s).0 == vec![0, 1, 0, 1]).unwrap();
+    assert!(back[p1p3.0 as usize]);
+    for &s in &cut {
+        assert!(!back[s.0 as usize]);
     }
 }
 
@@ -290,13 +271,7 @@ fn token_overflow_stops_cleanly() {
     b.add_output(t, p, 1 << 31);
     let net = b.build().unwrap();
     for threads in [1, 2] {
-        let r = analyze(
-            &net,
-            &Options {
-                threads,
-                ..opts(Semantics::Plain)
-            },
-        );
+        let r = analyze(&net, &Options { threads, ..opts(Semantics::Plain) });
         assert!(!r.complete);
         assert_eq!(r.stop_reason, Some(StopReason::TokenOverflow));
         assert_eq!(r.states, 2);
@@ -313,23 +288,9 @@ fn empty_net_has_one_dead_state() {
 
 #[test]
 fn report_serializes_to_json() {
-    let r = analyze(
-        &figure_a1(),
-        &Options {
-            max_states: 10,
-            ..Options::default()
-        },
-    );
+    let r = analyze(&figure_a1(), &Options { max_states: 10, ..Options::default() });
     let v = serde_json::to_value(&r).unwrap();
-    for key in [
-        "states",
-        "edges",
-        "dead_markings",
-        "one_safe",
-        "max_tokens",
-        "bounds",
-        "complete",
-    ] {
+    for key in ["states", "edges", "dead_markings", "one_safe", "max_tokens", "bounds", "complete"] {
         assert!(v.get(key).is_some(), "missing {key}");
     }
     assert_eq!(v["stop_reason"], "state_limit");
@@ -363,9 +324,7 @@ fn reference(net: &Net, s: Semantics) -> Reference {
             *b = (*b).max(x);
         }
         let mut ready = semantics::enabled(net, &m);
-        if s == Semantics::Mcl
-            && semantics::select_ready(net, &mut ready) == MarkingClass::Vanishing
-        {
+        if s == Semantics::Mcl && semantics::select_ready(net, &mut ready) == MarkingClass::Vanishing {
             vanishing += 1;
         }
         if ready.is_empty() {
@@ -382,15 +341,7 @@ fn reference(net: &Net, s: Semantics) -> Reference {
             }
         }
     }
-    Reference {
-        states: depth.len() as u64,
-        edges,
-        dead,
-        vanishing,
-        bounds,
-        max_total,
-        depth,
-    }
+    Reference { states: depth.len() as u64, edges, dead, vanishing, bounds, max_total, depth }
 }
 
 /// Random bounded nets: a few state-machine components (token conserving)
@@ -404,9 +355,7 @@ fn random_net() -> impl Strategy<Value = Net> {
     )
         .prop_map(|(np, trans, marks, extra)| {
             let mut b = NetBuilder::new("random");
-            let places: Vec<PlaceId> = (0..np)
-                .map(|i| b.add_place(Place::new(format!("p{i}"))))
-                .collect();
+            let places: Vec<PlaceId> = (0..np).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
             for (p, m) in marks {
                 let pl = b.place_mut(places[p % np]).unwrap();
                 pl.initial = (pl.initial + m).min(4);
@@ -423,8 +372,7 @@ fn random_net() -> impl Strategy<Value = Net> {
                     t.priority = Some(prio);
                 }
                 let t = b.add_transition(t);
-                b.add_input(places[from % np], t, 1)
-                    .add_output(t, places[to % np], 1);
+                b.add_input(places[from % np], t, 1).add_output(t, places[to % np], 1);
                 ts.push(t);
             }
             for (input, p, t, w) in extra {
@@ -447,7 +395,7 @@ proptest! {
     #[test]
     fn explorer_agrees_with_naive_reference(net in random_net(), mcl in any::<bool>()) {
         let s = if mcl { Semantics::Mcl } else { Semantics::Plain };
-        let o = Options { semantics: s, max_states: 20_000, max_dead_examples: usize::MAX, threads: 1 };
+        let o = Options { semantics: s, max_states: 20_000, max_dead_examples: usize::MAX, ..Options::default() };
         let ss = explore(&net, &o);
         prop_assume!(ss.complete());
         let r = reference(&net, s);
@@ -468,6 +416,29 @@ proptest! {
                 semantics::fire(&net, &mut x, t).unwrap();
             }
             prop_assert_eq!(x, m);
+        }
+        // Recorded edges are exactly the ready transitions and their firings.
+        let g = explore(&net, &Options { record_edges: true, ..o.clone() });
+        prop_assert_eq!(g.len(), ss.len());
+        for st in g.states() {
+            let m = g.marking(st);
+            let mut ready = semantics::enabled(&net, &m);
+            if s == Semantics::Mcl {
+                semantics::select_ready(&net, &mut ready);
+            }
+            let mut want: Vec<(TransitionId, Marking)> = ready
+                .into_iter()
+                .map(|t| {
+                    let mut m2 = m.clone();
+                    semantics::fire(&net, &mut m2, t).unwrap();
+                    (t, m2)
+                })
+                .collect();
+            let mut got: Vec<(TransitionId, Marking)> =
+                g.successors(st).iter().map(|&(t, d)| (t, g.marking(d))).collect();
+            want.sort();
+            got.sort();
+            prop_assert_eq!(got, want);
         }
         // The partitioned engine gives the same state space, numbering included.
         for threads in [2, 3] {

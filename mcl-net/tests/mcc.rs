@@ -9,10 +9,7 @@ fn mcc_dir() -> Option<PathBuf> {
     if dir.join("oracle.json").exists() {
         Some(dir)
     } else {
-        eprintln!(
-            "note: {} not found; skipping MCC oracle tests",
-            dir.display()
-        );
+        eprintln!("note: {} not found; skipping MCC oracle tests", dir.display());
         None
     }
 }
@@ -32,16 +29,8 @@ fn check(names: &dyn Fn(&str) -> bool) {
         }
         let text = std::fs::read_to_string(dir.join(format!("{name}.pnml"))).unwrap();
         let net = read_pnml(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
-        for (semantics, threads) in [
-            (Semantics::Plain, 1),
-            (Semantics::Mcl, 1),
-            (Semantics::Plain, 2),
-        ] {
-            let opts = Options {
-                semantics,
-                threads,
-                ..Options::default()
-            };
+        for (semantics, threads) in [(Semantics::Plain, 1), (Semantics::Mcl, 1), (Semantics::Plain, 2)] {
+            let opts = Options { semantics, threads, ..Options::default() };
             let start = std::time::Instant::now();
             let r = analyze(&net, &opts);
             eprintln!(
@@ -51,22 +40,10 @@ fn check(names: &dyn Fn(&str) -> bool) {
                 start.elapsed()
             );
             assert!(r.complete, "{name}");
-            assert_eq!(
-                r.states,
-                expect["states"].as_u64().unwrap(),
-                "{name} states"
-            );
+            assert_eq!(r.states, expect["states"].as_u64().unwrap(), "{name} states");
             assert_eq!(r.edges, expect["edges"].as_u64().unwrap(), "{name} edges");
-            assert_eq!(
-                r.deadlock,
-                expect["deadlock"].as_bool().unwrap(),
-                "{name} deadlock"
-            );
-            assert_eq!(
-                r.one_safe,
-                expect["one_safe"].as_bool().unwrap(),
-                "{name} one_safe"
-            );
+            assert_eq!(r.deadlock, expect["deadlock"].as_bool().unwrap(), "{name} deadlock");
+            assert_eq!(r.one_safe, expect["one_safe"].as_bool().unwrap(), "{name} one_safe");
             assert_eq!(r.deadlock, !r.dead_examples.is_empty());
             // Nets without MCL data have only immediate transitions: both
             // semantics coincide, and every dead example is reached by its path.

@@ -1,57 +1,41 @@
 //! PNML reading, writing and round trips.
 
 use mcl_net::{
-    read_pnml, read_pnml_nets, write_pnml, ActionRef, CallBinding, Delay, NetBuilder, Place,
-    Provenance, SourceSpan, Transition, TransitionKind,
+    read_pnml, read_pnml_nets, write_pnml, ActionRef, CallBinding, Delay, NetBuilder, Place, Provenance, SourceSpan,
+    Transition, TransitionKind,
 };
 
 fn sample_net() -> mcl_net::Net {
     let mut b = NetBuilder::new("mission-auv");
-    b.name("auv <mission> & \"friends\"")
-        .property("vehicle", "auv")
-        .property("note", "two\nlines");
-    let begin = b.add_place(
-        Place::new("begin")
-            .with_tokens(1)
-            .with_interface(1)
-            .with_provenance(Provenance {
-                task: Some("Goto".into()),
-                call_site: Some(3),
-                structure: Some("sequence".into()),
-                path: Some("0.1".into()),
-                span: Some(SourceSpan {
-                    file: "missions/dam.mcl".into(),
-                    start: 10,
-                    end: 42,
-                }),
-            }),
-    );
+    b.name("auv <mission> & \"friends\"").property("vehicle", "auv").property("note", "two\nlines");
+    let begin = b.add_place(Place::new("begin").with_tokens(1).with_interface(1).with_provenance(Provenance {
+        task: Some("Goto".into()),
+        call_site: Some(3),
+        structure: Some("sequence".into()),
+        path: Some("0.1".into()),
+        span: Some(SourceSpan { file: "missions/dam.mcl".into(), start: 10, end: 42 }),
+    }));
     let running = b.add_place(Place::new("running").with_name("  spaced\tname\r\n"));
     let ok = b.add_place(Place::new("ok").with_interface(1));
-    let start = b.add_transition(Transition::new("start").with_priority(2).with_action(
-        ActionRef {
-            action: "Goto".into(),
-            primitive: "goto".into(),
-            command: "enable".into(),
-            params: vec![("x".into(), "24".into()), ("y".into(), "-2.5".into())],
-        },
-    ));
+    let start = b.add_transition(Transition::new("start").with_priority(2).with_action(ActionRef {
+        action: "Goto".into(),
+        primitive: "goto".into(),
+        command: "enable".into(),
+        params: vec![("x".into(), "24".into()), ("y".into(), "-2.5".into())],
+    }));
     if let Some(t) = b.transition_mut(start) {
         t.binding = Some(CallBinding {
             task: "Goto".into(),
             call_site: 3,
             label: Some("first".into()),
             args: vec![("way-point".into(), "[24, 12]".into())],
+            role: Some("while_condition".into()),
         });
     }
-    let done = b
-        .add_transition(Transition::new("done").with_kind(TransitionKind::Event("goto_ok".into())));
-    let timeout = b.add_transition(
-        Transition::new("timeout").with_kind(TransitionKind::Timed(Delay::Param("timeout".into()))),
-    );
-    let tick = b.add_transition(
-        Transition::new("tick").with_kind(TransitionKind::Timed(Delay::Fixed(0.1 + 0.2))),
-    );
+    let done = b.add_transition(Transition::new("done").with_kind(TransitionKind::Event("goto_ok".into())));
+    let timeout =
+        b.add_transition(Transition::new("timeout").with_kind(TransitionKind::Timed(Delay::Param("timeout".into()))));
+    let tick = b.add_transition(Transition::new("tick").with_kind(TransitionKind::Timed(Delay::Fixed(0.1 + 0.2))));
     b.add_input(begin, start, 1).add_output(start, running, 3);
     b.add_input(running, done, 3).add_output(done, ok, 1);
     b.add_input(running, timeout, 2).add_output(timeout, ok, 1);
@@ -117,7 +101,10 @@ fn reads_nested_and_multiple_pages_and_skips_other_tools() {
 
 #[test]
 fn reads_several_nets() {
-    let doc = PLAIN.replace("</net>\n</pnml>", "</net>\n<net id=\"m\" type=\"http://www.pnml.org/version-2009/grammar/ptnet\"><page id=\"x\"/></net></pnml>");
+    let doc = PLAIN.replace(
+        "</net>\n</pnml>",
+        "</net>\n<net id=\"m\" type=\"http://www.pnml.org/version-2009/grammar/ptnet\"><page id=\"x\"/></net></pnml>",
+    );
     assert_eq!(read_pnml_nets(&doc).unwrap().len(), 2);
     let err = read_pnml(&doc).unwrap_err();
     assert!(err.message.contains("2 nets"), "{err}");
@@ -139,21 +126,15 @@ fn errors_carry_line_and_column() {
     assert_eq!((e.line, e.column), (4, 3), "{e}");
     assert!(e.message.contains("malformed XML"), "{e}");
 
-    let e = err(&wrap(
-        "<place id=\"p\"><initialMarking><text>-1</text></initialMarking></place>",
-    ));
+    let e = err(&wrap("<place id=\"p\"><initialMarking><text>-1</text></initialMarking></place>"));
     assert_eq!(e.line, 4, "{e}");
     assert!(e.message.contains("whole number"), "{e}");
 
-    let e = err(&wrap(
-        "<place id=\"p\"/>\n<arc id=\"a\" source=\"p\" target=\"nowhere\"/>",
-    ));
+    let e = err(&wrap("<place id=\"p\"/>\n<arc id=\"a\" source=\"p\" target=\"nowhere\"/>"));
     assert_eq!((e.line, e.column), (5, 1), "{e}");
     assert!(e.message.contains("nowhere"), "{e}");
 
-    let e = err(&wrap(
-        "<place id=\"p\"/><place id=\"q\"/><arc id=\"a\" source=\"p\" target=\"q\"/>",
-    ));
+    let e = err(&wrap("<place id=\"p\"/><place id=\"q\"/><arc id=\"a\" source=\"p\" target=\"q\"/>"));
     assert!(e.message.contains("place and a transition"), "{e}");
 
     let e = err(&wrap("<place id=\"p\"/><place id=\"p\"/>"));
@@ -168,9 +149,7 @@ fn errors_carry_line_and_column() {
     let e = err(&wrap("<transition id=\"t\"><toolspecific tool=\"mcl\" version=\"1\"><kind type=\"timed\" delay=\"-3\"/></toolspecific></transition>"));
     assert!(e.message.contains("delay"), "{e}");
 
-    let e = err(&wrap(
-        "<transition id=\"t\"><toolspecific tool=\"mcl\" version=\"2\"/></transition>",
-    ));
+    let e = err(&wrap("<transition id=\"t\"><toolspecific tool=\"mcl\" version=\"2\"/></transition>"));
     assert!(e.message.contains("version"), "{e}");
 
     let e = err("<pnml><net id=\"n\" type=\"http://www.pnml.org/version-2009/grammar/symmetricnet\"><page id=\"p\"/></net></pnml>");
@@ -189,11 +168,7 @@ fn errors_carry_line_and_column() {
 
 #[test]
 fn rejects_deep_nesting_without_overflowing_the_stack() {
-    let doc = format!(
-        "<pnml>{}{}</pnml>",
-        "<a>".repeat(100_000),
-        "</a>".repeat(100_000)
-    );
+    let doc = format!("<pnml>{}{}</pnml>", "<a>".repeat(100_000), "</a>".repeat(100_000));
     let e = err(&doc);
     assert!(e.message.contains("nested"), "{e}");
 }

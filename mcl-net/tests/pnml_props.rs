@@ -2,8 +2,8 @@
 //! makes the reader panic.
 
 use mcl_net::{
-    read_pnml, write_pnml, ActionRef, CallBinding, Delay, Net, NetBuilder, Place, PlaceId,
-    Provenance, SourceSpan, Transition, TransitionId, TransitionKind,
+    read_pnml, write_pnml, ActionRef, CallBinding, Delay, Net, NetBuilder, Place, PlaceId, Provenance, SourceSpan,
+    Transition, TransitionId, TransitionKind,
 };
 use proptest::prelude::*;
 
@@ -52,42 +52,15 @@ fn kind() -> impl Strategy<Value = TransitionKind> {
 }
 
 fn action() -> impl Strategy<Value = ActionRef> {
-    (
-        text(),
-        text(),
-        text(),
-        prop::collection::vec((text(), text()), 0..3),
-    )
-        .prop_map(|(action, primitive, command, params)| ActionRef {
-            action,
-            primitive,
-            command,
-            params,
-        })
+    (text(), text(), text(), prop::collection::vec((text(), text()), 0..3))
+        .prop_map(|(action, primitive, command, params)| ActionRef { action, primitive, command, params })
 }
 
-type TransitionSpec = (
-    String,
-    TransitionKind,
-    Vec<ActionRef>,
-    Option<u32>,
-    Option<CallBinding>,
-    Provenance,
-);
+type TransitionSpec = (String, TransitionKind, Vec<ActionRef>, Option<u32>, Option<CallBinding>, Provenance);
 
 fn binding() -> impl Strategy<Value = CallBinding> {
-    (
-        text(),
-        any::<u32>(),
-        opt_text(),
-        prop::collection::vec((text(), text()), 0..3),
-    )
-        .prop_map(|(task, call_site, label, args)| CallBinding {
-            task,
-            call_site,
-            label,
-            args,
-        })
+    (text(), any::<u32>(), opt_text(), prop::collection::vec((text(), text()), 0..3), opt_text())
+        .prop_map(|(task, call_site, label, args, role)| CallBinding { task, call_site, label, args, role })
 }
 
 #[derive(Debug, Clone)]
@@ -185,10 +158,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         Just("\"".to_string()),
         Just("</place>".to_string()),
         Just("<page id=\"x\">".to_string()),
-        Just(
-            "<toolspecific tool=\"mcl\" version=\"1\"><kind type=\"timed\"/></toolspecific>"
-                .to_string()
-        ),
+        Just("<toolspecific tool=\"mcl\" version=\"1\"><kind type=\"timed\"/></toolspecific>".to_string()),
         Just("<text>99999999999</text>".to_string()),
         Just("&#0;".to_string()),
         Just("<![CDATA[x]]>".to_string()),

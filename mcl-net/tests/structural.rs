@@ -1,8 +1,8 @@
 //! Structural analysis on textbook nets and against brute force.
 
 use mcl_net::structural::{
-    incidence, is_siphon, is_trap, max_siphon_within, max_trap_within, minimal_siphons,
-    minimal_traps, p_invariants, t_invariants, Limits,
+    incidence, is_siphon, is_trap, max_siphon_within, max_trap_within, minimal_siphons, minimal_traps, p_invariants,
+    t_invariants, Limits,
 };
 use mcl_net::{Net, NetBuilder, Place, PlaceId, Transition, TransitionId};
 use proptest::prelude::*;
@@ -22,12 +22,8 @@ fn mutex() -> Net {
         let cs = b.add_place(Place::new(format!("cs{i}")));
         let enter = b.add_transition(Transition::new(format!("enter{i}")));
         let leave = b.add_transition(Transition::new(format!("leave{i}")));
-        b.add_input(idle, enter, 1)
-            .add_input(m, enter, 1)
-            .add_output(enter, cs, 1);
-        b.add_input(cs, leave, 1)
-            .add_output(leave, idle, 1)
-            .add_output(leave, m, 1);
+        b.add_input(idle, enter, 1).add_input(m, enter, 1).add_output(enter, cs, 1);
+        b.add_input(cs, leave, 1).add_output(leave, idle, 1).add_output(leave, m, 1);
     }
     b.build().unwrap()
 }
@@ -35,29 +31,17 @@ fn mutex() -> Net {
 /// Dining philosophers taking the left fork, then the right one.
 fn philosophers(n: usize) -> Net {
     let mut b = NetBuilder::new(format!("philo{n}"));
-    let think: Vec<_> = (0..n)
-        .map(|i| b.add_place(Place::new(format!("think{i}")).with_tokens(1)))
-        .collect();
-    let left: Vec<_> = (0..n)
-        .map(|i| b.add_place(Place::new(format!("left{i}"))))
-        .collect();
-    let eat: Vec<_> = (0..n)
-        .map(|i| b.add_place(Place::new(format!("eat{i}"))))
-        .collect();
-    let fork: Vec<_> = (0..n)
-        .map(|i| b.add_place(Place::new(format!("fork{i}")).with_tokens(1)))
-        .collect();
+    let think: Vec<_> = (0..n).map(|i| b.add_place(Place::new(format!("think{i}")).with_tokens(1))).collect();
+    let left: Vec<_> = (0..n).map(|i| b.add_place(Place::new(format!("left{i}")))).collect();
+    let eat: Vec<_> = (0..n).map(|i| b.add_place(Place::new(format!("eat{i}")))).collect();
+    let fork: Vec<_> = (0..n).map(|i| b.add_place(Place::new(format!("fork{i}")).with_tokens(1))).collect();
     for i in 0..n {
         let j = (i + 1) % n;
         let tl = b.add_transition(Transition::new(format!("takeLeft{i}")));
         let tr = b.add_transition(Transition::new(format!("takeRight{i}")));
         let rel = b.add_transition(Transition::new(format!("release{i}")));
-        b.add_input(think[i], tl, 1)
-            .add_input(fork[i], tl, 1)
-            .add_output(tl, left[i], 1);
-        b.add_input(left[i], tr, 1)
-            .add_input(fork[j], tr, 1)
-            .add_output(tr, eat[i], 1);
+        b.add_input(think[i], tl, 1).add_input(fork[i], tl, 1).add_output(tl, left[i], 1);
+        b.add_input(left[i], tr, 1).add_input(fork[j], tr, 1).add_output(tr, eat[i], 1);
         b.add_input(eat[i], rel, 1)
             .add_output(rel, think[i], 1)
             .add_output(rel, fork[i], 1)
@@ -67,10 +51,8 @@ fn philosophers(n: usize) -> Net {
 }
 
 fn unit_invariants(net: &Net, sets: &[&[&str]]) -> Vec<Vec<(PlaceId, u64)>> {
-    let mut v: Vec<Vec<(PlaceId, u64)>> = sets
-        .iter()
-        .map(|s| ids(net, s).into_iter().map(|p| (p, 1)).collect())
-        .collect();
+    let mut v: Vec<Vec<(PlaceId, u64)>> =
+        sets.iter().map(|s| ids(net, s).into_iter().map(|p| (p, 1)).collect()).collect();
     v.sort();
     v
 }
@@ -79,11 +61,7 @@ fn unit_invariants(net: &Net, sets: &[&[&str]]) -> Vec<Vec<(PlaceId, u64)>> {
 fn mutex_invariants_siphons_traps() {
     let net = mutex();
     let l = Limits::default();
-    let expected: &[&[&str]] = &[
-        &["idle1", "cs1"],
-        &["idle2", "cs2"],
-        &["mutex", "cs1", "cs2"],
-    ];
+    let expected: &[&[&str]] = &[&["idle1", "cs1"], &["idle2", "cs2"], &["mutex", "cs1", "cs2"]];
     let inv = p_invariants(&net, &l);
     assert!(inv.complete);
     assert_eq!(inv.invariants, unit_invariants(&net, expected));
@@ -97,25 +75,16 @@ fn mutex_invariants_siphons_traps() {
     let t = t_invariants(&net, &l);
     assert_eq!(
         t.invariants,
-        vec![
-            vec![(TransitionId(0), 1), (TransitionId(1), 1)],
-            vec![(TransitionId(2), 1), (TransitionId(3), 1)],
-        ]
+        vec![vec![(TransitionId(0), 1), (TransitionId(1), 1)], vec![(TransitionId(2), 1), (TransitionId(3), 1)],]
     );
 }
 
 #[test]
 fn seed_figure_a1_incidence_invariant_siphon_trap() {
     let mut b = NetBuilder::new("a1");
-    let p: Vec<_> = (0..4)
-        .map(|i| b.add_place(Place::new(format!("P{i}"))))
-        .collect();
-    let t: Vec<_> = (0..4)
-        .map(|i| b.add_transition(Transition::new(format!("T{i}"))))
-        .collect();
-    b.add_input(p[0], t[0], 1)
-        .add_output(t[0], p[1], 1)
-        .add_output(t[0], p[2], 1);
+    let p: Vec<_> = (0..4).map(|i| b.add_place(Place::new(format!("P{i}")))).collect();
+    let t: Vec<_> = (0..4).map(|i| b.add_transition(Transition::new(format!("T{i}")))).collect();
+    b.add_input(p[0], t[0], 1).add_output(t[0], p[1], 1).add_output(t[0], p[2], 1);
     b.add_input(p[1], t[1], 1);
     b.add_input(p[2], t[2], 1).add_output(t[2], p[3], 1);
     b.add_input(p[3], t[3], 1).add_output(t[3], p[0], 1);
@@ -128,10 +97,7 @@ fn seed_figure_a1_incidence_invariant_siphon_trap() {
     }
     let l = Limits::default();
     let s = vec![p[0], p[2], p[3]];
-    assert_eq!(
-        p_invariants(&net, &l).invariants,
-        vec![s.iter().map(|&x| (x, 1)).collect::<Vec<_>>()]
-    );
+    assert_eq!(p_invariants(&net, &l).invariants, vec![s.iter().map(|&x| (x, 1)).collect::<Vec<_>>()]);
     assert!(is_siphon(&net, &s) && is_trap(&net, &s));
     assert_eq!(minimal_siphons(&net, &l).sets, vec![s.clone()]);
     assert_eq!(minimal_traps(&net, &l).sets, vec![s]);
@@ -146,23 +112,11 @@ fn philosophers_deadlock_is_explained_by_an_empty_siphon() {
         // P-invariants: each philosopher is in one state; each fork is free or held.
         let mut expected: Vec<Vec<String>> = Vec::new();
         for i in 0..n {
-            expected.push(vec![
-                format!("think{i}"),
-                format!("left{i}"),
-                format!("eat{i}"),
-            ]);
+            expected.push(vec![format!("think{i}"), format!("left{i}"), format!("eat{i}")]);
             let prev = (i + n - 1) % n;
-            expected.push(vec![
-                format!("fork{i}"),
-                format!("left{i}"),
-                format!("eat{i}"),
-                format!("eat{prev}"),
-            ]);
+            expected.push(vec![format!("fork{i}"), format!("left{i}"), format!("eat{i}"), format!("eat{prev}")]);
         }
-        let expected: Vec<Vec<&str>> = expected
-            .iter()
-            .map(|v| v.iter().map(String::as_str).collect())
-            .collect();
+        let expected: Vec<Vec<&str>> = expected.iter().map(|v| v.iter().map(String::as_str).collect()).collect();
         let refs: Vec<&[&str]> = expected.iter().map(Vec::as_slice).collect();
         let inv = p_invariants(&net, &l);
         assert!(inv.complete);
@@ -172,9 +126,7 @@ fn philosophers_deadlock_is_explained_by_an_empty_siphon() {
         // {eat_i, fork_i} is empty there and contains no marked trap.
         let r = mcl_net::analyze(&net, &mcl_net::Options::plain());
         assert_eq!(r.dead_markings, 1);
-        let names: Vec<String> = (0..n)
-            .flat_map(|i| [format!("eat{i}"), format!("fork{i}")])
-            .collect();
+        let names: Vec<String> = (0..n).flat_map(|i| [format!("eat{i}"), format!("fork{i}")]).collect();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let s = ids(&net, &names);
         assert!(is_siphon(&net, &s));
@@ -201,11 +153,7 @@ fn philosophers_deadlock_is_explained_by_an_empty_siphon() {
 #[test]
 fn caps_are_reported() {
     let net = philosophers(3);
-    let tiny = Limits {
-        max_rows: 1,
-        max_nodes: 2,
-        max_results: 1,
-    };
+    let tiny = Limits { max_rows: 1, max_nodes: 2, max_results: 1 };
     assert!(!p_invariants(&net, &tiny).complete);
     assert!(!minimal_siphons(&net, &tiny).complete);
     assert!(!minimal_traps(&net, &tiny).complete);
@@ -215,19 +163,11 @@ fn caps_are_reported() {
 // Brute force on small random nets.
 
 fn random_net() -> impl Strategy<Value = Net> {
-    (
-        1usize..8,
-        1usize..7,
-        prop::collection::vec((any::<bool>(), 0usize..8, 0usize..7, 1u32..3), 0..18),
-    )
-        .prop_map(|(np, nt, arcs)| {
+    (1usize..8, 1usize..7, prop::collection::vec((any::<bool>(), 0usize..8, 0usize..7, 1u32..3), 0..18)).prop_map(
+        |(np, nt, arcs)| {
             let mut b = NetBuilder::new("r");
-            let ps: Vec<_> = (0..np)
-                .map(|i| b.add_place(Place::new(format!("p{i}"))))
-                .collect();
-            let ts: Vec<_> = (0..nt)
-                .map(|i| b.add_transition(Transition::new(format!("t{i}"))))
-                .collect();
+            let ps: Vec<_> = (0..np).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
+            let ts: Vec<_> = (0..nt).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
             for (input, p, t, w) in arcs {
                 let (p, t) = (ps[p % np], ts[t % nt]);
                 if input {
@@ -237,28 +177,19 @@ fn random_net() -> impl Strategy<Value = Net> {
                 }
             }
             b.build().unwrap()
-        })
+        },
+    )
 }
 
 fn subsets(n: usize) -> impl Iterator<Item = Vec<PlaceId>> {
-    (1u32..(1 << n)).map(move |mask| {
-        (0..n as u32)
-            .filter(|i| mask & (1 << i) != 0)
-            .map(PlaceId)
-            .collect()
-    })
+    (1u32..(1 << n)).map(move |mask| (0..n as u32).filter(|i| mask & (1 << i) != 0).map(PlaceId).collect())
 }
 
 fn brute_minimal(net: &Net, pred: impl Fn(&Net, &[PlaceId]) -> bool) -> Vec<Vec<PlaceId>> {
-    let all: Vec<Vec<PlaceId>> = subsets(net.place_count())
-        .filter(|s| pred(net, s))
-        .collect();
+    let all: Vec<Vec<PlaceId>> = subsets(net.place_count()).filter(|s| pred(net, s)).collect();
     let mut min: Vec<Vec<PlaceId>> = all
         .iter()
-        .filter(|s| {
-            !all.iter()
-                .any(|o| o.len() < s.len() && o.iter().all(|p| s.contains(p)))
-        })
+        .filter(|s| !all.iter().any(|o| o.len() < s.len() && o.iter().all(|p| s.contains(p))))
         .cloned()
         .collect();
     min.sort();

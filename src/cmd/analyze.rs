@@ -42,15 +42,24 @@ pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsC
         Format::Json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_else(|_| "{}".into())),
         Format::Human => {
             println!("net `{}`: {} places, {} transitions", net.name(), net.place_count(), net.transition_count());
-            let more = if r.complete { String::new() } else { format!(" (stopped at the limit of {max_states} states: the net is larger)") };
+            let more = if r.complete {
+                String::new()
+            } else {
+                format!(" (stopped at the limit of {max_states} states: the net is larger)")
+            };
             println!("reachable markings: {}{more}", r.states);
             println!("edges: {}", r.edges);
             println!("dead markings: {}", r.dead_markings);
             println!("1-safe: {}", if r.one_safe { "yes" } else { "no" });
             println!("largest bound: {}", r.max_tokens_in_place);
             for d in r.dead_examples.iter().take(3) {
-                let m: Vec<String> = d.marking.iter().map(|(p, k)| if *k == 1 { p.clone() } else { format!("{p}×{k}") }).collect();
-                println!("  dead: {{{}}} after {}", m.join(", "), if d.path_names.is_empty() { "no firing".into() } else { d.path_names.join(" → ") });
+                let m: Vec<String> =
+                    d.marking.iter().map(|(p, k)| if *k == 1 { p.clone() } else { format!("{p}×{k}") }).collect();
+                println!(
+                    "  dead: {{{}}} after {}",
+                    m.join(", "),
+                    if d.path_names.is_empty() { "no firing".into() } else { d.path_names.join(" → ") }
+                );
             }
         }
     }

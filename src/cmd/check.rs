@@ -20,10 +20,7 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
     for path in &files {
         let f = db.file(path);
         if f.text(&db).is_none() {
-            eprintln!(
-                "error: cannot read `{}` (is it UTF-8 text?)",
-                path.display()
-            );
+            eprintln!("error: cannot read `{}` (is it UTF-8 text?)", path.display());
             return 2;
         }
         roots.push(f);
@@ -42,31 +39,19 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
     for &f in &to_check {
         diags.extend(check_file(&db, f).iter().cloned());
     }
-    let errors = diags
-        .iter()
-        .filter(|d| d.diag.severity == Severity::Error)
-        .count();
-    let warnings = diags
-        .iter()
-        .filter(|d| d.diag.severity == Severity::Warning)
-        .count();
+    let errors = diags.iter().filter(|d| d.diag.severity == Severity::Error).count();
+    let warnings = diags.iter().filter(|d| d.diag.severity == Severity::Warning).count();
     let mut stdout = std::io::stdout().lock();
     let written = match format {
         Format::Json => {
             let arr: Vec<_> = diags.iter().map(|d| to_json(&db, d)).collect();
-            writeln!(
-                stdout,
-                "{}",
-                serde_json::to_string_pretty(&arr).unwrap_or_else(|_| "[]".into())
-            )
+            writeln!(stdout, "{}", serde_json::to_string_pretty(&arr).unwrap_or_else(|_| "[]".into()))
         }
         Format::Human => {
             let use_color = match color {
                 ColorChoice::Always => true,
                 ColorChoice::Never => false,
-                ColorChoice::Auto => {
-                    std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none()
-                }
+                ColorChoice::Auto => std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
             };
             let mut s = render_human(&db, &diags, use_color);
             let n = to_check.len();

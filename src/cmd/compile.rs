@@ -16,8 +16,7 @@ pub struct Options<'a> {
 
 fn write(path: &Path, text: &str) -> Result<(), String> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .map_err(|e| format!("cannot create `{}`: {e}", parent.display()))?;
+        std::fs::create_dir_all(parent).map_err(|e| format!("cannot create `{}`: {e}", parent.display()))?;
     }
     std::fs::write(path, text).map_err(|e| format!("cannot write `{}`: {e}", path.display()))
 }
@@ -25,15 +24,7 @@ fn write(path: &Path, text: &str) -> Result<(), String> {
 /// A file name for a mission: its name, with characters outside
 /// `[A-Za-z0-9_-]` replaced by `_`.
 pub fn file_stem(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }
 
 pub fn run(o: Options<'_>) -> u8 {
@@ -44,28 +35,15 @@ pub fn run(o: Options<'_>) -> u8 {
     let db = Database::new();
     let file = db.file(o.file);
     if file.text(&db).is_none() {
-        eprintln!(
-            "error: cannot read `{}` (is it UTF-8 text?)",
-            o.file.display()
-        );
+        eprintln!("error: cannot read `{}` (is it UTF-8 text?)", o.file.display());
         return 2;
     }
     let missions = match compile_file(&db, file) {
         Ok(m) => m,
         Err(CompileError::HasErrors) => {
-            let diags: Vec<_> = check_file(&db, file)
-                .iter()
-                .filter(|d| d.diag.is_error())
-                .cloned()
-                .collect();
-            eprint!(
-                "{}",
-                render_human(&db, &diags, std::io::stderr().is_terminal())
-            );
-            eprintln!(
-                "error: `{}` has errors; nothing was compiled",
-                o.file.display()
-            );
+            let diags: Vec<_> = check_file(&db, file).iter().filter(|d| d.diag.is_error()).cloned().collect();
+            eprint!("{}", render_human(&db, &diags, std::io::stderr().is_terminal()));
+            eprintln!("error: `{}` has errors; nothing was compiled", o.file.display());
             return 1;
         }
         Err(e) => {

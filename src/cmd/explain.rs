@@ -10,17 +10,15 @@ pub fn run(code: Option<&str>) -> u8 {
             }
             0
         }
-        Some(code) => {
-            match codes::lookup(code) {
-                Some(info) => {
-                    print!("{}", info.explanation);
-                    0
-                }
-                None => {
-                    eprintln!("error: `{code}` is not an MCL diagnostic code; `mcl explain` lists them all");
-                    2
-                }
+        Some(code) => match codes::lookup(code) {
+            Some(info) => {
+                print!("{}", info.explanation);
+                0
             }
-        }
+            None => {
+                eprintln!("error: `{code}` is not an MCL diagnostic code; `mcl explain` lists them all");
+                2
+            }
+        },
     }
 }

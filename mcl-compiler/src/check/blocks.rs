@@ -61,17 +61,14 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                     "abort" => "does not handle abort correctly",
                     _ => "is too large to verify",
                 };
-                let mut d = Diagnostic::error(
-                    codes::BLOCK_PROPERTY,
-                    format!("task `{}` {what}", t.name.text),
-                    t.name.span,
-                )
-                .with_label(t.name.span, v.message.clone())
-                .with_label_in(
-                    cx.other_file(pid),
-                    pattern.name.span,
-                    format!("pattern `{}`", pattern.name.text),
-                );
+                let mut d =
+                    Diagnostic::error(codes::BLOCK_PROPERTY, format!("task `{}` {what}", t.name.text), t.name.span)
+                        .with_label(t.name.span, v.message.clone())
+                        .with_label_in(
+                            cx.other_file(pid),
+                            pattern.name.span,
+                            format!("pattern `{}`", pattern.name.text),
+                        );
                 if !v.trace.is_empty() {
                     d = d.with_note(format!("counterexample: {}", v.trace.join(" → ")));
                 }

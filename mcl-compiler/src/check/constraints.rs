@@ -35,10 +35,7 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
         };
         cx.out.push(Diagnostic::error(
             codes::CONSTRAINT_ARITY,
-            format!(
-                "`{kind}` names {n} call{} but needs {want}",
-                if n == 1 { "" } else { "s" }
-            ),
+            format!("`{kind}` names {n} call{} but needs {want}", if n == 1 { "" } else { "s" }),
             c.span,
         ));
     }
@@ -51,36 +48,23 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
             )
             .with_help("add `= 1` after the braces for a mutual exclusion"),
         ),
-        (ConstraintKind::Mutex, Some(b)) if b.as_u32().is_none_or(|v| v == 0) => {
-            cx.out.push(Diagnostic::error(
-                codes::CONSTRAINT_BOUND,
-                format!(
-                    "the bound of a `mutex` must be a whole number >= 1, found `{}`",
-                    b.text
-                ),
-                b.span,
-            ))
-        }
+        (ConstraintKind::Mutex, Some(b)) if b.as_u32().is_none_or(|v| v == 0) => cx.out.push(Diagnostic::error(
+            codes::CONSTRAINT_BOUND,
+            format!("the bound of a `mutex` must be a whole number >= 1, found `{}`", b.text),
+            b.span,
+        )),
         (ConstraintKind::Order | ConstraintKind::Sync, Some(b)) => cx.out.push(
-            Diagnostic::error(
-                codes::CONSTRAINT_BOUND,
-                format!("`{kind}` takes no bound"),
-                b.span,
-            )
-            .with_help("only `mutex { ... } = N` has a bound"),
+            Diagnostic::error(codes::CONSTRAINT_BOUND, format!("`{kind}` takes no bound"), b.span)
+                .with_help("only `mutex { ... } = N` has a bound"),
         ),
         _ => {}
     }
     for r in &c.refs {
         match &r.mission {
             Some(mname) => {
-                let Some((_, m)) = all
-                    .iter()
-                    .find(|(_, m)| m.name.as_ref().is_some_and(|n| n.text == mname.text))
+                let Some((_, m)) = all.iter().find(|(_, m)| m.name.as_ref().is_some_and(|n| n.text == mname.text))
                 else {
-                    let names = all
-                        .iter()
-                        .filter_map(|(_, m)| m.name.as_ref().map(|n| n.text.as_str()));
+                    let names = all.iter().filter_map(|(_, m)| m.name.as_ref().map(|n| n.text.as_str()));
                     let d = Diagnostic::error(
                         codes::UNKNOWN_MISSION,
                         format!("there is no mission named `{}`", mname.text),
@@ -88,34 +72,23 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                     )
                     .with_label(mname.span, "unknown mission");
                     let d = cx.suggest(d, &mname.text, names);
-                    let d = if d.help.is_none() {
-                        d.with_help("name a mission with `mission : name { ... }`")
-                    } else {
-                        d
-                    };
+                    let d =
+                        if d.help.is_none() { d.with_help("name a mission with `mission : name { ... }`") } else { d };
                     cx.out.push(d);
                     continue;
                 };
-                let labels: Vec<&str> = calls(&m.body)
-                    .into_iter()
-                    .filter_map(|c| c.label.as_ref().map(|l| l.text.as_str()))
-                    .collect();
+                let labels: Vec<&str> =
+                    calls(&m.body).into_iter().filter_map(|c| c.label.as_ref().map(|l| l.text.as_str())).collect();
                 if !labels.contains(&r.label.text.as_str()) {
                     let d = Diagnostic::error(
                         codes::UNKNOWN_LABEL,
-                        format!(
-                            "mission `{}` has no call labelled `{}`",
-                            mname.text, r.label.text
-                        ),
+                        format!("mission `{}` has no call labelled `{}`", mname.text, r.label.text),
                         r.label.span,
                     )
                     .with_label(r.label.span, "unknown label");
                     let d = cx.suggest(d, &r.label.text, labels.iter().copied());
                     let d = if d.help.is_none() {
-                        d.with_help(format!(
-                            "label a call with `Task( ... ) : {}`",
-                            r.label.text
-                        ))
+                        d.with_help(format!("label a call with `Task( ... ) : {}`", r.label.text))
                     } else {
                         d
                     };
@@ -126,9 +99,7 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                 let owners: Vec<&Mission> = all
                     .iter()
                     .filter(|(_, m)| {
-                        calls(&m.body)
-                            .iter()
-                            .any(|c| c.label.as_ref().is_some_and(|l| l.text == r.label.text))
+                        calls(&m.body).iter().any(|c| c.label.as_ref().is_some_and(|l| l.text == r.label.text))
                     })
                     .map(|(_, m)| *m)
                     .collect();
@@ -139,29 +110,18 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                             format!("no mission has a call labelled `{}`", r.label.text),
                             r.label.span,
                         )
-                        .with_help(format!(
-                            "label a call with `Task( ... ) : {}`",
-                            r.label.text
-                        )),
+                        .with_help(format!("label a call with `Task( ... ) : {}`", r.label.text)),
                     ),
                     1 => {}
                     _ => {
                         let names: Vec<String> = owners
                             .iter()
-                            .filter_map(|m| {
-                                m.name
-                                    .as_ref()
-                                    .map(|n| format!("`{}:{}`", n.text, r.label.text))
-                            })
+                            .filter_map(|m| m.name.as_ref().map(|n| format!("`{}:{}`", n.text, r.label.text)))
                             .collect();
                         cx.out.push(
                             Diagnostic::error(
                                 codes::AMBIGUOUS_LABEL,
-                                format!(
-                                    "label `{}` is used by {} missions",
-                                    r.label.text,
-                                    owners.len()
-                                ),
+                                format!("label `{}` is used by {} missions", r.label.text, owners.len()),
                                 r.label.span,
                             )
                             .with_help(format!("say which one: {}", names.join(" or "))),

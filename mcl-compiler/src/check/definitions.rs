@@ -7,18 +7,10 @@ use mcl_syntax::Diagnostic;
 
 pub(crate) fn check(cx: &mut Cx<'_>) {
     let mut found = Vec::new();
-    for_each_def(cx.db, cx.file, |id, name| {
-        found.push((id, name.to_string()))
-    });
+    for_each_def(cx.db, cx.file, |id, name| found.push((id, name.to_string())));
     for (id, name) in found {
         // Definitions of the standard library may be overridden.
-        let defs: Vec<_> = cx
-            .scope
-            .get(id.kind, &name)
-            .iter()
-            .filter(|d| !d.in_stdlib)
-            .copied()
-            .collect();
+        let defs: Vec<_> = cx.scope.get(id.kind, &name).iter().filter(|d| !d.in_stdlib).copied().collect();
         let Some(first) = defs.first().copied() else {
             continue;
         };
@@ -32,11 +24,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             id.name_span,
         )
         .with_label(id.name_span, format!("`{name}` redefined here"))
-        .with_label_in(
-            cx.other_file(first),
-            first.name_span,
-            format!("first definition of `{name}`"),
-        )
+        .with_label_in(cx.other_file(first), first.name_span, format!("first definition of `{name}`"))
         .with_help(format!("rename one of the two {kind}s, or remove one"));
         cx.out.push(d);
     }
@@ -48,27 +36,21 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
 /// file reports it).
 pub(crate) fn check_imported_clashes(cx: &mut Cx<'_>) {
     use crate::queries::{imports, program};
-    let closures: Vec<(&crate::queries::ResolvedImport, Vec<crate::db::SourceFile>)> =
-        imports(cx.db, cx.file)
-            .iter()
-            .filter(|i| i.target.text(cx.db).is_some())
-            .map(|i| (i, program(cx.db, i.target).files.clone()))
-            .collect();
+    let closures: Vec<(&crate::queries::ResolvedImport, Vec<crate::db::SourceFile>)> = imports(cx.db, cx.file)
+        .iter()
+        .filter(|i| i.target.text(cx.db).is_some())
+        .map(|i| (i, program(cx.db, i.target).files.clone()))
+        .collect();
     let mut reported = rustc_hash::FxHashSet::default();
     let mut keys: Vec<_> = cx.scope.defs.iter().collect();
     keys.sort_by(|a, b| a.0.cmp(b.0));
     for ((kind, name), defs) in keys {
-        let defs: Vec<_> = defs
-            .iter()
-            .filter(|d| !d.in_stdlib && d.file != cx.file)
-            .collect();
+        let defs: Vec<_> = defs.iter().filter(|d| !d.in_stdlib && d.file != cx.file).collect();
         let [first, second, ..] = defs.as_slice() else {
             continue;
         };
         if first.file == second.file
-            || closures
-                .iter()
-                .any(|(_, c)| c.contains(&first.file) && c.contains(&second.file))
+            || closures.iter().any(|(_, c)| c.contains(&first.file) && c.contains(&second.file))
         {
             continue;
         }
@@ -85,23 +67,14 @@ pub(crate) fn check_imported_clashes(cx: &mut Cx<'_>) {
                 format!("the {k} `{name}` is defined by two imported files"),
                 imp.path_span,
             )
-            .with_label(
-                imp.path_span,
-                format!("this import brings a second `{name}`"),
-            )
-            .with_label_in(
-                cx.other_file(**first),
-                first.name_span,
-                format!("`{name}` defined here"),
-            )
+            .with_label(imp.path_span, format!("this import brings a second `{name}`"))
+            .with_label_in(cx.other_file(**first), first.name_span, format!("`{name}` defined here"))
             .with_label_in(
                 cx.other_file(**second),
                 second.name_span,
                 format!("and again here, imported through `{}`", imp.written),
             )
-            .with_help(format!(
-                "rename one of the two {k}s, or move it to a file both import"
-            )),
+            .with_help(format!("rename one of the two {k}s, or move it to a file both import")),
         );
     }
 }

@@ -37,23 +37,16 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                                 l.span,
                             )
                             .with_label(prev, "first used here")
-                            .with_help(
-                                "a label names one call, so that constraints can refer to it",
-                            ),
+                            .with_help("a label names one call, so that constraints can refer to it"),
                         );
                     }
                 }
                 check_call(cx, c);
             }
             StmtKind::Parallel { ops, .. } => {
-                if let (Some(&(first, fs)), Some(&(_, other))) =
-                    (ops.first(), ops.iter().find(|(o, _)| *o != ops[0].0))
+                if let (Some(&(first, fs)), Some(&(_, other))) = (ops.first(), ops.iter().find(|(o, _)| *o != ops[0].0))
                 {
-                    let (a, b) = if first == ParallelOp::And {
-                        ("and", "or")
-                    } else {
-                        ("or", "and")
-                    };
+                    let (a, b) = if first == ParallelOp::And { ("and", "or") } else { ("or", "and") };
                     cx.out.push(
                         Diagnostic::error(codes::MIXED_PARALLEL, "`and` and `or` are mixed in one `parallel`", other)
                             .with_label(fs, format!("this `parallel` is a parallel-{a}"))
@@ -69,23 +62,15 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
 
 fn check_call(cx: &mut Cx<'_>, c: &Call) {
     let Some(id) = cx.scope.first(DefKind::Task, &c.name.text) else {
-        let mut d = Diagnostic::error(
-            codes::UNDEFINED_TASK,
-            format!("cannot find task `{}`", c.name.text),
-            c.name.span,
-        )
-        .with_label(c.name.span, "not defined in this file or its imports");
+        let mut d =
+            Diagnostic::error(codes::UNDEFINED_TASK, format!("cannot find task `{}`", c.name.text), c.name.span)
+                .with_label(c.name.span, "not defined in this file or its imports");
         if cx.scope.first(DefKind::Mission, &c.name.text).is_some() {
-            d = d.with_help(format!(
-                "`{}` is a mission; missions cannot be called from other missions",
-                c.name.text
-            ));
+            d = d.with_help(format!("`{}` is a mission; missions cannot be called from other missions", c.name.text));
         } else {
             d = cx.suggest(d, &c.name.text, cx.scope.names(DefKind::Task));
             if d.help.is_none() {
-                d = d.with_help(
-                    "declare it in a `tasks { ... }` block, or import the file that declares it",
-                );
+                d = d.with_help("declare it in a `tasks { ... }` block, or import the file that declares it");
             }
         }
         cx.out.push(d);
@@ -98,21 +83,10 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
     let broken_args = crate::queries::parse(cx.db, cx.file)
         .errors
         .iter()
-        .any(|e| {
-            e.is_error() && e.span.start >= c.args_span.start && e.span.start <= c.args_span.end
-        });
+        .any(|e| e.is_error() && e.span.start >= c.args_span.start && e.span.start <= c.args_span.end);
     if task.params.len() != c.args.len() && !broken_args {
-        let header = task
-            .params
-            .iter()
-            .map(|p| p.text.as_str())
-            .collect::<Vec<_>>()
-            .join(", ");
-        let header = if header.is_empty() {
-            String::new()
-        } else {
-            format!(" {header} ")
-        };
+        let header = task.params.iter().map(|p| p.text.as_str()).collect::<Vec<_>>().join(", ");
+        let header = if header.is_empty() { String::new() } else { format!(" {header} ") };
         let n = task.params.len();
         let plural = if n == 1 { "" } else { "s" };
         let mut d = Diagnostic::error(
@@ -132,7 +106,9 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
             format!("`{}({header})` is declared here", task.name.text),
         );
         if n == 1 && c.args.len() > 1 {
-            d = d.with_help("a composite value (a way-point, a path) is one argument: write it as a list, e.g. `[24, 12]`");
+            d = d.with_help(
+                "a composite value (a way-point, a path) is one argument: write it as a list, e.g. `[24, 12]`",
+            );
         }
         cx.out.push(d);
     }

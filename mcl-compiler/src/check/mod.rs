@@ -20,12 +20,7 @@ use mcl_syntax::{Diagnostic, Severity};
 /// patterns, missions, constraints and unused definitions; sorted by position.
 #[salsa::tracked(returns(ref))]
 pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
-    let mut cx = Cx {
-        db,
-        file,
-        scope: scope(db, file),
-        out: Vec::new(),
-    };
+    let mut cx = Cx { db, file, scope: scope(db, file), out: Vec::new() };
     cx.out.extend(parse(db, file).errors.iter().cloned());
     let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
     definitions::check(&mut cx);
@@ -38,11 +33,7 @@ pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     blocks::check(&mut cx);
     diags.extend(cx.out.into_iter().map(|diag| FileDiagnostic { file, diag }));
     diags.sort_by(|a, b| {
-        (a.diag.span.start, a.diag.span.end, a.diag.code).cmp(&(
-            b.diag.span.start,
-            b.diag.span.end,
-            b.diag.code,
-        ))
+        (a.diag.span.start, a.diag.span.end, a.diag.code).cmp(&(b.diag.span.start, b.diag.span.end, b.diag.code))
     });
     diags.dedup();
     diags
@@ -72,12 +63,7 @@ impl<'a> Cx<'a> {
     }
 
     /// Adds "did you mean" help for `name` among `candidates`.
-    pub fn suggest<'n>(
-        &self,
-        d: Diagnostic,
-        name: &str,
-        candidates: impl Iterator<Item = &'n str>,
-    ) -> Diagnostic {
+    pub fn suggest<'n>(&self, d: Diagnostic, name: &str, candidates: impl Iterator<Item = &'n str>) -> Diagnostic {
         match closest(name, candidates) {
             Some(best) => d.with_help(format!("did you mean `{best}`?")),
             None => d,

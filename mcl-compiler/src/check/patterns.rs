@@ -25,10 +25,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                         cx.out.push(
                             Diagnostic::error(
                                 codes::PNML_NOT_FOUND,
-                                format!(
-                                    "cannot find the PNML file `{path}` of pattern `{}`",
-                                    p.name.text
-                                ),
+                                format!("cannot find the PNML file `{path}` of pattern `{}`", p.name.text),
                                 *path_span,
                             )
                             .with_help("the path is relative to the folder of this file"),
@@ -78,16 +75,10 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
             cx.out.push(
                 Diagnostic::error(
                     codes::DUPLICATE_NODE,
-                    format!(
-                        "`{}` is declared twice in pattern `{}`",
-                        name.text, p.name.text
-                    ),
+                    format!("`{}` is declared twice in pattern `{}`", name.text, p.name.text),
                     name.span,
                 )
-                .with_label(
-                    *prev,
-                    format!("first declared here as a {}", what(*prev_kind)),
-                )
+                .with_label(*prev, format!("first declared here as a {}", what(*prev_kind)))
                 .with_label(name.span, format!("declared again as a {}", what(kind)))
                 .with_help("places and transitions of a pattern share one namespace"),
             );
@@ -97,11 +88,7 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
     };
     let mut interface_places: FxHashMap<&str, Span> = FxHashMap::default();
     for pl in &net.places {
-        let iface = pl
-            .interface
-            .as_ref()
-            .and_then(|n| nonneg_int(cx, n, "an interface id"))
-            .unwrap_or(0);
+        let iface = pl.interface.as_ref().and_then(|n| nonneg_int(cx, n, "an interface id")).unwrap_or(0);
         if let Some(t) = &pl.tokens {
             nonneg_int(cx, t, "an initial marking");
         }
@@ -119,10 +106,7 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
             cx.out.push(
                 Diagnostic::error(
                     codes::INTERFACE,
-                    format!(
-                        "place `{}` of the common interface must be on interface 1",
-                        pl.name.text
-                    ),
+                    format!("place `{}` of the common interface must be on interface 1", pl.name.text),
                     pl.span,
                 )
                 .with_help(format!("write `{}.1;`", pl.name.text)),
@@ -130,37 +114,20 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
             interface_places.insert(&pl.name.text, pl.name.span);
         }
     }
-    let missing: Vec<&str> = INTERFACE
-        .iter()
-        .copied()
-        .filter(|n| !interface_places.contains_key(n))
-        .collect();
+    let missing: Vec<&str> = INTERFACE.iter().copied().filter(|n| !interface_places.contains_key(n)).collect();
     if !missing.is_empty() {
-        let list = missing
-            .iter()
-            .map(|m| format!("`{m}.1`"))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let list = missing.iter().map(|m| format!("`{m}.1`")).collect::<Vec<_>>().join(", ");
         cx.out.push(
             Diagnostic::error(
                 codes::INTERFACE,
-                format!(
-                    "pattern `{}` lacks the common interface: no place {list}",
-                    p.name.text
-                ),
+                format!("pattern `{}` lacks the common interface: no place {list}", p.name.text),
                 p.name.span,
             )
-            .with_help(
-                "every building block has the places begin.1, abort.1, ok.1 and fail.1 (seed 4.3)",
-            ),
+            .with_help("every building block has the places begin.1, abort.1, ok.1 and fail.1 (seed 4.3)"),
         );
     }
     for t in &net.transitions {
-        let iface = t
-            .interface
-            .as_ref()
-            .and_then(|n| nonneg_int(cx, n, "an interface id"))
-            .unwrap_or(0);
+        let iface = t.interface.as_ref().and_then(|n| nonneg_int(cx, n, "an interface id")).unwrap_or(0);
         if let Some(Delay::Fixed(n)) = &t.delay {
             if n.value() < 0.0 || !n.value().is_finite() {
                 cx.out.push(Diagnostic::error(
@@ -180,10 +147,7 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
                 None => {
                     let d = Diagnostic::error(
                         codes::UNDEFINED_NODE,
-                        format!(
-                            "`{}` is not a place or transition of pattern `{}`",
-                            end.name.text, p.name.text
-                        ),
+                        format!("`{}` is not a place or transition of pattern `{}`", end.name.text, p.name.text),
                         end.name.span,
                     )
                     .with_label(end.name.span, "not declared in `places` or `transitions`");
@@ -197,10 +161,7 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
                             cx.out.push(
                                 Diagnostic::error(
                                     codes::INTERFACE_MISMATCH,
-                                    format!(
-                                        "`{}` is declared on interface {iface}, not {}",
-                                        end.name.text, n.text
-                                    ),
+                                    format!("`{}` is declared on interface {iface}, not {}", end.name.text, n.text),
                                     n.span,
                                 )
                                 .with_help(if iface == 0 {
@@ -217,20 +178,10 @@ fn check_net<'n>(cx: &mut Cx<'_>, p: &Pattern, net: &'n PatternNet) {
         }
         if let (Some(a), Some(b)) = (ends[0], ends[1]) {
             if a == b {
-                let what = if a == Node::Place {
-                    "two places"
-                } else {
-                    "two transitions"
-                };
+                let what = if a == Node::Place { "two places" } else { "two transitions" };
                 cx.out.push(
-                    Diagnostic::error(
-                        codes::BAD_ARC,
-                        format!("an arc cannot join {what}"),
-                        arc.span,
-                    )
-                    .with_help(
-                        "arcs go from a place to a transition or from a transition to a place",
-                    ),
+                    Diagnostic::error(codes::BAD_ARC, format!("an arc cannot join {what}"), arc.span)
+                        .with_help("arcs go from a place to a transition or from a transition to a place"),
                 );
             }
         }

@@ -51,12 +51,9 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
         }
         Some(pn) => match cx.scope.first(DefKind::Pattern, &pn.text) {
             None => {
-                let d = Diagnostic::error(
-                    codes::UNDEFINED_PATTERN,
-                    format!("cannot find pattern `{}`", pn.text),
-                    pn.span,
-                )
-                .with_label(pn.span, "not defined in this file or its imports");
+                let d =
+                    Diagnostic::error(codes::UNDEFINED_PATTERN, format!("cannot find pattern `{}`", pn.text), pn.span)
+                        .with_label(pn.span, "not defined in this file or its imports");
                 let d = cx.suggest(d, &pn.text, cx.scope.names(DefKind::Pattern));
                 cx.out.push(d);
                 None
@@ -70,17 +67,10 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
             }
         },
     };
-    let transitions: FxHashMap<&str, &TransitionDef> = net
-        .map(|(_, n)| {
-            n.transitions
-                .iter()
-                .map(|t| (t.name.text.as_str(), t))
-                .collect()
-        })
-        .unwrap_or_default();
-    let places: FxHashSet<&str> = net
-        .map(|(_, n)| n.places.iter().map(|p| p.name.text.as_str()).collect())
-        .unwrap_or_default();
+    let transitions: FxHashMap<&str, &TransitionDef> =
+        net.map(|(_, n)| n.transitions.iter().map(|t| (t.name.text.as_str(), t)).collect()).unwrap_or_default();
+    let places: FxHashSet<&str> =
+        net.map(|(_, n)| n.places.iter().map(|p| p.name.text.as_str()).collect()).unwrap_or_default();
 
     // Timed transitions whose delay is a task parameter.
     if let Some((pat, n)) = net {
@@ -90,7 +80,10 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     cx.out.push(
                         Diagnostic::error(
                             codes::DELAY_PARAM_NOT_IN_HEADER,
-                            format!("task `{}` has no parameter `{}`, which pattern `{}` uses as the delay of `{}`", t.name.text, p.text, pat.name.text, tr.name.text),
+                            format!(
+                                "task `{}` has no parameter `{}`, which pattern `{}` uses as the delay of `{}`",
+                                t.name.text, p.text, pat.name.text, tr.name.text
+                            ),
                             t.name.span,
                         )
                         .with_label_in(None, t.name.span, "this task's header")
@@ -111,17 +104,9 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
         };
         match cx.scope.first(defkind, &b.target.text) {
             None => {
-                let code = if b.kind == BindingKind::Action {
-                    codes::UNDEFINED_ACTION
-                } else {
-                    codes::UNDEFINED_EVENT
-                };
-                let d = Diagnostic::error(
-                    code,
-                    format!("cannot find {kind} `{}`", b.target.text),
-                    b.target.span,
-                )
-                .with_label(b.target.span, format!("no {kind} with this name"));
+                let code = if b.kind == BindingKind::Action { codes::UNDEFINED_ACTION } else { codes::UNDEFINED_EVENT };
+                let d = Diagnostic::error(code, format!("cannot find {kind} `{}`", b.target.text), b.target.span)
+                    .with_label(b.target.span, format!("no {kind} with this name"));
                 let d = cx.suggest(d, &b.target.text, cx.scope.names(defkind));
                 let d = if d.help.is_none() {
                     d.with_help(format!("declare it in an `{kind}s {{ ... }}` block"))
@@ -138,11 +123,23 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                                 cx.out.push(
                                     Diagnostic::error(
                                         codes::ACTION_PARAM_NOT_IN_HEADER,
-                                        format!("action `{}` needs parameter `{}`, which task `{}` does not declare", a.name.text, pn.text, t.name.text),
+                                        format!(
+                                            "action `{}` needs parameter `{}`, which task `{}` does not declare",
+                                            a.name.text, pn.text, t.name.text
+                                        ),
                                         b.target.span,
                                     )
-                                    .with_label_in(cx.other_file(id), pn.span, format!("`{}` used by the action here", pn.text))
-                                    .with_help(format!("add `{}` to the header: `{}( {} )`", pn.text, t.name.text, header_with(t, &pn.text))),
+                                    .with_label_in(
+                                        cx.other_file(id),
+                                        pn.span,
+                                        format!("`{}` used by the action here", pn.text),
+                                    )
+                                    .with_help(format!(
+                                        "add `{}` to the header: `{}( {} )`",
+                                        pn.text,
+                                        t.name.text,
+                                        header_with(t, &pn.text)
+                                    )),
                                 );
                             }
                         }
@@ -157,10 +154,7 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     None => {
                         let pat = t.pattern.as_ref().map(|p| p.text.as_str()).unwrap_or("?");
                         let msg = if places.contains(tr.text.as_str()) {
-                            format!(
-                                "`{}` is a place of pattern `{pat}`, not a transition",
-                                tr.text
-                            )
+                            format!("`{}` is a place of pattern `{pat}`, not a transition", tr.text)
                         } else {
                             format!("pattern `{pat}` has no transition `{}`", tr.text)
                         };
@@ -172,9 +166,16 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     }
                     Some(def) if b.kind == BindingKind::Event && def.delay.is_some() => {
                         cx.out.push(
-                            Diagnostic::error(codes::TIMED_AND_EVENT, format!("`{}` is a timed transition and cannot also wait for event `{}`", tr.text, b.target.text), tr.span)
-                                .with_label_in(pattern_file.clone(), def.name.span, "declared with a delay here")
-                                .with_help("bind the event to another transition, or remove the delay"),
+                            Diagnostic::error(
+                                codes::TIMED_AND_EVENT,
+                                format!(
+                                    "`{}` is a timed transition and cannot also wait for event `{}`",
+                                    tr.text, b.target.text
+                                ),
+                                tr.span,
+                            )
+                            .with_label_in(pattern_file.clone(), def.name.span, "declared with a delay here")
+                            .with_help("bind the event to another transition, or remove the delay"),
                         );
                     }
                     Some(_) => {}
@@ -184,9 +185,16 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                 if let Some(&(other_event, prev)) = event_of_transition.get(tr.text.as_str()) {
                     if other_event != b.target.text {
                         cx.out.push(
-                            Diagnostic::error(codes::TRANSITION_TWO_EVENTS, format!("transition `{}` is bound to two events, `{other_event}` and `{}`", tr.text, b.target.text), tr.span)
-                                .with_label(prev, format!("bound to `{other_event}` here"))
-                                .with_help("a transition waits for at most one event"),
+                            Diagnostic::error(
+                                codes::TRANSITION_TWO_EVENTS,
+                                format!(
+                                    "transition `{}` is bound to two events, `{other_event}` and `{}`",
+                                    tr.text, b.target.text
+                                ),
+                                tr.span,
+                            )
+                            .with_label(prev, format!("bound to `{other_event}` here"))
+                            .with_help("a transition waits for at most one event"),
                         );
                     }
                 } else {

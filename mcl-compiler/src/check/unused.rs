@@ -20,11 +20,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                         used.insert((DefKind::Pattern, &p.text));
                     }
                     for bd in &t.bindings {
-                        let k = if bd.kind == BindingKind::Action {
-                            DefKind::Action
-                        } else {
-                            DefKind::Event
-                        };
+                        let k = if bd.kind == BindingKind::Action { DefKind::Action } else { DefKind::Event };
                         used.insert((k, &bd.target.text));
                     }
                 }
@@ -41,14 +37,9 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
     // on its own declares tasks for other files to call.
     let has_missions = !all_missions.is_empty();
     let mut found = Vec::new();
-    for_each_def(cx.db, cx.file, |id, name| {
-        found.push((id, name.to_string()))
-    });
+    for_each_def(cx.db, cx.file, |id, name| found.push((id, name.to_string())));
     for (id, name) in found {
-        if id.kind == DefKind::Mission
-            || name.starts_with('_')
-            || (id.kind == DefKind::Task && !has_missions)
-        {
+        if id.kind == DefKind::Mission || name.starts_with('_') || (id.kind == DefKind::Task && !has_missions) {
             continue;
         }
         if !used.contains(&(id.kind, name.as_str())) {
@@ -57,13 +48,9 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                 _ => "no task uses it",
             };
             cx.out.push(
-                Diagnostic::warning(
-                    codes::UNUSED,
-                    format!("unused {} `{name}`", id.kind.as_str()),
-                    id.name_span,
-                )
-                .with_label(id.name_span, by)
-                .with_help("remove it, or prefix its name with `_` to keep it quietly"),
+                Diagnostic::warning(codes::UNUSED, format!("unused {} `{name}`", id.kind.as_str()), id.name_span)
+                    .with_label(id.name_span, by)
+                    .with_help("remove it, or prefix its name with `_` to keep it quietly"),
             );
         }
     }
@@ -81,12 +68,8 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
         for p in &m.params {
             if !used_params.contains(p.text.as_str()) && !p.text.starts_with('_') {
                 cx.out.push(
-                    Diagnostic::warning(
-                        codes::UNUSED_PARAMETER,
-                        format!("unused parameter `{}`", p.text),
-                        p.span,
-                    )
-                    .with_help("pass it to a task, or remove it"),
+                    Diagnostic::warning(codes::UNUSED_PARAMETER, format!("unused parameter `{}`", p.text), p.span)
+                        .with_help("pass it to a task, or remove it"),
                 );
             }
         }

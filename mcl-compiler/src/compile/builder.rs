@@ -2,9 +2,7 @@
 //! transitions by id, interfaces as place quadruples, and the provenance that
 //! every node created next receives.
 
-use mcl_net::{
-    Delay, NetBuilder, Place, PlaceId, Provenance, Transition, TransitionId, TransitionKind,
-};
+use mcl_net::{Delay, NetBuilder, Place, PlaceId, Provenance, Transition, TransitionId, TransitionKind};
 
 /// The four places of an interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -24,36 +22,22 @@ pub struct Builder {
 
 impl Builder {
     pub fn new(id: &str) -> Self {
-        Builder {
-            net: NetBuilder::new(id),
-            provenance: Provenance::default(),
-        }
+        Builder { net: NetBuilder::new(id), provenance: Provenance::default() }
     }
 
     /// A place with `tokens` initial tokens, outside any interface.
     pub fn place(&mut self, id: &str, tokens: u32) -> PlaceId {
-        self.net.add_place(
-            Place::new(id)
-                .with_tokens(tokens)
-                .with_provenance(self.provenance.clone()),
-        )
+        self.net.add_place(Place::new(id).with_tokens(tokens).with_provenance(self.provenance.clone()))
     }
 
     /// The places `prefix.begin`, `prefix.abort`, `prefix.ok`, `prefix.fail` on interface `interface`.
     pub fn iface(&mut self, prefix: &str, interface: u32) -> Iface {
         let mut mk = |n: &str| {
             self.net.add_place(
-                Place::new(format!("{prefix}.{n}"))
-                    .with_interface(interface)
-                    .with_provenance(self.provenance.clone()),
+                Place::new(format!("{prefix}.{n}")).with_interface(interface).with_provenance(self.provenance.clone()),
             )
         };
-        Iface {
-            begin: mk("begin"),
-            abort: mk("abort"),
-            ok: mk("ok"),
-            fail: mk("fail"),
-        }
+        Iface { begin: mk("begin"), abort: mk("abort"), ok: mk("ok"), fail: mk("fail") }
     }
 
     /// A transition of any kind with unit-weight arcs.
@@ -64,11 +48,7 @@ impl Builder {
         inputs: &[PlaceId],
         outputs: &[PlaceId],
     ) -> TransitionId {
-        let t = self.net.add_transition(
-            Transition::new(id)
-                .with_kind(kind)
-                .with_provenance(self.provenance.clone()),
-        );
+        let t = self.net.add_transition(Transition::new(id).with_kind(kind).with_provenance(self.provenance.clone()));
         for &p in inputs {
             self.net.add_input(p, t, 1);
         }
@@ -86,11 +66,6 @@ impl Builder {
     /// A deferred transition: timed with delay 0, so it fires only in a
     /// tangible marking, after every immediate cascade has settled.
     pub fn deferred(&mut self, id: &str, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
-        self.transition(
-            id,
-            TransitionKind::Timed(Delay::Fixed(0.0)),
-            inputs,
-            outputs,
-        )
+        self.transition(id, TransitionKind::Timed(Delay::Fixed(0.0)), inputs, outputs)
     }
 }

@@ -30,9 +30,7 @@ struct Cluster {
 }
 
 fn esc(s: &str) -> String {
-    s.replace('\\', "\\\\")
-        .replace('"', "\\\"")
-        .replace('\n', "\\n")
+    s.replace('\\', "\\\\").replace('"', "\\\"").replace('\n', "\\n")
 }
 
 /// The last component of a node id, for compact labels.
@@ -44,10 +42,7 @@ fn short(id: &str) -> &str {
 pub fn to_dot(net: &Net) -> String {
     let mut root = Cluster::default();
     let mut labels: BTreeMap<String, String> = BTreeMap::new();
-    let put = |prov: &Provenance,
-               line: String,
-               root: &mut Cluster,
-               labels: &mut BTreeMap<String, String>| {
+    let put = |prov: &Provenance, line: String, root: &mut Cluster, labels: &mut BTreeMap<String, String>| {
         let mut c = root;
         for key in cluster_path(prov) {
             if !labels.contains_key(&key) {
@@ -66,11 +61,7 @@ pub fn to_dot(net: &Net) -> String {
         c.nodes.push(line);
     };
     for p in net.places() {
-        let tokens = if p.initial > 0 {
-            "●".repeat(p.initial.min(3) as usize)
-        } else {
-            String::new()
-        };
+        let tokens = if p.initial > 0 { "●".repeat(p.initial.min(3) as usize) } else { String::new() };
         let line = format!(
             "\"{}\" [shape=circle, width=0.35, fixedsize=false, label=\"{}\n{}\", tooltip=\"{}\"];",
             esc(&p.id),
@@ -111,13 +102,7 @@ pub fn to_dot(net: &Net) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "digraph \"{}\" {{", esc(net.name()));
     let _ = writeln!(out, "  rankdir=TB; compound=true; fontname=\"Helvetica\"; node [fontname=\"Helvetica\", fontsize=10]; edge [arrowsize=0.6];");
-    fn emit(
-        out: &mut String,
-        c: &Cluster,
-        labels: &BTreeMap<String, String>,
-        depth: usize,
-        counter: &mut usize,
-    ) {
+    fn emit(out: &mut String, c: &Cluster, labels: &BTreeMap<String, String>, depth: usize, counter: &mut usize) {
         let pad = "  ".repeat(depth + 1);
         for n in &c.nodes {
             let _ = writeln!(out, "{pad}{n}");
@@ -133,11 +118,7 @@ pub fn to_dot(net: &Net) -> String {
             } else {
                 "style=\"rounded\""
             };
-            let _ = writeln!(
-                out,
-                "{pad}  label=\"{}\"; {style}; fontsize=11;",
-                esc(&label)
-            );
+            let _ = writeln!(out, "{pad}  label=\"{}\"; {style}; fontsize=11;", esc(&label));
             emit(out, child, labels, depth + 1, counter);
             let _ = writeln!(out, "{pad}}}");
         }
@@ -146,32 +127,19 @@ pub fn to_dot(net: &Net) -> String {
     emit(&mut out, &root, &labels, 0, &mut counter);
     for a in net.arcs() {
         let (src, dst, w) = match *a {
-            mcl_net::Arc::Input {
-                place,
-                transition,
-                weight,
-            } => (NodeId::Place(place), NodeId::Transition(transition), weight),
-            mcl_net::Arc::Output {
-                transition,
-                place,
-                weight,
-            } => (NodeId::Transition(transition), NodeId::Place(place), weight),
+            mcl_net::Arc::Input { place, transition, weight } => {
+                (NodeId::Place(place), NodeId::Transition(transition), weight)
+            }
+            mcl_net::Arc::Output { transition, place, weight } => {
+                (NodeId::Transition(transition), NodeId::Place(place), weight)
+            }
         };
         let id = |n: NodeId| match n {
             NodeId::Place(p) => net.place(p).map(|x| x.id.clone()).unwrap_or_default(),
             NodeId::Transition(t) => net.transition(t).map(|x| x.id.clone()).unwrap_or_default(),
         };
-        let label = if w > 1 {
-            format!(" [label=\"{w}\"]")
-        } else {
-            String::new()
-        };
-        let _ = writeln!(
-            out,
-            "  \"{}\" -> \"{}\"{label};",
-            esc(&id(src)),
-            esc(&id(dst))
-        );
+        let label = if w > 1 { format!(" [label=\"{w}\"]") } else { String::new() };
+        let _ = writeln!(out, "  \"{}\" -> \"{}\"{label};", esc(&id(src)), esc(&id(dst)));
     }
     out.push_str("}\n");
     out

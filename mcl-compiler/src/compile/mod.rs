@@ -65,11 +65,7 @@ pub fn compile_mission(
     mission: &Mission,
     mission_file: SourceFile,
 ) -> Result<Net, CompileError> {
-    let name = mission
-        .name
-        .as_ref()
-        .map(|n| n.text.clone())
-        .unwrap_or_else(|| "mission".to_string());
+    let name = mission.name.as_ref().map(|n| n.text.clone()).unwrap_or_else(|| "mission".to_string());
     let mut cx = Composer {
         db,
         scope: scope::scope(db, root),
@@ -78,35 +74,32 @@ pub fn compile_mission(
         tasks: FxHashMap::default(),
         calls: 0,
         error: None,
+        role: None,
     };
     cx.b.net.name(&name);
     for p in &mission.params {
         cx.b.net.property("mission_param", &p.text);
     }
     cx.b.provenance = cx.prov("mission", "m", mission.span);
-    let ext = Iface {
-        begin: cx.b.net.add_place(
-            mcl_net::Place::new(MISSION_BEGIN)
-                .with_tokens(1)
-                .with_interface(1)
-                .with_provenance(cx.b.provenance.clone()),
-        ),
-        abort: cx.b.net.add_place(
-            mcl_net::Place::new(MISSION_ABORT)
-                .with_interface(1)
-                .with_provenance(cx.b.provenance.clone()),
-        ),
-        ok: cx.b.net.add_place(
-            mcl_net::Place::new(MISSION_OK)
-                .with_interface(1)
-                .with_provenance(cx.b.provenance.clone()),
-        ),
-        fail: cx.b.net.add_place(
-            mcl_net::Place::new(MISSION_FAIL)
-                .with_interface(1)
-                .with_provenance(cx.b.provenance.clone()),
-        ),
-    };
+    let ext =
+        Iface {
+            begin: cx.b.net.add_place(
+                mcl_net::Place::new(MISSION_BEGIN)
+                    .with_tokens(1)
+                    .with_interface(1)
+                    .with_provenance(cx.b.provenance.clone()),
+            ),
+            abort: cx.b.net.add_place(
+                mcl_net::Place::new(MISSION_ABORT).with_interface(1).with_provenance(cx.b.provenance.clone()),
+            ),
+            ok: cx
+                .b
+                .net
+                .add_place(mcl_net::Place::new(MISSION_OK).with_interface(1).with_provenance(cx.b.provenance.clone())),
+            fail: cx.b.net.add_place(
+                mcl_net::Place::new(MISSION_FAIL).with_interface(1).with_provenance(cx.b.provenance.clone()),
+            ),
+        };
     cx.block(&mission.body, ext, "m");
     if let Some(e) = cx.error {
         return Err(e);
@@ -128,6 +121,8 @@ struct Composer<'a> {
     tasks: FxHashMap<String, TaskNet>,
     calls: u32,
     error: Option<CompileError>,
+    /// The role given to calls compiled now (inside a condition).
+    role: Option<&'static str>,
 }
 
 impl Composer<'_> {
@@ -150,8 +145,7 @@ impl Composer<'_> {
             [single] => self.stmt(single, ext, path),
             stmts => {
                 self.b.provenance = self.prov("sequence", path, block.span);
-                let kids =
-                    structures::build(&mut self.b, &Structure::Sequence(stmts.len()), ext, path);
+                let kids = structures::build(&mut self.b, &Structure::Sequence(stmts.len()), ext, path);
                 for (i, (s, k)) in stmts.iter().zip(kids).enumerate() {
                     self.stmt(s, k, &format!("{path}.{i}"));
                 }
@@ -159,45 +153,33 @@ impl Composer<'_> {
         }
     }
 
-    fn structure(
-        &mut self,
-        s: Structure,
-        span: mcl_syntax::Span,
-        ext: Iface,
-        path: &str,
-        children: &[&Block],
-    ) {
+    fn structure(&mut self, s: Structure, span: mcl_syntax::Span, ext: Iface, path: &str, children: &[&Block]) {
         self.b.provenance = self.prov(s.name(), path, span);
         let kids = structures::build(&mut self.b, &s, ext, path);
         for (i, (blk, k)) in children.iter().zip(kids).enumerate() {
+            let saved = self.role;
+            match (&s, i) {
+                (Structure::While, 0) => self.role = Some("while_condition"),
+                (Structure::Monitor(_), i) if i % 2 == 1 => self.role = Some("monitor_condition"),
+                _ => {}
+            }
             self.block(blk, k, &format!("{path}.{i}"));
+            self.role = saved;
         }
     }
 
     fn stmt(&mut self, s: &Stmt, ext: Iface, path: &str) {
         match &s.kind {
             StmtKind::Call(c) => self.call(c, ext, path),
-            StmtKind::While { cond, body, .. } => {
-                self.structure(Structure::While, s.span, ext, path, &[cond, body])
+            StmtKind::While { cond, body, .. } => self.structure(Structure::While, s.span, ext, path, &[cond, body]),
+            StmtKind::If { cond, then, otherwise: None, .. } => {
+                self.structure(Structure::IfThen, s.span, ext, path, &[cond, then])
             }
-            StmtKind::If {
-                cond,
-                then,
-                otherwise: None,
-                ..
-            } => self.structure(Structure::IfThen, s.span, ext, path, &[cond, then]),
-            StmtKind::If {
-                cond,
-                then,
-                otherwise: Some(o),
-                ..
-            } => self.structure(Structure::IfThenElse, s.span, ext, path, &[cond, then, o]),
-            StmtKind::Try { body, catch, .. } => {
-                self.structure(Structure::TryCatch, s.span, ext, path, &[body, catch])
+            StmtKind::If { cond, then, otherwise: Some(o), .. } => {
+                self.structure(Structure::IfThenElse, s.span, ext, path, &[cond, then, o])
             }
-            StmtKind::Not { body, .. } => {
-                self.structure(Structure::Not, s.span, ext, path, &[body])
-            }
+            StmtKind::Try { body, catch, .. } => self.structure(Structure::TryCatch, s.span, ext, path, &[body, catch]),
+            StmtKind::Not { body, .. } => self.structure(Structure::Not, s.span, ext, path, &[body]),
             StmtKind::Parallel { branches, ops, .. } => {
                 let n = branches.len();
                 let st = if ops.iter().all(|(o, _)| *o == ParallelOp::And) {
@@ -237,16 +219,8 @@ impl Composer<'_> {
         let p = format!("call{id}");
         let run = self.b.place(&format!("{p}.run"), 0);
         let stopping = self.b.place(&format!("{p}.stopping"), 0);
-        let start = self.b.imm(
-            &format!("{p}.start"),
-            &[ext.begin, lock],
-            &[run, tiface.begin],
-        );
-        let args: Vec<(String, String)> = params
-            .iter()
-            .cloned()
-            .zip(c.args.iter().map(value_json))
-            .collect();
+        let start = self.b.imm(&format!("{p}.start"), &[ext.begin, lock], &[run, tiface.begin]);
+        let args: Vec<(String, String)> = params.iter().cloned().zip(c.args.iter().map(value_json)).collect();
         let label = c.label.as_ref().map(|l| l.text.clone());
         if let Some(t) = self.b.net.transition_mut(start) {
             t.binding = Some(CallBinding {
@@ -254,21 +228,14 @@ impl Composer<'_> {
                 call_site: id,
                 label,
                 args,
+                role: self.role.map(String::from),
             });
         }
-        self.b
-            .imm(&format!("{p}.ok"), &[run, tiface.ok], &[ext.ok, lock]);
-        self.b
-            .imm(&format!("{p}.fail"), &[run, tiface.fail], &[ext.fail, lock]);
-        self.b
-            .imm(&format!("{p}.cancel"), &[ext.abort, ext.begin], &[]);
-        self.b.imm(
-            &format!("{p}.abort"),
-            &[ext.abort, run],
-            &[tiface.abort, stopping],
-        );
-        self.b
-            .deferred(&format!("{p}.release"), &[stopping], &[lock]);
+        self.b.imm(&format!("{p}.ok"), &[run, tiface.ok], &[ext.ok, lock]);
+        self.b.imm(&format!("{p}.fail"), &[run, tiface.fail], &[ext.fail, lock]);
+        self.b.imm(&format!("{p}.cancel"), &[ext.abort, ext.begin], &[]);
+        self.b.imm(&format!("{p}.abort"), &[ext.abort, run], &[tiface.abort, stopping]);
+        self.b.deferred(&format!("{p}.release"), &[stopping], &[lock]);
     }
 
     /// The net of a task, created on first use.
@@ -281,29 +248,18 @@ impl Composer<'_> {
     }
 
     fn instantiate_task(&mut self, name: &str) -> Option<TaskNet> {
-        let (iface, params) = match add_task_net(
-            self.db,
-            self.scope,
-            &mut self.b,
-            name,
-            &format!("task.{name}."),
-        ) {
+        let (iface, params) = match add_task_net(self.db, self.scope, &mut self.b, name, &format!("task.{name}.")) {
             Ok(x) => x?,
             Err(e) => {
                 self.error = Some(e);
                 return None;
             }
         };
-        self.b.provenance = Provenance {
-            task: Some(name.to_string()),
-            ..Default::default()
-        };
+        let (ok, fail) = task_outcome_events(self.db, self.scope, name);
+        self.b.net.property(format!("task_events:{name}"), serde_json::json!({ "ok": ok, "fail": fail }).to_string());
+        self.b.provenance = Provenance { task: Some(name.to_string()), ..Default::default() };
         let lock = self.b.place(&format!("task.{name}.idle"), 1);
-        Some(TaskNet {
-            iface,
-            lock,
-            params,
-        })
+        Some(TaskNet { iface, lock, params })
     }
 }
 
@@ -326,11 +282,7 @@ pub fn add_task_net(
         let Some(task) = scope::task(db, tid) else {
             return Ok(None);
         };
-        let Some(pid) = task
-            .pattern
-            .as_ref()
-            .and_then(|p| scope.first(DefKind::Pattern, &p.text))
-        else {
+        let Some(pid) = task.pattern.as_ref().and_then(|p| scope.first(DefKind::Pattern, &p.text)) else {
             return Ok(None);
         };
         let Some(pattern) = scope::pattern(db, pid) else {
@@ -348,11 +300,7 @@ pub fn add_task_net(
             call_site: None,
             structure: None,
             path: None,
-            span: Some(SourceSpan {
-                file: file_path.clone(),
-                start: span.start,
-                end: span.end,
-            }),
+            span: Some(SourceSpan { file: file_path.clone(), start: span.start, end: span.end }),
         };
 
         let mut places = FxHashMap::default();
@@ -368,20 +316,12 @@ pub fn add_task_net(
             );
             places.insert(pl.name.text.as_str(), id);
         }
-        let (Some(&begin), Some(&abort), Some(&ok), Some(&fail)) = (
-            places.get("begin"),
-            places.get("abort"),
-            places.get("ok"),
-            places.get("fail"),
-        ) else {
+        let (Some(&begin), Some(&abort), Some(&ok), Some(&fail)) =
+            (places.get("begin"), places.get("abort"), places.get("ok"), places.get("fail"))
+        else {
             return Ok(None);
         };
-        let iface = Iface {
-            begin,
-            abort,
-            ok,
-            fail,
-        };
+        let iface = Iface { begin, abort, ok, fail };
         // Bindings of this task: events and actions per transition.
         let mut events: FxHashMap<&str, &str> = FxHashMap::default();
         let mut actions: FxHashMap<&str, Vec<ActionRef>> = FxHashMap::default();
@@ -392,9 +332,8 @@ pub fn add_task_net(
                         events.insert(&tr.text, &bd.target.text);
                     }
                     BindingKind::Action => {
-                        if let Some(a) = scope
-                            .first(DefKind::Action, &bd.target.text)
-                            .and_then(|id| scope::action(db, id))
+                        if let Some(a) =
+                            scope.first(DefKind::Action, &bd.target.text).and_then(|id| scope::action(db, id))
                         {
                             actions.entry(&tr.text).or_default().push(action_ref(a));
                         }
@@ -407,12 +346,8 @@ pub fn add_task_net(
             b.provenance = prov(t.span);
             let kind = match (events.get(t.name.text.as_str()), &t.delay) {
                 (Some(e), _) => TransitionKind::Event(e.to_string()),
-                (None, Some(Delay::Fixed(n))) => {
-                    TransitionKind::Timed(mcl_net::Delay::Fixed(n.value()))
-                }
-                (None, Some(Delay::Param(p))) => {
-                    TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone()))
-                }
+                (None, Some(Delay::Fixed(n))) => TransitionKind::Timed(mcl_net::Delay::Fixed(n.value())),
+                (None, Some(Delay::Param(p))) => TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone())),
                 (None, None) => TransitionKind::Immediate,
             };
             let tid = b.transition(&format!("{prefix}{}", t.name.text), kind, &[], &[]);
@@ -422,19 +357,9 @@ pub fn add_task_net(
             transitions.insert(t.name.text.as_str(), tid);
         }
         for arc in &net.arcs {
-            let w = arc
-                .weight
-                .as_ref()
-                .and_then(Number::as_u32)
-                .unwrap_or(1)
-                .max(1);
+            let w = arc.weight.as_ref().and_then(Number::as_u32).unwrap_or(1).max(1);
             let (s, d) = (arc.source.name.text.as_str(), arc.target.name.text.as_str());
-            match (
-                places.get(s),
-                transitions.get(d),
-                transitions.get(s),
-                places.get(d),
-            ) {
+            match (places.get(s), transitions.get(d), transitions.get(s), places.get(d)) {
                 (Some(&p), Some(&t), _, _) => {
                     b.net.add_input(p, t, w);
                 }
@@ -453,21 +378,14 @@ fn action_ref(a: &ActionDef) -> ActionRef {
     ActionRef {
         action: a.name.text.clone(),
         primitive: a.primitive.text.clone(),
-        command: a
-            .command
-            .as_ref()
-            .map(|c| c.text.clone())
-            .unwrap_or_default(),
+        command: a.command.as_ref().map(|c| c.text.clone()).unwrap_or_default(),
         params: a
             .params
             .iter()
             .enumerate()
             .map(|(i, v)| match &v.kind {
                 // A task parameter: resolved from the call's binding when the action is sent.
-                ValueKind::Ident(n) => (
-                    n.text.clone(),
-                    serde_json::json!({ "param": n.text }).to_string(),
-                ),
+                ValueKind::Ident(n) => (n.text.clone(), serde_json::json!({ "param": n.text }).to_string()),
                 _ => (format!("v{i}"), value_json(v)),
             })
             .collect(),
@@ -481,14 +399,10 @@ fn action_ref(a: &ActionDef) -> ActionRef {
 pub fn value_json(v: &Value) -> String {
     fn go(v: &Value) -> serde_json::Value {
         match &v.kind {
-            ValueKind::Number(n) => {
-                serde_json::from_str(&n.text).unwrap_or(serde_json::Value::Null)
-            }
+            ValueKind::Number(n) => serde_json::from_str(&n.text).unwrap_or(serde_json::Value::Null),
             ValueKind::Str(s) => serde_json::Value::String(s.clone()),
             ValueKind::Ident(n) => serde_json::Value::String(n.text.clone()),
-            ValueKind::List { items, .. } => {
-                serde_json::Value::Array(items.iter().map(go).collect())
-            }
+            ValueKind::List { items, .. } => serde_json::Value::Array(items.iter().map(go).collect()),
             ValueKind::Error => serde_json::Value::Null,
         }
     }
@@ -512,11 +426,70 @@ pub fn compile_file(db: &dyn Db, file: SourceFile) -> Result<Vec<CompiledMission
     for item in &crate::queries::parse(db, file).file.items {
         if let Item::Mission(m) = item {
             let net = compile_mission(db, file, m, file)?;
-            out.push(CompiledMission {
-                name: net.name().to_string(),
-                net,
-            });
+            out.push(CompiledMission { name: net.name().to_string(), net });
         }
     }
     Ok(out)
+}
+
+/// Which events of task `name` can end it in ok and which in fail, found by
+/// running the task net alone: started, settled, then each event fired in
+/// each running marking, with every order of the immediate transitions.
+pub fn task_outcome_events(db: &dyn Db, scope: &Scope, name: &str) -> (Vec<String>, Vec<String>) {
+    let mut b = Builder::new(name);
+    let Ok(Some((iface, _))) = add_task_net(db, scope, &mut b, name, "") else { return (vec![], vec![]) };
+    let Ok(net) = b.net.build() else { return (vec![], vec![]) };
+    let fire = |m: &[u32], t: mcl_net::TransitionId| -> Option<Vec<u32>> {
+        let mut m2 = m.to_vec();
+        for &(p, w) in net.pre(t) {
+            if m2[p.index()] < w {
+                return None;
+            }
+            m2[p.index()] -= w;
+        }
+        for &(p, w) in net.post(t) {
+            m2[p.index()] += w;
+        }
+        Some(m2)
+    };
+    let imm: Vec<_> =
+        net.transition_ids().filter(|&t| net.transition(t).is_some_and(|x| x.kind.is_immediate())).collect();
+    // All tangible markings reachable from `start` through immediate transitions.
+    let settle = |start: Vec<u32>| -> Vec<Vec<u32>> {
+        let mut seen = rustc_hash::FxHashSet::default();
+        let mut stack = vec![start];
+        let mut out = Vec::new();
+        while let Some(m) = stack.pop() {
+            if !seen.insert(m.clone()) || seen.len() > 10_000 {
+                continue;
+            }
+            let next: Vec<Vec<u32>> = imm.iter().filter_map(|&t| fire(&m, t)).collect();
+            if next.is_empty() {
+                out.push(m);
+            } else {
+                stack.extend(next);
+            }
+        }
+        out
+    };
+    let mut m0: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+    m0[iface.begin.index()] += 1;
+    let running = settle(m0);
+    let (mut ok, mut fail) = (Vec::new(), Vec::new());
+    for t in net.transition_ids() {
+        let Some(mcl_net::TransitionKind::Event(e)) = net.transition(t).map(|x| &x.kind) else { continue };
+        for m in &running {
+            if let Some(m2) = fire(m, t) {
+                for end in settle(m2) {
+                    if end[iface.ok.index()] > 0 && !ok.contains(e) {
+                        ok.push(e.clone());
+                    }
+                    if end[iface.fail.index()] > 0 && !fail.contains(e) {
+                        fail.push(e.clone());
+                    }
+                }
+            }
+        }
+    }
+    (ok, fail)
 }

@@ -99,9 +99,7 @@ impl Structure {
 /// Builds the net of `s` on the external interface `ext` and returns the
 /// internal interfaces of its children, in the order of [`Structure`].
 pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<Iface> {
-    let kids: Vec<Iface> = (0..s.arity())
-        .map(|i| b.iface(&format!("{prefix}.{i}"), i as u32 + 2))
-        .collect();
+    let kids: Vec<Iface> = (0..s.arity()).map(|i| b.iface(&format!("{prefix}.{i}"), i as u32 + 2)).collect();
     // Local nodes are `prefix.p_NAME` and `prefix.t_NAME`, apart from the
     // interface places `prefix.I.begin` of the children.
     let p = |b: &mut Builder, name: &str| b.place(&format!("{prefix}.p_{name}"), 0);
@@ -120,24 +118,12 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             b.imm(&t("start"), &[ext.begin], &[kids[0].begin, runs[0]]);
             for i in 0..*n {
                 if i + 1 < *n {
-                    b.imm(
-                        &t(&format!("next{i}")),
-                        &[runs[i], kids[i].ok],
-                        &[kids[i + 1].begin, runs[i + 1]],
-                    );
+                    b.imm(&t(&format!("next{i}")), &[runs[i], kids[i].ok], &[kids[i + 1].begin, runs[i + 1]]);
                 } else {
                     b.imm(&t(&format!("ok{i}")), &[runs[i], kids[i].ok], &[ext.ok]);
                 }
-                b.imm(
-                    &t(&format!("fail{i}")),
-                    &[runs[i], kids[i].fail],
-                    &[ext.fail],
-                );
-                b.imm(
-                    &t(&format!("abort{i}")),
-                    &[ext.abort, runs[i]],
-                    &[kids[i].abort],
-                );
+                b.imm(&t(&format!("fail{i}")), &[runs[i], kids[i].fail], &[ext.fail]);
+                b.imm(&t(&format!("abort{i}")), &[ext.abort, runs[i]], &[kids[i].abort]);
             }
         }
         Structure::IfThen | Structure::IfThenElse | Structure::While | Structure::TryCatch => {
@@ -190,21 +176,9 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             b.imm(&t("start"), &[ext.begin], &start_out);
             for i in 0..*n {
                 b.imm(&t(&format!("ok{i}")), &[runs[i], kids[i].ok], &[done[i]]);
-                b.imm(
-                    &t(&format!("fail{i}")),
-                    &[runs[i], kids[i].fail, good],
-                    &[done[i], bad],
-                );
-                b.imm(
-                    &t(&format!("fail{i}_again")),
-                    &[runs[i], kids[i].fail, bad],
-                    &[done[i], bad],
-                );
-                b.imm(
-                    &t(&format!("kill{i}")),
-                    &[stop, runs[i]],
-                    &[stop, kids[i].abort, done[i]],
-                );
+                b.imm(&t(&format!("fail{i}")), &[runs[i], kids[i].fail, good], &[done[i], bad]);
+                b.imm(&t(&format!("fail{i}_again")), &[runs[i], kids[i].fail, bad], &[done[i], bad]);
+                b.imm(&t(&format!("kill{i}")), &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
             }
             b.imm(&t("end_ok"), &with(&done, good), &[ext.ok]);
             b.imm(&t("end_fail"), &with(&done, bad), &[ext.fail]);
@@ -226,38 +200,14 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             }
             b.imm(&t("start"), &[ext.begin], &start_out);
             for i in 0..*n {
-                b.imm(
-                    &t(&format!("first_ok{i}")),
-                    &[open, runs[i], kids[i].ok],
-                    &[won_ok, done[i]],
-                );
-                b.imm(
-                    &t(&format!("first_fail{i}")),
-                    &[open, runs[i], kids[i].fail],
-                    &[won_fail, done[i]],
-                );
+                b.imm(&t(&format!("first_ok{i}")), &[open, runs[i], kids[i].ok], &[won_ok, done[i]]);
+                b.imm(&t(&format!("first_fail{i}")), &[open, runs[i], kids[i].fail], &[won_fail, done[i]]);
                 for (m, mname) in [(won_ok, "won_ok"), (won_fail, "won_fail")] {
-                    b.imm(
-                        &t(&format!("late_ok{i}_{mname}")),
-                        &[m, runs[i], kids[i].ok],
-                        &[m, done[i]],
-                    );
-                    b.imm(
-                        &t(&format!("late_fail{i}_{mname}")),
-                        &[m, runs[i], kids[i].fail],
-                        &[m, done[i]],
-                    );
-                    b.deferred(
-                        &t(&format!("kill{i}_{mname}")),
-                        &[m, runs[i]],
-                        &[m, kids[i].abort, done[i]],
-                    );
+                    b.imm(&t(&format!("late_ok{i}_{mname}")), &[m, runs[i], kids[i].ok], &[m, done[i]]);
+                    b.imm(&t(&format!("late_fail{i}_{mname}")), &[m, runs[i], kids[i].fail], &[m, done[i]]);
+                    b.deferred(&t(&format!("kill{i}_{mname}")), &[m, runs[i]], &[m, kids[i].abort, done[i]]);
                 }
-                b.imm(
-                    &t(&format!("stop{i}")),
-                    &[stop, runs[i]],
-                    &[stop, kids[i].abort, done[i]],
-                );
+                b.imm(&t(&format!("stop{i}")), &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
             }
             // Deferred: the aborted branches have settled before the result moves on.
             b.deferred(&t("end_ok"), &with(&done, won_ok), &[ext.ok]);
@@ -276,9 +226,7 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             let trig: Vec<_> = (0..k).map(|j| p(b, &format!("triggered{j}"))).collect();
             let do_run: Vec<_> = (0..k).map(|j| p(b, &format!("do_run{j}"))).collect();
             // Parallel part: the monitored block (0) and the conditions (1..=k).
-            let par: Vec<Iface> = std::iter::once(kids[0])
-                .chain((0..k).map(|j| kids[1 + 2 * j]))
-                .collect();
+            let par: Vec<Iface> = std::iter::once(kids[0]).chain((0..k).map(|j| kids[1 + 2 * j])).collect();
             let runs: Vec<_> = (0..par.len()).map(|i| p(b, &format!("run{i}"))).collect();
             let done: Vec<_> = (0..par.len()).map(|i| p(b, &format!("done{i}"))).collect();
             let mut start_out = vec![open];
@@ -287,58 +235,23 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
                 start_out.push(runs[i]);
             }
             b.imm(&t("start"), &[ext.begin], &start_out);
-            b.imm(
-                &t("monitored_first_ok"),
-                &[open, runs[0], par[0].ok],
-                &[a_ok, done[0]],
-            );
-            b.imm(
-                &t("monitored_first_fail"),
-                &[open, runs[0], par[0].fail],
-                &[a_fail, done[0]],
-            );
+            b.imm(&t("monitored_first_ok"), &[open, runs[0], par[0].ok], &[a_ok, done[0]]);
+            b.imm(&t("monitored_first_fail"), &[open, runs[0], par[0].fail], &[a_fail, done[0]]);
             for j in 0..k {
                 let i = j + 1;
-                b.imm(
-                    &t(&format!("condition{j}_ok")),
-                    &[open, runs[i], par[i].ok],
-                    &[trig[j], done[i]],
-                );
+                b.imm(&t(&format!("condition{j}_ok")), &[open, runs[i], par[i].ok], &[trig[j], done[i]]);
                 // Seed 4.5.3: whenever the condition finalizes first (ok or fail), the do-block runs.
-                b.imm(
-                    &t(&format!("condition{j}_fail")),
-                    &[open, runs[i], par[i].fail],
-                    &[trig[j], done[i]],
-                );
+                b.imm(&t(&format!("condition{j}_fail")), &[open, runs[i], par[i].fail], &[trig[j], done[i]]);
             }
-            let modes: Vec<(_, String)> = [
-                (a_ok, "monitored_ok".to_string()),
-                (a_fail, "monitored_fail".to_string()),
-            ]
-            .into_iter()
-            .chain(
-                trig.iter()
-                    .enumerate()
-                    .map(|(j, &p)| (p, format!("triggered{j}"))),
-            )
-            .collect();
+            let modes: Vec<(_, String)> = [(a_ok, "monitored_ok".to_string()), (a_fail, "monitored_fail".to_string())]
+                .into_iter()
+                .chain(trig.iter().enumerate().map(|(j, &p)| (p, format!("triggered{j}"))))
+                .collect();
             for (m, mname) in &modes {
                 for i in 0..par.len() {
-                    b.imm(
-                        &t(&format!("late_ok{i}_{mname}")),
-                        &[*m, runs[i], par[i].ok],
-                        &[*m, done[i]],
-                    );
-                    b.imm(
-                        &t(&format!("late_fail{i}_{mname}")),
-                        &[*m, runs[i], par[i].fail],
-                        &[*m, done[i]],
-                    );
-                    b.deferred(
-                        &t(&format!("kill{i}_{mname}")),
-                        &[*m, runs[i]],
-                        &[*m, par[i].abort, done[i]],
-                    );
+                    b.imm(&t(&format!("late_ok{i}_{mname}")), &[*m, runs[i], par[i].ok], &[*m, done[i]]);
+                    b.imm(&t(&format!("late_fail{i}_{mname}")), &[*m, runs[i], par[i].fail], &[*m, done[i]]);
+                    b.deferred(&t(&format!("kill{i}_{mname}")), &[*m, runs[i]], &[*m, par[i].abort, done[i]]);
                 }
             }
             // Deferred: the aborted blocks have settled before anything else starts.
@@ -346,43 +259,23 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             b.deferred(&t("end_fail"), &with(&done, a_fail), &[ext.fail]);
             for j in 0..k {
                 let c = kids[2 + 2 * j];
-                b.deferred(
-                    &t(&format!("do{j}")),
-                    &with(&done, trig[j]),
-                    &[c.begin, do_run[j]],
-                );
+                b.deferred(&t(&format!("do{j}")), &with(&done, trig[j]), &[c.begin, do_run[j]]);
                 match kinds[j] {
                     MonitorKind::Condition => {
                         b.imm(&t(&format!("do{j}_ok")), &[do_run[j], c.ok], &[ext.ok]);
                     }
                     MonitorKind::WhileCondition => {
-                        b.imm(
-                            &t(&format!("do{j}_ok_restart")),
-                            &[do_run[j], c.ok],
-                            &start_out,
-                        );
+                        b.imm(&t(&format!("do{j}_ok_restart")), &[do_run[j], c.ok], &start_out);
                     }
                 }
-                b.imm(
-                    &t(&format!("do{j}_fail")),
-                    &[do_run[j], c.fail],
-                    &[ext.fail],
-                );
-                b.imm(
-                    &t(&format!("abort_do{j}")),
-                    &[ext.abort, do_run[j]],
-                    &[c.abort],
-                );
+                b.imm(&t(&format!("do{j}_fail")), &[do_run[j], c.fail], &[ext.fail]);
+                b.imm(&t(&format!("abort_do{j}")), &[ext.abort, do_run[j]], &[c.abort]);
             }
             for (m, mname) in std::iter::once(&(open, "open".to_string())).chain(modes.iter()) {
                 b.imm(&t(&format!("abort_{mname}")), &[ext.abort, *m], &[stop]);
             }
             for i in 0..par.len() {
-                b.imm(
-                    &t(&format!("stop{i}")),
-                    &[stop, runs[i]],
-                    &[stop, par[i].abort, done[i]],
-                );
+                b.imm(&t(&format!("stop{i}")), &[stop, runs[i]], &[stop, par[i].abort, done[i]]);
             }
             b.imm(&t("aborted"), &with(&done, stop), &[]);
         }

@@ -95,10 +95,7 @@ pub fn mission_harness(net: Net) -> Option<Harness> {
 }
 
 /// Adds the environment around the external interface `ext`.
-fn environment(
-    b: &mut Builder,
-    ext: Iface,
-) -> (PlaceId, PlaceId, PlaceId, Vec<PlaceId>, Vec<TransitionId>) {
+fn environment(b: &mut Builder, ext: Iface) -> (PlaceId, PlaceId, PlaceId, Vec<PlaceId>, Vec<TransitionId>) {
     let idle = b.place("env.idle", 1);
     let run = b.place("env.running", 0);
     let got_ok = b.place("env.got_ok", 0);
@@ -108,20 +105,9 @@ fn environment(
         b.imm("env.begin", &[idle], &[ext.begin, run]),
         b.imm("env.ok", &[run, ext.ok], &[got_ok]),
         b.imm("env.fail", &[run, ext.fail], &[got_fail]),
-        b.transition(
-            "env.abort",
-            TransitionKind::Event("env.abort".into()),
-            &[run],
-            &[ext.abort, aborted],
-        ),
+        b.transition("env.abort", TransitionKind::Event("env.abort".into()), &[run], &[ext.abort, aborted]),
     ];
-    (
-        got_ok,
-        got_fail,
-        aborted,
-        vec![idle, run, got_ok, got_fail, aborted],
-        ts,
-    )
+    (got_ok, got_fail, aborted, vec![idle, run, got_ok, got_fail, aborted], ts)
 }
 
 /// A control structure with the given children plugged in.
@@ -136,18 +122,8 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
             Child::Reduced => {
                 let exe = b.place(&format!("{n}.exe"), 0);
                 b.imm(&format!("{n}.start"), &[k.begin], &[exe]);
-                b.transition(
-                    &format!("{n}.end_ok"),
-                    TransitionKind::Event(format!("{n}.ok")),
-                    &[exe],
-                    &[k.ok],
-                );
-                b.transition(
-                    &format!("{n}.end_fail"),
-                    TransitionKind::Event(format!("{n}.fail")),
-                    &[exe],
-                    &[k.fail],
-                );
+                b.transition(&format!("{n}.end_ok"), TransitionKind::Event(format!("{n}.ok")), &[exe], &[k.ok]);
+                b.transition(&format!("{n}.end_fail"), TransitionKind::Event(format!("{n}.fail")), &[exe], &[k.fail]);
                 b.imm(&format!("{n}.abort"), &[k.abort, exe], &[]);
             }
             Child::Instant => {
@@ -156,10 +132,7 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
             }
         }
     }
-    let net = b
-        .net
-        .build()
-        .expect("generated structure nets are well formed");
+    let net = b.net.build().expect("generated structure nets are well formed");
     Harness {
         abort_place: Some(ext.abort),
         net,
@@ -177,16 +150,9 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
 pub fn task_harness(task: &Net) -> Option<Harness> {
     let mut nb = task.to_builder();
     let find = |id: &str| task.place_by_id(id);
-    let ext = Iface {
-        begin: find("begin")?,
-        abort: find("abort")?,
-        ok: find("ok")?,
-        fail: find("fail")?,
-    };
-    let mut b = Builder {
-        net: std::mem::replace(&mut nb, mcl_net::NetBuilder::new("x")),
-        provenance: Default::default(),
-    };
+    let ext = Iface { begin: find("begin")?, abort: find("abort")?, ok: find("ok")?, fail: find("fail")? };
+    let mut b =
+        Builder { net: std::mem::replace(&mut nb, mcl_net::NetBuilder::new("x")), provenance: Default::default() };
     let (got_ok, got_fail, aborted, env, env_transitions) = environment(&mut b, ext);
     let net = b.net.build().ok()?;
     Some(Harness {
@@ -247,19 +213,11 @@ fn explore(net: &Net, max_states: usize) -> Graph {
         let imm: Vec<TransitionId> = ts
             .iter()
             .copied()
-            .filter(|&t| {
-                net.transition(t).is_some_and(|x| x.kind.is_immediate()) && enabled(net, &m, t)
-            })
+            .filter(|&t| net.transition(t).is_some_and(|x| x.kind.is_immediate()) && enabled(net, &m, t))
             .collect();
         let is_tangible = imm.is_empty();
-        let fire: Vec<TransitionId> = if is_tangible {
-            ts.iter()
-                .copied()
-                .filter(|&t| enabled(net, &m, t))
-                .collect()
-        } else {
-            imm
-        };
+        let fire: Vec<TransitionId> =
+            if is_tangible { ts.iter().copied().filter(|&t| enabled(net, &m, t)).collect() } else { imm };
         let mut succ = Vec::with_capacity(fire.len());
         for t in fire {
             let mut m2 = m.clone();
@@ -302,11 +260,7 @@ impl Harness {
     fn trace(&self, g: &Graph, mut s: u32) -> Vec<String> {
         let mut out = Vec::new();
         while let Some((p, t)) = g.parent[s as usize] {
-            let name = self
-                .net
-                .transition(t)
-                .map(|x| x.id.clone())
-                .unwrap_or_default();
+            let name = self.net.transition(t).map(|x| x.id.clone()).unwrap_or_default();
             out.push(if self.env_transitions.contains(&t) {
                 format!("({})", name.trim_start_matches("env."))
             } else {
@@ -325,23 +279,13 @@ impl Harness {
             .iter()
             .zip(m)
             .filter(|(_, &k)| k > 0)
-            .map(|(p, &k)| {
-                if k == 1 {
-                    p.id.clone()
-                } else {
-                    format!("{}×{k}", p.id)
-                }
-            })
+            .map(|(p, &k)| if k == 1 { p.id.clone() } else { format!("{}×{k}", p.id) })
             .collect();
         format!("{{{}}}", marked.join(", "))
     }
 
     fn at_rest(&self, m: &[u32]) -> bool {
-        self.net
-            .places()
-            .iter()
-            .enumerate()
-            .all(|(i, p)| self.env.iter().any(|e| e.index() == i) || m[i] == p.initial)
+        self.net.places().iter().enumerate().all(|(i, p)| self.env.iter().any(|e| e.index() == i) || m[i] == p.initial)
     }
 
     fn is_final(&self, m: &[u32]) -> bool {
@@ -380,7 +324,10 @@ impl Harness {
                     push(
                         Violation {
                             property: "reachability",
-                            message: format!("deadlock: no transition can fire in {} and the block has not ended", self.describe(m)),
+                            message: format!(
+                                "deadlock: no transition can fire in {} and the block has not ended",
+                                self.describe(m)
+                            ),
                             trace: self.trace(&g, s),
                         },
                         &mut violations,
@@ -389,10 +336,7 @@ impl Harness {
                     push(
                         Violation {
                             property: "reusability",
-                            message: format!(
-                                "the block ended but left tokens behind: {}",
-                                self.describe(m)
-                            ),
+                            message: format!("the block ended but left tokens behind: {}", self.describe(m)),
                             trace: self.trace(&g, s),
                         },
                         &mut violations,
@@ -408,7 +352,10 @@ impl Harness {
                 push(
                     Violation {
                         property: "abort",
-                        message: format!("after an abort the task waits in {} instead of returning to rest at once", self.describe(m)),
+                        message: format!(
+                            "after an abort the task waits in {} instead of returning to rest at once",
+                            self.describe(m)
+                        ),
                         trace: self.trace(&g, s),
                     },
                     &mut violations,
@@ -425,9 +372,7 @@ impl Harness {
             }
             let mut good = vec![false; g.markings.len()];
             let mut stack: Vec<u32> = (0..g.markings.len() as u32)
-                .filter(|&s| {
-                    g.succ[s as usize].is_empty() && self.is_final(&g.markings[s as usize])
-                })
+                .filter(|&s| g.succ[s as usize].is_empty() && self.is_final(&g.markings[s as usize]))
                 .collect();
             for &s in &stack {
                 good[s as usize] = true;
@@ -440,8 +385,7 @@ impl Harness {
                     }
                 }
             }
-            if let Some(s) = (0..g.markings.len() as u32)
-                .find(|&s| !good[s as usize] && !g.succ[s as usize].is_empty())
+            if let Some(s) = (0..g.markings.len() as u32).find(|&s| !good[s as usize] && !g.succ[s as usize].is_empty())
             {
                 push(
                     Violation {
@@ -461,11 +405,7 @@ impl Harness {
             let mut m: Vec<u32> = self.net.places().iter().map(|p| p.initial).collect();
             m[abort_place.index()] += 1;
             let env_ts = &self.env_transitions;
-            if let Some(t) = self
-                .net
-                .transition_ids()
-                .find(|&t| !env_ts.contains(&t) && enabled(&self.net, &m, t))
-            {
+            if let Some(t) = self.net.transition_ids().find(|&t| !env_ts.contains(&t) && enabled(&self.net, &m, t)) {
                 push(
                     Violation {
                         property: "abort",
@@ -487,11 +427,7 @@ impl Harness {
             });
         }
         let tangible = g.tangible.iter().filter(|&&t| t).count();
-        Verdict {
-            states: g.markings.len(),
-            tangible,
-            violations,
-        }
+        Verdict { states: g.markings.len(), tangible, violations }
     }
 }
 
@@ -524,15 +460,8 @@ mod tests {
         for s in all_structures() {
             let n = s.arity();
             for mask in 0..(1u32 << n) {
-                let children: Vec<Child> = (0..n)
-                    .map(|i| {
-                        if mask & (1 << i) != 0 {
-                            Child::Instant
-                        } else {
-                            Child::Reduced
-                        }
-                    })
-                    .collect();
+                let children: Vec<Child> =
+                    (0..n).map(|i| if mask & (1 << i) != 0 { Child::Instant } else { Child::Reduced }).collect();
                 // An instantaneous loop body with an instantaneous condition never reaches a
                 // tangible marking: that is a property of the program (reported for missions), not of the block.
                 if s == Structure::While && children.iter().all(|c| *c == Child::Instant) {
@@ -544,12 +473,7 @@ mod tests {
                     continue;
                 }
                 let v = structure_harness(&s, &children).verify(2_000_000);
-                assert!(
-                    v.ok(),
-                    "{} with {children:?}: {:#?}",
-                    s.name(),
-                    v.violations
-                );
+                assert!(v.ok(), "{} with {children:?}: {:#?}", s.name(), v.violations);
             }
         }
     }
@@ -569,12 +493,7 @@ mod tests {
         let exe = b.place("c.exe", 0);
         b.imm("c.start", &[a.begin], &[exe]);
         b.transition("c.ok", TransitionKind::Event("e1".into()), &[exe], &[a.ok]);
-        b.transition(
-            "c.fail",
-            TransitionKind::Event("e2".into()),
-            &[exe],
-            &[a.fail],
-        );
+        b.transition("c.fail", TransitionKind::Event("e2".into()), &[exe], &[a.fail]);
         b.imm("c.abort", &[a.abort, exe], &[]);
         let net = b.net.build().unwrap();
         let h = Harness {
@@ -588,15 +507,8 @@ mod tests {
         };
         let v = h.verify(10_000);
         assert!(!v.ok());
-        let r = v
-            .violations
-            .iter()
-            .find(|v| v.property == "reusability")
-            .expect("stray abort token");
+        let r = v.violations.iter().find(|v| v.property == "reusability").expect("stray abort token");
         // The abort is never forwarded: the child ends on its own and its result is left behind.
-        assert_eq!(
-            r.trace,
-            vec!["(begin)", "start", "c.start", "(abort)", "c.ok", "ok"]
-        );
+        assert_eq!(r.trace, vec!["(begin)", "start", "c.start", "(abort)", "c.ok", "ok"]);
     }
 }

@@ -18,7 +18,7 @@
 //! * **Trigger places.** A transition is only tested when one designated input
 //!   place is marked; unmarked parts of the net cost nothing.
 
-use super::{Options, Semantics, StateSpace, StopReason};
+use super::{Options, Semantics, StateId, StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 use crate::semantics::{self, MarkingClass};
 
@@ -40,13 +40,7 @@ pub(crate) struct Layout {
 impl Layout {
     fn new(places: usize, bits: u32) -> Self {
         let per_word = (64 / bits) as usize;
-        Layout {
-            places,
-            bits,
-            words: places.div_ceil(per_word).max(1),
-            per_word,
-            mask: (1u64 << bits) - 1,
-        }
+        Layout { places, bits, words: places.div_ceil(per_word).max(1), per_word, mask: (1u64 << bits) - 1 }
     }
 
     #[inline]
@@ -205,9 +199,8 @@ impl Compiled {
             trig_off.push(trig.len() as u32);
         }
         let initial_marking: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
-        let initial_hash = initial_marking.iter().zip(&coef).fold(0u64, |h, (&x, &c)| {
-            h.wrapping_add(u64::from(x).wrapping_mul(c))
-        });
+        let initial_hash =
+            initial_marking.iter().zip(&coef).fold(0u64, |h, (&x, &c)| h.wrapping_add(u64::from(x).wrapping_mul(c)));
         Compiled {
             layout,
             trans,
@@ -224,10 +217,7 @@ impl Compiled {
             // With only immediate, unprioritized transitions the MCL rule keeps
             // every enabled transition: skip it.
             mcl_rule: semantics == Semantics::Mcl
-                && net
-                    .transitions()
-                    .iter()
-                    .any(|t| !t.kind.is_immediate() || t.priority.is_some()),
+                && net.transitions().iter().any(|t| !t.kind.is_immediate() || t.priority.is_some()),
             semantics,
         }
     }
@@ -246,10 +236,7 @@ pub(super) struct Stats {
 
 impl Stats {
     pub fn new(net: &Net) -> Self {
-        Stats {
-            bounds: net.places().iter().map(|p| p.initial).collect(),
-            max_total: 0,
-        }
+        Stats { bounds: net.places().iter().map(|p| p.initial).collect(), max_total: 0 }
     }
 
     /// Accounts for the token total of a packed state.
@@ -291,6 +278,65 @@ fn field_sum(x: u64, bits: u32) -> u64 {
         }
     }
     v
+}
+
+/// Optional work of a sequential run: recording the edges, and not expanding
+/// markings above [`Options::cut_above`].
+pub(super) struct Extras {
+    record: bool,
+    cut_above: Option<u32>,
+    counts: Vec<u32>,
+    succ: Vec<(TransitionId, StateId)>,
+    pub cut: Vec<u32>,
+}
+
+impl Extras {
+    pub fn new(opts: &Options) -> Self {
+        Extras {
+            record: opts.record_edges,
+            cut_above: opts.cut_above,
+            counts: Vec::new(),
+            succ: Vec::new(),
+            cut: Vec::new(),
+        }
+    }
+
+    /// Whether state `s` must not be expanded (and is then listed as cut).
+    #[inline]
+    pub fn cut(&mut self, l: &Layout, s: usize, state: &[u64]) -> bool {
+        match self.cut_above {
+            Some(b) if (0..l.places).any(|p| l.get(state, p) > b) => {
+                self.cut.push(s as u32);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    #[inline]
+    pub fn edge(&mut self, s: u32, t: u32, target: u32) {
+        if self.record {
+            if self.counts.len() <= s as usize {
+                self.counts.resize(s as usize + 1, 0);
+            }
+            self.counts[s as usize] += 1;
+            self.succ.push((TransitionId(t), StateId(target)));
+        }
+    }
+
+    /// (successor offsets per state, successors); both empty when not recording.
+    pub fn finish(mut self, states: usize) -> (Vec<u32>, Vec<(TransitionId, StateId)>, Vec<u32>) {
+        if !self.record {
+            return (Vec::new(), Vec::new(), self.cut);
+        }
+        self.counts.resize(states, 0);
+        let mut off = Vec::with_capacity(states + 1);
+        off.push(0u32);
+        for &c in &self.counts {
+            off.push(off.last().copied().unwrap_or(0) + c);
+        }
+        (off, self.succ, self.cut)
+    }
 }
 
 /// A place would overflow its bit field.
@@ -335,12 +381,7 @@ impl Compiled {
     /// Turns `state` (a copy of the source state) into the successor by `t`.
     /// Raises `bounds` to the new token counts of the places `t` adds to.
     #[inline]
-    pub(super) fn successor(
-        &self,
-        state: &mut [u64],
-        t: usize,
-        bounds: &mut [u32],
-    ) -> Result<(), Overflow> {
+    pub(super) fn successor(&self, state: &mut [u64], t: usize, bounds: &mut [u32]) -> Result<(), Overflow> {
         let l = &self.layout;
         let Some(info) = self.trans.get(t) else {
             return Ok(());
@@ -348,11 +389,7 @@ impl Compiled {
         for &(gw, sh, d, p) in &self.grow[range(info.grow)] {
             let v = ((state[gw as usize] >> sh) & l.mask) + d;
             if v > l.mask {
-                return Err(if l.bits == 32 {
-                    Overflow::Stop
-                } else {
-                    Overflow::Widen
-                });
+                return Err(if l.bits == 32 { Overflow::Stop } else { Overflow::Widen });
             }
             if let Some(b) = bounds.get_mut(p as usize) {
                 *b = (*b).max(v as u32);
@@ -373,14 +410,9 @@ impl Compiled {
             return false;
         };
         if l.bits == 1 {
-            !info.never
-                && self.pre_mask[range(info.pre_mask)]
-                    .iter()
-                    .all(|&(w, m)| cur[w as usize] & m == m)
+            !info.never && self.pre_mask[range(info.pre_mask)].iter().all(|&(w, m)| cur[w as usize] & m == m)
         } else {
-            self.pre[range(info.pre)]
-                .iter()
-                .all(|&(w, sh, wt)| (cur[w as usize] >> sh) & l.mask >= wt)
+            self.pre[range(info.pre)].iter().all(|&(w, sh, wt)| (cur[w as usize] >> sh) & l.mask >= wt)
         }
     }
 }
@@ -402,13 +434,7 @@ pub(super) struct Table {
 impl Table {
     pub(super) fn new(words: usize) -> Self {
         let cap = 1usize << 12;
-        Table {
-            slots: vec![0; cap * (words + 1)],
-            stride: words + 1,
-            words,
-            mask: cap - 1,
-            len: 0,
-        }
+        Table { slots: vec![0; cap * (words + 1)], stride: words + 1, words, mask: cap - 1, len: 0 }
     }
 
     pub(super) fn capacity(&self) -> usize {
@@ -457,12 +483,7 @@ impl Table {
             if meta == 0 {
                 return Err(pos);
             }
-            if meta & 0xFFFF_FFFF_0000_0000 == tag
-                && key
-                    .iter()
-                    .enumerate()
-                    .all(|(i, &k)| self.slots[base + i] == k)
-            {
+            if meta & 0xFFFF_FFFF_0000_0000 == tag && key.iter().enumerate().all(|(i, &k)| self.slots[base + i] == k) {
                 return Ok(meta as u32 - 1);
             }
             pos = (pos + 1) & self.mask;
@@ -480,10 +501,7 @@ impl Table {
 
 /// Smallest field width that holds `x` tokens.
 fn bits_for(x: u32) -> u32 {
-    [1, 2, 4, 8, 16, 32]
-        .into_iter()
-        .find(|&b| b == 32 || x < (1u32 << b))
-        .unwrap_or(32)
+    [1, 2, 4, 8, 16, 32].into_iter().find(|&b| b == 32 || x < (1u32 << b)).unwrap_or(32)
 }
 
 pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
@@ -492,19 +510,33 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
     let mut bits = bits_for(initial_max);
     loop {
         let c = Compiled::new(net, opts.semantics, bits);
-        let result = match opts.threads {
-            1 => match c.layout.words {
-                1 => super::fixed::run::<1>(&c, net, max),
-                2 => super::fixed::run::<2>(&c, net, max),
-                3 => super::fixed::run::<3>(&c, net, max),
-                4 => super::fixed::run::<4>(&c, net, max),
-                5 => super::fixed::run::<5>(&c, net, max),
-                6 => super::fixed::run::<6>(&c, net, max),
-                7 => super::fixed::run::<7>(&c, net, max),
-                8 => super::fixed::run::<8>(&c, net, max),
-                _ => run(&c, net, max),
-            },
-            n => super::parallel::run(&c, net, max, if n == 0 { default_threads() } else { n }),
+        // Recording edges and cutting markings are done by the sequential engines.
+        let sequential = opts.threads == 1 || opts.record_edges || opts.cut_above.is_some();
+        let result = if sequential {
+            let x = Extras::new(opts);
+            let extras = opts.record_edges || opts.cut_above.is_some();
+            match (c.layout.words, extras) {
+                (1, false) => super::fixed::run::<1, false>(&c, net, max, x),
+                (2, false) => super::fixed::run::<2, false>(&c, net, max, x),
+                (3, false) => super::fixed::run::<3, false>(&c, net, max, x),
+                (4, false) => super::fixed::run::<4, false>(&c, net, max, x),
+                (5, false) => super::fixed::run::<5, false>(&c, net, max, x),
+                (6, false) => super::fixed::run::<6, false>(&c, net, max, x),
+                (7, false) => super::fixed::run::<7, false>(&c, net, max, x),
+                (8, false) => super::fixed::run::<8, false>(&c, net, max, x),
+                (1, true) => super::fixed::run::<1, true>(&c, net, max, x),
+                (2, true) => super::fixed::run::<2, true>(&c, net, max, x),
+                (3, true) => super::fixed::run::<3, true>(&c, net, max, x),
+                (4, true) => super::fixed::run::<4, true>(&c, net, max, x),
+                (5, true) => super::fixed::run::<5, true>(&c, net, max, x),
+                (6, true) => super::fixed::run::<6, true>(&c, net, max, x),
+                (7, true) => super::fixed::run::<7, true>(&c, net, max, x),
+                (8, true) => super::fixed::run::<8, true>(&c, net, max, x),
+                _ => run(&c, net, max, x),
+            }
+        } else {
+            let n = if opts.threads == 0 { default_threads() } else { opts.threads };
+            super::parallel::run(&c, net, max, n)
         };
         match result {
             Some(ss) => return ss,
@@ -525,6 +557,9 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
                     stop: Some(StopReason::TokenOverflow),
                     bounds: net.places().iter().map(|p| p.initial).collect(),
                     max_total: net.places().iter().map(|p| u64::from(p.initial)).sum(),
+                    succ_off: Vec::new(),
+                    succ: Vec::new(),
+                    cut: Vec::new(),
                 }
             }
         }
@@ -537,7 +572,7 @@ fn default_threads() -> usize {
 }
 
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
+fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option<StateSpace> {
     let l = c.layout;
     let w = l.words;
     let mut arena: Vec<u64> = c.initial.clone();
@@ -571,6 +606,9 @@ fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
             next += 1;
             cur.copy_from_slice(&arena[s * w..(s + 1) * w]);
             stats.observe(&l, &cur);
+            if extras.cut(&l, s, &cur) {
+                continue;
+            }
             let h = hashes[s];
 
             let is_vanishing = c.ready_in(net, &cur, &mut enabled);
@@ -616,7 +654,10 @@ fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
         for (i, &(h2, mixed, s, t)) in meta.iter().enumerate() {
             let key = &succs[i * w..(i + 1) * w];
             let pos = match table.find(key, mixed) {
-                Ok(_) => continue,
+                Ok(idx) => {
+                    extras.edge(s, t, idx);
+                    continue;
+                }
                 Err(pos) => pos,
             };
             if parent.len() >= max_states {
@@ -625,6 +666,7 @@ fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
             }
             let idx = parent.len() as u32;
             table.insert_at(pos, key, mixed, idx);
+            extras.edge(s, t, idx);
             arena.extend_from_slice(key);
             hashes.push(h2);
             parent.push(s);
@@ -632,6 +674,7 @@ fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
         }
     }
 
+    let (succ_off, succ, cut) = extras.finish(parent.len());
     Some(StateSpace {
         semantics: c.semantics,
         layout: l,
@@ -644,5 +687,8 @@ fn run(c: &Compiled, net: &Net, max_states: usize) -> Option<StateSpace> {
         stop,
         bounds: stats.bounds,
         max_total: stats.max_total,
+        succ_off,
+        succ,
+        cut,
     })
 }

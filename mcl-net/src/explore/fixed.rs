@@ -5,7 +5,7 @@
 //! size known at compile time, which removes the bounds checks and `memcpy`
 //! calls of the slice-based version from the inner loop.
 
-use super::engine::{mix, Compiled, Overflow, Stats, BATCH, NO_PARENT};
+use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
 use super::{StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 
@@ -24,18 +24,11 @@ struct FixedTable<const W: usize> {
 }
 
 impl<const W: usize> FixedTable<W> {
-    const EMPTY: Slot<W> = Slot {
-        key: [0; W],
-        meta: 0,
-    };
+    const EMPTY: Slot<W> = Slot { key: [0; W], meta: 0 };
 
     fn new() -> Self {
         let cap = 1 << 12;
-        FixedTable {
-            slots: vec![Self::EMPTY; cap],
-            mask: cap - 1,
-            len: 0,
-        }
+        FixedTable { slots: vec![Self::EMPTY; cap], mask: cap - 1, len: 0 }
     }
 
     fn grow(&mut self) {
@@ -59,7 +52,7 @@ impl<const W: usize> FixedTable<W> {
     }
 
     #[inline]
-    fn find(&self, key: &[u64; W], mixed: u64) -> Result<(), usize> {
+    fn find(&self, key: &[u64; W], mixed: u64) -> Result<u32, usize> {
         let tag = mixed << 32;
         let mut pos = mixed as usize & self.mask;
         loop {
@@ -68,7 +61,7 @@ impl<const W: usize> FixedTable<W> {
                 return Err(pos);
             }
             if s.meta & 0xFFFF_FFFF_0000_0000 == tag && s.key == *key {
-                return Ok(());
+                return Ok(s.meta as u32 - 1);
             }
             pos = (pos + 1) & self.mask;
         }
@@ -76,19 +69,20 @@ impl<const W: usize> FixedTable<W> {
 
     #[inline]
     fn insert_at(&mut self, pos: usize, key: [u64; W], mixed: u64, idx: u32) {
-        self.slots[pos] = Slot {
-            key,
-            meta: (mixed << 32) | (u64::from(idx) + 1),
-        };
+        self.slots[pos] = Slot { key, meta: (mixed << 32) | (u64::from(idx) + 1) };
         self.len += 1;
     }
 }
 
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-pub(super) fn run<const W: usize>(
+///
+/// `EXTRAS` compiles in the calls to `extras` (edges, cut); without it the
+/// default search pays nothing for them.
+pub(super) fn run<const W: usize, const EXTRAS: bool>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
+    mut extras: Extras,
 ) -> Option<StateSpace> {
     let mut init = [0u64; W];
     init.copy_from_slice(&c.initial);
@@ -122,6 +116,9 @@ pub(super) fn run<const W: usize>(
             next += 1;
             let cur = arena[s];
             stats.observe(&c.layout, &cur);
+            if EXTRAS && extras.cut(&c.layout, s, &cur) {
+                continue;
+            }
             if c.ready_in(net, &cur, &mut enabled) {
                 if vanishing.len() <= s / 64 {
                     vanishing.resize(s / 64 + 1, 0);
@@ -163,14 +160,23 @@ pub(super) fn run<const W: usize>(
         // 3. Look up and insert, in BFS order.
         for (&key, &(h2, mixed, s, t)) in succs.iter().zip(&meta) {
             let pos = match table.find(&key, mixed) {
-                Ok(()) => continue,
+                Ok(idx) => {
+                    if EXTRAS {
+                        extras.edge(s, t, idx);
+                    }
+                    continue;
+                }
                 Err(pos) => pos,
             };
             if parent.len() >= max_states {
                 stop = Some(StopReason::StateLimit);
                 break 'bfs;
             }
-            table.insert_at(pos, key, mixed, parent.len() as u32);
+            let idx = parent.len() as u32;
+            table.insert_at(pos, key, mixed, idx);
+            if EXTRAS {
+                extras.edge(s, t, idx);
+            }
             arena.push(key);
             hashes.push(h2);
             parent.push(s);
@@ -178,6 +184,7 @@ pub(super) fn run<const W: usize>(
         }
     }
 
+    let (succ_off, succ, cut) = extras.finish(parent.len());
     Some(StateSpace {
         semantics: c.semantics,
         layout: c.layout,
@@ -190,5 +197,8 @@ pub(super) fn run<const W: usize>(
         stop,
         bounds: stats.bounds,
         max_total: stats.max_total,
+        succ_off,
+        succ,
+        cut,
     })
 }

@@ -48,8 +48,16 @@ pub struct Options {
     pub max_dead_examples: usize,
     /// Worker threads (0 = one per core, at most 8; default 1). Results do not
     /// depend on it, state numbering included, except which states are kept
-    /// at the BFS level where `max_states` is reached.
+    /// at the BFS level where `max_states` is reached. Recording edges and
+    /// cutting markings always run on one thread.
     pub threads: usize,
+    /// Keep the edges (state, ready transition, successor) for
+    /// [`StateSpace::successors`] and [`StateSpace::coreachable`].
+    pub record_edges: bool,
+    /// Do not expand a marking in which some place holds more than this many
+    /// tokens; such states are listed by [`StateSpace::cut_states`]. With
+    /// `Some(1)`, checking 1-safeness stays finite on unbounded nets.
+    pub cut_above: Option<u32>,
 }
 
 /// Default [`Options::max_states`].
@@ -62,6 +70,8 @@ impl Default for Options {
             max_states: DEFAULT_MAX_STATES,
             max_dead_examples: 10,
             threads: 1,
+            record_edges: false,
+            cut_above: None,
         }
     }
 }
@@ -69,10 +79,7 @@ impl Default for Options {
 impl Options {
     /// Default options with the plain P/T semantics.
     pub fn plain() -> Self {
-        Options {
-            semantics: Semantics::Plain,
-            ..Options::default()
-        }
+        Options { semantics: Semantics::Plain, ..Options::default() }
     }
 }
 
@@ -119,6 +126,11 @@ pub struct StateSpace {
     bounds: Vec<u32>,
     /// Highest token total of an expanded state.
     max_total: u64,
+    /// With [`Options::record_edges`]: `succ[succ_off[s]..succ_off[s + 1]]`.
+    succ_off: Vec<u32>,
+    succ: Vec<(TransitionId, StateId)>,
+    /// States not expanded because of [`Options::cut_above`].
+    cut: Vec<u32>,
 }
 
 impl StateSpace {
@@ -168,19 +180,14 @@ impl StateSpace {
 
     /// The marking of state `s`.
     pub fn marking(&self, s: StateId) -> Marking {
-        Marking(
-            (0..self.layout.places as u32)
-                .map(|p| self.tokens(s, PlaceId(p)))
-                .collect(),
-        )
+        Marking((0..self.layout.places as u32).map(|p| self.tokens(s, PlaceId(p))).collect())
     }
 
     /// A shortest firing sequence from the initial marking to `s`.
     pub fn path_to(&self, s: StateId) -> Vec<TransitionId> {
         let mut path = Vec::new();
         let mut cur = s.0;
-        while let (Some(&p), Some(&t)) = (self.parent.get(cur as usize), self.via.get(cur as usize))
-        {
+        while let (Some(&p), Some(&t)) = (self.parent.get(cur as usize), self.via.get(cur as usize)) {
             if p == NO_PARENT {
                 break;
             }
@@ -199,17 +206,12 @@ impl StateSpace {
     /// True when `s` is vanishing (always false under [`Semantics::Plain`]).
     pub fn is_vanishing(&self, s: StateId) -> bool {
         let i = s.0 as usize;
-        self.vanishing
-            .get(i / 64)
-            .is_some_and(|w| w & (1u64 << (i % 64)) != 0)
+        self.vanishing.get(i / 64).is_some_and(|w| w & (1u64 << (i % 64)) != 0)
     }
 
     /// Number of vanishing states.
     pub fn vanishing_count(&self) -> u64 {
-        self.vanishing
-            .iter()
-            .map(|w| u64::from(w.count_ones()))
-            .sum()
+        self.vanishing.iter().map(|w| u64::from(w.count_ones())).sum()
     }
 
     /// Highest token count of each place over the stored states (and their
@@ -221,6 +223,68 @@ impl StateSpace {
     /// Largest total number of tokens in one expanded state.
     pub fn max_tokens(&self) -> u64 {
         self.max_total
+    }
+
+    /// True when the edges were recorded ([`Options::record_edges`]).
+    pub fn has_edges(&self) -> bool {
+        !self.succ_off.is_empty()
+    }
+
+    /// The ready transitions of `s` with the states they lead to, in the order
+    /// the firing rule lists them (empty unless [`Options::record_edges`]).
+    pub fn successors(&self, s: StateId) -> &[(TransitionId, StateId)] {
+        let i = s.0 as usize;
+        match (self.succ_off.get(i), self.succ_off.get(i + 1)) {
+            (Some(&a), Some(&b)) => self.succ.get(a as usize..b as usize).unwrap_or(&[]),
+            _ => &[],
+        }
+    }
+
+    /// For every state, whether some state satisfying `target` can be reached
+    /// from it (itself included), following the recorded edges. Without
+    /// [`Options::record_edges`] only the targets themselves are marked.
+    pub fn coreachable(&self, mut target: impl FnMut(StateId) -> bool) -> Vec<bool> {
+        let n = self.len();
+        let mut reach: Vec<bool> = (0..n as u32).map(|s| target(StateId(s))).collect();
+        if !self.has_edges() {
+            return reach;
+        }
+        // Reverse adjacency, then a backward search from the targets.
+        let mut count = vec![0u32; n + 1];
+        for &(_, d) in &self.succ {
+            if let Some(c) = count.get_mut(d.0 as usize + 1) {
+                *c += 1;
+            }
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut preds = vec![0u32; self.succ.len()];
+        for s in 0..n {
+            for &(_, d) in self.successors(StateId(s as u32)) {
+                if let Some(f) = fill.get_mut(d.0 as usize) {
+                    preds[*f as usize] = s as u32;
+                    *f += 1;
+                }
+            }
+        }
+        let mut stack: Vec<u32> = (0..n as u32).filter(|&s| reach[s as usize]).collect();
+        while let Some(d) = stack.pop() {
+            let (a, b) = (count[d as usize] as usize, count[d as usize + 1] as usize);
+            for &p in &preds[a..b] {
+                if !reach[p as usize] {
+                    reach[p as usize] = true;
+                    stack.push(p);
+                }
+            }
+        }
+        reach
+    }
+
+    /// States not expanded because of [`Options::cut_above`], in BFS order.
+    pub fn cut_states(&self) -> impl ExactSizeIterator<Item = StateId> + '_ {
+        self.cut.iter().map(|&s| StateId(s))
     }
 
     /// Bits used per place in the packed markings (1, 2, 4, 8, 16 or 32).
@@ -287,6 +351,8 @@ pub struct AnalysisReport {
     pub bounds: Vec<PlaceBound>,
     /// Vanishing markings (MCL semantics only; 0 under plain semantics).
     pub vanishing_states: u64,
+    /// Markings not expanded because of [`Options::cut_above`].
+    pub cut_states: u64,
 }
 
 /// Explores `net` and summarizes the state space.
@@ -312,10 +378,7 @@ pub fn report(net: &Net, ss: &StateSpace, max_dead_examples: usize) -> AnalysisR
                     .collect(),
                 path_names: path
                     .iter()
-                    .map(|&t| {
-                        net.transition(t)
-                            .map_or_else(String::new, |tr| tr.name.clone())
-                    })
+                    .map(|&t| net.transition(t).map_or_else(String::new, |tr| tr.name.clone()))
                     .collect(),
                 path,
             }
@@ -334,15 +397,8 @@ pub fn report(net: &Net, ss: &StateSpace, max_dead_examples: usize) -> AnalysisR
         one_safe: bounds.iter().all(|&b| b <= 1),
         max_tokens,
         max_tokens_in_place: bounds.iter().copied().max().unwrap_or(0),
-        bounds: net
-            .places()
-            .iter()
-            .zip(bounds)
-            .map(|(p, &b)| PlaceBound {
-                place: p.id.clone(),
-                bound: b,
-            })
-            .collect(),
+        bounds: net.places().iter().zip(bounds).map(|(p, &b)| PlaceBound { place: p.id.clone(), bound: b }).collect(),
         vanishing_states: ss.vanishing_count(),
+        cut_states: ss.cut.len() as u64,
     }
 }

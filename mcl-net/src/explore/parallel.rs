@@ -128,14 +128,7 @@ impl Part {
 
     /// Phase 2: looks up and inserts the successors this partition owns
     /// (`outboxes[src][dst]` for every `src`, with `dst` this partition).
-    fn insert(
-        &mut self,
-        outboxes: &[Vec<Outbox>],
-        dst: usize,
-        w: usize,
-        count: &AtomicUsize,
-        max: usize,
-    ) -> bool {
+    fn insert(&mut self, outboxes: &[Vec<Outbox>], dst: usize, w: usize, count: &AtomicUsize, max: usize) -> bool {
         let mut full = false;
         for o in outboxes.iter().map(|row| &row[dst]) {
             while (self.table.len + o.meta.len()) * 4 > self.table.capacity() * 3 {
@@ -200,25 +193,13 @@ fn each<E: Send, T: Send>(
     f: impl Fn(usize, &mut Part, &mut E) -> T + Sync,
 ) -> Vec<T> {
     if !parallel {
-        return parts
-            .iter_mut()
-            .zip(extra.iter_mut())
-            .enumerate()
-            .map(|(k, (p, e))| f(k, p, e))
-            .collect();
+        return parts.iter_mut().zip(extra.iter_mut()).enumerate().map(|(k, (p, e))| f(k, p, e)).collect();
     }
     std::thread::scope(|s| {
         let f = &f;
-        let handles: Vec<_> = parts
-            .iter_mut()
-            .zip(extra.iter_mut())
-            .enumerate()
-            .map(|(k, (p, e))| s.spawn(move || f(k, p, e)))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
+        let handles: Vec<_> =
+            parts.iter_mut().zip(extra.iter_mut()).enumerate().map(|(k, (p, e))| s.spawn(move || f(k, p, e))).collect();
+        handles.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
     })
 }
 
@@ -227,12 +208,8 @@ fn number_level(parts: &mut [Part], next_gid: usize) -> usize {
     let mut lists: Vec<Vec<(u64, u32)>> = parts
         .iter()
         .map(|p| {
-            let mut v: Vec<(u64, u32)> = p
-                .key
-                .iter()
-                .enumerate()
-                .map(|(i, &k)| (k, (p.level_start + i) as u32))
-                .collect();
+            let mut v: Vec<(u64, u32)> =
+                p.key.iter().enumerate().map(|(i, &k)| (k, (p.level_start + i) as u32)).collect();
             v.sort_unstable();
             v
         })
@@ -269,12 +246,7 @@ fn number_level(parts: &mut [Part], next_gid: usize) -> usize {
 }
 
 /// Partitioned BFS; `None` means a place overflowed its field (retry wider).
-pub(super) fn run(
-    c: &Compiled,
-    net: &Net,
-    max_states: usize,
-    threads: usize,
-) -> Option<StateSpace> {
+pub(super) fn run(c: &Compiled, net: &Net, max_states: usize, threads: usize) -> Option<StateSpace> {
     let w = c.layout.words;
     let k = threads.max(1);
     let mut parts: Vec<Part> = (0..k).map(|_| Part::new(w, net)).collect();
@@ -292,9 +264,7 @@ pub(super) fn run(
     }
     let count = AtomicUsize::new(1);
     // outboxes[src][dst]: successors found by partition src, owned by dst.
-    let mut outboxes: Vec<Vec<Outbox>> = (0..k)
-        .map(|_| (0..k).map(|_| Outbox::default()).collect())
-        .collect();
+    let mut outboxes: Vec<Vec<Outbox>> = (0..k).map(|_| (0..k).map(|_| Outbox::default()).collect()).collect();
     let mut total = number_level(&mut parts, 0);
     let mut stop = None;
 
@@ -304,14 +274,9 @@ pub(super) fn run(
         }
         // Chunks of the current level.
         while parts.iter().any(|p| p.cursor < p.frontier_end) {
-            let work: usize = parts
-                .iter()
-                .map(|p| (p.frontier_end - p.cursor).min(CHUNK))
-                .sum();
+            let work: usize = parts.iter().map(|p| (p.frontier_end - p.cursor).min(CHUNK)).sum();
             let parallel = k > 1 && work >= PARALLEL_MIN;
-            let results = each(&mut parts, &mut outboxes, parallel, |_, p, row| {
-                p.expand(c, net, row)
-            });
+            let results = each(&mut parts, &mut outboxes, parallel, |_, p, row| p.expand(c, net, row));
             for r in results {
                 match r {
                     Ok(()) => {}
@@ -324,9 +289,7 @@ pub(super) fn run(
             }
             let shared = &outboxes;
             let mut unit = vec![(); k];
-            let full = each(&mut parts, &mut unit, parallel, |dst, p, _| {
-                p.insert(shared, dst, w, &count, max_states)
-            });
+            let full = each(&mut parts, &mut unit, parallel, |dst, p, _| p.insert(shared, dst, w, &count, max_states));
             // Keep the buffers (and their memory) for the next chunk.
             for o in outboxes.iter_mut().flatten() {
                 o.words.clear();
@@ -346,13 +309,7 @@ pub(super) fn run(
 }
 
 /// Gathers the partitions into one state space indexed by global id.
-fn assemble(
-    c: &Compiled,
-    net: &Net,
-    parts: Vec<Part>,
-    total: usize,
-    stop: Option<StopReason>,
-) -> StateSpace {
+fn assemble(c: &Compiled, net: &Net, parts: Vec<Part>, total: usize, stop: Option<StopReason>) -> StateSpace {
     let w = c.layout.words;
     let mut arena = vec![0u64; total * w];
     let mut parent = vec![NO_PARENT; total];
@@ -389,5 +346,8 @@ fn assemble(
         stop,
         bounds: stats.bounds,
         max_total: stats.max_total,
+        succ_off: Vec::new(),
+        succ: Vec::new(),
+        cut: Vec::new(),
     }
 }

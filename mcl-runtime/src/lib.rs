@@ -1,0 +1,9 @@
+//! # mcl-runtime
+//!
+//! Runs compiled missions. The player and the mock vehicle are *sans-IO*
+//! state machines (time is a number of seconds given by the caller), driven
+//! either in virtual time (deterministic, instantaneous) or in real time
+//! over a [`link::Link`] to an Architecture Abstraction Component (AAC), in
+//! process or over TCP.
+
+pub mod link;
