@@ -171,3 +171,69 @@ fn path_to(db: &dyn Db, from: SourceFile, to: SourceFile) -> Option<Vec<SourceFi
     }
     None
 }
+
+/// A pattern read from a PNML file (`P_X : file.xml;`), as a pattern net.
+/// Node names are the PNML names when they are MCL identifiers, else the
+/// ids; places named begin/abort/ok/fail without MCL data are on interface 1.
+/// Spans are empty: diagnostics point at the import in the MCL file.
+#[salsa::tracked(returns(ref))]
+pub fn pnml_pattern(db: &dyn Db, file: SourceFile) -> Result<mcl_syntax::ast::PatternNet, String> {
+    use mcl_syntax::ast::{ArcDef, Delay as AstDelay, Name, NodeRef, Number, PatternNet, PlaceDef, TransitionDef};
+    let Some(text) = file.text(db) else {
+        return Err(format!("cannot read `{}`", file.path(db).display()));
+    };
+    let net = mcl_net::read_pnml(text).map_err(|e| format!("{}: {e}", file.path(db).display()))?;
+    let is_ident = |s: &str| {
+        let mut c = s.chars();
+        c.next().is_some_and(|f| f.is_ascii_alphabetic() || f == '_' || f == '$')
+            && c.all(|x| x.is_ascii_alphanumeric() || "_$-/".contains(x))
+    };
+    let name_of = |id: &str, name: &str| if is_ident(name) { name.to_string() } else { id.to_string() };
+    let nm = |text: String| Name { text, span: Span::default() };
+    let num = |v: String| Number { text: v, span: Span::default() };
+    let mut pn = PatternNet::default();
+    for p in net.places() {
+        let name = name_of(&p.id, &p.name);
+        let iface = if p.interface != 0 {
+            p.interface
+        } else if ["begin", "abort", "ok", "fail"].contains(&name.as_str()) {
+            1
+        } else {
+            0
+        };
+        pn.places.push(PlaceDef {
+            name: nm(name),
+            interface: (iface != 0).then(|| num(iface.to_string())),
+            tokens: (p.initial != 0).then(|| num(p.initial.to_string())),
+            span: Span::default(),
+        });
+    }
+    for t in net.transitions() {
+        let delay = match &t.kind {
+            mcl_net::TransitionKind::Timed(mcl_net::Delay::Fixed(s)) => Some(AstDelay::Fixed(num(s.to_string()))),
+            mcl_net::TransitionKind::Timed(mcl_net::Delay::Param(p)) => Some(AstDelay::Param(nm(p.clone()))),
+            _ => None,
+        };
+        pn.transitions.push(TransitionDef {
+            name: nm(name_of(&t.id, &t.name)),
+            interface: None,
+            delay,
+            span: Span::default(),
+        });
+    }
+    let place_name = |p: mcl_net::PlaceId| net.place(p).map(|x| name_of(&x.id, &x.name)).unwrap_or_default();
+    let trans_name = |t: mcl_net::TransitionId| net.transition(t).map(|x| name_of(&x.id, &x.name)).unwrap_or_default();
+    for a in net.arcs() {
+        let (s, d, w) = match *a {
+            mcl_net::Arc::Input { place, transition, weight } => (place_name(place), trans_name(transition), weight),
+            mcl_net::Arc::Output { transition, place, weight } => (trans_name(transition), place_name(place), weight),
+        };
+        pn.arcs.push(ArcDef {
+            source: NodeRef { name: nm(s), interface: None },
+            target: NodeRef { name: nm(d), interface: None },
+            weight: (w != 1).then(|| num(w.to_string())),
+            span: Span::default(),
+        });
+    }
+    Ok(pn)
+}

@@ -142,3 +142,16 @@ pub fn missions(db: &dyn Db, root: SourceFile) -> Vec<(SourceFile, &Mission)> {
     }
     out
 }
+
+/// The net of a pattern: written in MCL, or read from its PNML file. `Err`
+/// holds why the PNML file could not be used.
+pub fn pattern_net(db: &dyn Db, id: DefId) -> Option<Result<&PatternNet, &String>> {
+    let p = pattern(db, id)?;
+    Some(match &p.body {
+        PatternBody::Net(n) => Ok(n),
+        PatternBody::File { path, .. } => {
+            let full = crate::queries::resolve_relative(db, id.file, path);
+            crate::queries::pnml_pattern(db, db.file(&full)).as_ref()
+        }
+    })
+}

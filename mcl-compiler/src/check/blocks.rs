@@ -46,7 +46,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             let Some(pattern) = scope::pattern(cx.db, pid) else {
                 continue;
             };
-            if !matches!(pattern.body, PatternBody::Net(_)) {
+            if !matches!(scope::pattern_net(cx.db, pid), Some(Ok(_))) {
                 continue;
             }
             let key = TaskKey::new(cx.db, cx.file, t.name.text.clone());

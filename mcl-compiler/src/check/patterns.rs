@@ -30,6 +30,28 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                             )
                             .with_help("the path is relative to the folder of this file"),
                         );
+                        continue;
+                    }
+                    match crate::queries::pnml_pattern(cx.db, cx.db.file(&full)) {
+                        Err(e) => cx.out.push(
+                            Diagnostic::error(
+                                codes::PNML_NOT_FOUND,
+                                format!("cannot use the PNML file `{path}` of pattern `{}`", p.name.text),
+                                *path_span,
+                            )
+                            .with_label(*path_span, e.clone())
+                            .with_help("the file must be a PNML 2009 P/T net"),
+                        ),
+                        Ok(net) => {
+                            // The nodes have no MCL location: point at the import.
+                            let before = cx.out.len();
+                            check_net(cx, p, net);
+                            for d in &mut cx.out[before..] {
+                                d.span = *path_span;
+                                d.labels.retain(|l| l.span != mcl_syntax::Span::default());
+                                d.notes.push(format!("in the net read from `{path}`"));
+                            }
+                        }
                     }
                 }
             }

@@ -60,10 +60,10 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
             }
             Some(id) => {
                 pattern_file = cx.other_file(id);
-                scope::pattern(cx.db, id).and_then(|p| match &p.body {
-                    PatternBody::Net(net) => Some((p, net)),
-                    PatternBody::File { .. } => None,
-                })
+                match (scope::pattern(cx.db, id), scope::pattern_net(cx.db, id)) {
+                    (Some(p), Some(Ok(net))) => Some((p, net)),
+                    _ => None,
+                }
             }
         },
     };

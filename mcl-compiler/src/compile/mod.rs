@@ -285,14 +285,10 @@ pub fn add_task_net(
         let Some(pid) = task.pattern.as_ref().and_then(|p| scope.first(DefKind::Pattern, &p.text)) else {
             return Ok(None);
         };
-        let Some(pattern) = scope::pattern(db, pid) else {
-            return Ok(None);
-        };
-        let PatternBody::Net(net) = &pattern.body else {
-            return Err(CompileError::Pattern(format!(
-                "pattern `{}` is read from a PNML file, which this compiler cannot load yet",
-                pattern.name.text
-            )));
+        let net = match scope::pattern_net(db, pid) {
+            Some(Ok(n)) => n,
+            Some(Err(e)) => return Err(CompileError::Pattern(e.clone())),
+            None => return Ok(None),
         };
         let file_path = tid.file.path(db).display().to_string();
         let prov = |span: mcl_syntax::Span| Provenance {
