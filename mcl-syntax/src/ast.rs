@@ -104,7 +104,10 @@ pub enum ValueKind {
     /// A string literal, unescaped.
     Str(String),
     /// `[a, b]` or a tagged list `path[[0, 0], [1, 1]]`.
-    List { tag: Option<Name>, items: Vec<Value> },
+    List {
+        tag: Option<Name>,
+        items: Vec<Value>,
+    },
     /// A value that failed to parse.
     Error,
 }
@@ -282,7 +285,11 @@ pub struct MonitorHandler {
 pub enum StmtKind {
     Call(Call),
     /// `while ( A ) { B }`
-    While { keyword: Span, cond: Block, body: Block },
+    While {
+        keyword: Span,
+        cond: Block,
+        body: Block,
+    },
     /// `if ( A ) { B } (else { C })?`
     If {
         keyword: Span,
@@ -293,13 +300,28 @@ pub enum StmtKind {
         else_written_then: Option<Span>,
     },
     /// `parallel { A } and { B } or ...`; `ops.len() == branches.len() - 1`.
-    Parallel { keyword: Span, branches: Vec<Block>, ops: Vec<(ParallelOp, Span)> },
+    Parallel {
+        keyword: Span,
+        branches: Vec<Block>,
+        ops: Vec<(ParallelOp, Span)>,
+    },
     /// `try { A } catch { B }`
-    Try { keyword: Span, body: Block, catch: Block },
+    Try {
+        keyword: Span,
+        body: Block,
+        catch: Block,
+    },
     /// `not ( A )`
-    Not { keyword: Span, body: Block },
+    Not {
+        keyword: Span,
+        body: Block,
+    },
     /// `monitor { A } (condition|while_condition) ( B ) do { C } ...`
-    Monitor { keyword: Span, body: Block, handlers: Vec<MonitorHandler> },
+    Monitor {
+        keyword: Span,
+        body: Block,
+        handlers: Vec<MonitorHandler>,
+    },
     /// A statement that failed to parse.
     Error,
 }

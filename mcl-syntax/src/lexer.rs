@@ -202,10 +202,7 @@ fn is_ident_continue(c: char) -> bool {
 /// Splits `src` into tokens. Never fails: unknown characters become errors.
 pub fn lex(src: &str) -> Lexed<'_> {
     let bytes = src.as_bytes();
-    let mut out = Lexed {
-        tokens: Vec::with_capacity(src.len() / 4),
-        ..Default::default()
-    };
+    let mut out = Lexed { tokens: Vec::with_capacity(src.len() / 4), ..Default::default() };
     let mut i = 0usize;
     while i < bytes.len() {
         let b = bytes[i];
@@ -220,15 +217,8 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 while i < bytes.len() && bytes[i] != b'\n' {
                     i += 1;
                 }
-                let end = if i > start && bytes[i - 1] == b'\r' {
-                    i - 1
-                } else {
-                    i
-                };
-                out.comments.push(Comment {
-                    kind: CommentKind::Line,
-                    span: Span::new(start, end),
-                });
+                let end = if i > start && bytes[i - 1] == b'\r' { i - 1 } else { i };
+                out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(start, end) });
                 continue;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
@@ -252,10 +242,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
                         .with_help("close the comment with `*/`"),
                     );
                 }
-                out.comments.push(Comment {
-                    kind: CommentKind::Block,
-                    span: Span::new(start, i),
-                });
+                out.comments.push(Comment { kind: CommentKind::Block, span: Span::new(start, i) });
                 continue;
             }
             b'"' => {
@@ -286,9 +273,8 @@ pub fn lex(src: &str) -> Lexed<'_> {
                     // likely belongs just before it (`Search( "cable ) ;`):
                     // end the string there so that the rest of the line is
                     // lexed as usual and one missing quote gives one error.
-                    if let Some(p) = bytes[start + 1..end]
-                        .iter()
-                        .position(|b| matches!(b, b')' | b']' | b'}' | b';' | b','))
+                    if let Some(p) =
+                        bytes[start + 1..end].iter().position(|b| matches!(b, b')' | b']' | b'}' | b';' | b','))
                     {
                         end = start + 1 + p;
                     }
@@ -296,16 +282,11 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 i = end;
                 if !closed {
                     out.errors.push(
-                        Diagnostic::error(
-                            codes::UNTERMINATED_STRING,
-                            "unterminated string",
-                            Span::new(start, end),
-                        )
-                        .with_help("add the closing `\"` on the same line"),
+                        Diagnostic::error(codes::UNTERMINATED_STRING, "unterminated string", Span::new(start, end))
+                            .with_help("add the closing `\"` on the same line"),
                     );
                 }
-                out.tokens
-                    .push((Token::Str(&src[start..end]), Span::new(start, end)));
+                out.tokens.push((Token::Str(&src[start..end]), Span::new(start, end)));
                 continue;
             }
             b'0'..=b'9' => {
@@ -348,10 +329,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
             i += 1;
             continue;
         }
-        let c = src[i..]
-            .chars()
-            .next()
-            .expect("i is a char boundary inside src");
+        let c = src[i..].chars().next().expect("i is a char boundary inside src");
         if is_ident_start(c) {
             i += 1;
             while i < bytes.len() {
@@ -361,9 +339,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 }
                 // `-` before `>` is an arrow; `/` before `/` or `*` starts a comment.
                 let next = bytes.get(i + 1).copied();
-                if (c == '-' && next == Some(b'>'))
-                    || (c == '/' && matches!(next, Some(b'/') | Some(b'*')))
-                {
+                if (c == '-' && next == Some(b'>')) || (c == '/' && matches!(next, Some(b'/') | Some(b'*'))) {
                     break;
                 }
                 i += 1;
@@ -377,8 +353,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
             continue;
         }
         if c == '→' {
-            out.tokens
-                .push((Token::Arrow, Span::new(i, i + c.len_utf8())));
+            out.tokens.push((Token::Arrow, Span::new(i, i + c.len_utf8())));
             i += c.len_utf8();
             continue;
         }
@@ -393,17 +368,10 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 end += 1;
             }
             out.errors.push(
-                Diagnostic::error(
-                    codes::UNKNOWN_CHAR,
-                    "`#` does not start a comment in MCL",
-                    Span::new(i, i + 1),
-                )
-                .with_help("comments are written `// ...` or `/* ... */`"),
+                Diagnostic::error(codes::UNKNOWN_CHAR, "`#` does not start a comment in MCL", Span::new(i, i + 1))
+                    .with_help("comments are written `// ...` or `/* ... */`"),
             );
-            out.comments.push(Comment {
-                kind: CommentKind::Line,
-                span: Span::new(i, end),
-            });
+            out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(i, end) });
             i = end;
             continue;
         }
@@ -411,11 +379,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
         let mut end = i + c.len_utf8();
         while end < bytes.len() {
             let c2 = src[end..].chars().next().expect("boundary");
-            if c2.is_whitespace()
-                || c2.is_ascii_alphanumeric()
-                || "{}()[];:,.=\"_$/".contains(c2)
-                || c2 == '→'
-            {
+            if c2.is_whitespace() || c2.is_ascii_alphanumeric() || "{}()[];:,.=\"_$/".contains(c2) || c2 == '→' {
                 break;
             }
             end += c2.len_utf8();
@@ -428,19 +392,13 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 if shown.chars().count() > 1 { "s" } else { "" },
                 shown
                     .chars()
-                    .flat_map(|c| if c.is_control() {
-                        c.escape_debug().collect::<Vec<_>>()
-                    } else {
-                        vec![c]
-                    })
+                    .flat_map(|c| if c.is_control() { c.escape_debug().collect::<Vec<_>>() } else { vec![c] })
                     .collect::<String>()
             ),
             Span::new(i, end),
         );
         if c == '≠' || c == '!' {
-            d = d.with_help(
-                "MCL programs have no operators; expressions belong to planning operators",
-            );
+            d = d.with_help("MCL programs have no operators; expressions belong to planning operators");
         } else if c == '\'' {
             d = d.with_help("strings are written with double quotes: \"...\"");
         } else if c == '#' {
@@ -470,34 +428,23 @@ fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usiz
     if !fraction
         && i < bytes.len()
         && bytes[i] == b'.'
-        && !bytes
-            .get(i + 1)
-            .is_some_and(|&b| b.is_ascii_digit() || is_ident_start(b as char))
+        && !bytes.get(i + 1).is_some_and(|&b| b.is_ascii_digit() || is_ident_start(b as char))
     {
         // `1.`: a fraction without digits. Take the dot into the number so
         // that the parser sees one (malformed) number.
         i += 1;
         out.errors.push(
-            Diagnostic::error(
-                codes::BAD_NUMBER,
-                "number with a `.` but no digits after it",
-                Span::new(start, i),
-            )
-            .with_help("write the fraction's digits, or drop the `.`: `1` or `1.5`"),
+            Diagnostic::error(codes::BAD_NUMBER, "number with a `.` but no digits after it", Span::new(start, i))
+                .with_help("write the fraction's digits, or drop the `.`: `1` or `1.5`"),
         );
     }
     if int_len > 1 && bytes[start] == b'0' {
         out.errors.push(
-            Diagnostic::error(
-                codes::BAD_NUMBER,
-                "number with a leading zero",
-                Span::new(start, i),
-            )
-            .with_help("write numbers without leading zeros, e.g. `7` or `0.5`"),
+            Diagnostic::error(codes::BAD_NUMBER, "number with a leading zero", Span::new(start, i))
+                .with_help("write numbers without leading zeros, e.g. `7` or `0.5`"),
         );
     }
-    out.tokens
-        .push((Token::Num(&src[start..i]), Span::new(start, i)));
+    out.tokens.push((Token::Num(&src[start..i]), Span::new(start, i)));
     i
 }
 
@@ -532,43 +479,22 @@ mod tests {
 
     #[test]
     fn identifiers_with_dash_slash_dollar() {
-        assert_eq!(
-            kinds("way-point a/b $x"),
-            vec![
-                Token::Ident("way-point"),
-                Token::Ident("a/b"),
-                Token::Ident("$x")
-            ]
-        );
+        assert_eq!(kinds("way-point a/b $x"), vec![Token::Ident("way-point"), Token::Ident("a/b"), Token::Ident("$x")]);
     }
 
     #[test]
     fn arrows_end_identifiers() {
-        assert_eq!(
-            kinds("begin->T0"),
-            vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]
-        );
-        assert_eq!(
-            kinds("a → b"),
-            vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]
-        );
+        assert_eq!(kinds("begin->T0"), vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]);
+        assert_eq!(kinds("a → b"), vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]);
     }
 
     #[test]
     fn negative_and_decimal_numbers() {
         assert_eq!(
             kinds("-2 15.5 x -0.5"),
-            vec![
-                Token::Num("-2"),
-                Token::Num("15.5"),
-                Token::Ident("x"),
-                Token::Num("-0.5")
-            ]
+            vec![Token::Num("-2"), Token::Num("15.5"), Token::Ident("x"), Token::Num("-0.5")]
         );
-        assert_eq!(
-            kinds("begin.1"),
-            vec![Token::Ident("begin"), Token::Dot, Token::Num("1")]
-        );
+        assert_eq!(kinds("begin.1"), vec![Token::Ident("begin"), Token::Dot, Token::Num("1")]);
         assert_eq!(kinds("a-2"), vec![Token::Ident("a-2")]);
     }
 

@@ -32,8 +32,7 @@ pub fn parse(src: &str) -> Parse {
     let mut errors = lexed.errors;
     let tokens = balance(lexed.tokens, src.len(), &mut errors);
     let eoi = SimpleSpan::from(src.len()..src.len());
-    let input: Vec<(Token<'_>, SimpleSpan)> =
-        tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
+    let input: Vec<(Token<'_>, SimpleSpan)> = tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
     let (file, parse_errors) = file_parser().parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
     let file = file.unwrap_or_default();
@@ -59,16 +58,30 @@ fn is_closer(t: Token<'_>) -> bool {
     matches!(t, Token::RBrace | Token::RParen | Token::RBracket)
 }
 
+/// Whether `tok`, followed by `next`, looks like the start of a top-level
+/// item. A keyword alone is not enough: `events { mission; }` uses a keyword
+/// as a name by mistake, which must be one error, not a closed block.
+fn starts_item_here(tok: Token<'_>, next: Option<Token<'_>>) -> bool {
+    let Token::Kw(k) = tok else { return false };
+    match k {
+        Kw::Import => matches!(next, Some(Token::Str(_))),
+        Kw::Mission => matches!(next, Some(Token::LBrace | Token::Colon | Token::Ident(_))),
+        Kw::PlanOp => matches!(next, Some(Token::Ident(_))),
+        _ => k.starts_item() && matches!(next, Some(Token::LBrace)),
+    }
+}
+
 fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diagnostic>) -> Vec<(Token<'s>, Span)> {
     let mut out = Vec::with_capacity(tokens.len() + 4);
     let mut stack: Vec<(Token<'s>, Span)> = Vec::new();
     let unclosed = |open: (Token<'_>, Span), at: Span, why: &str| {
         let close = closer_of(open.0).expect("stack holds openers");
         Diagnostic::error(codes::UNCLOSED_DELIMITER, format!("unclosed {}", open.0), open.1)
+            .with_label(open.1, format!("this {} is never closed", open.0))
             .with_label(at, format!("{close} expected {why}"))
             .with_help(format!("add the missing {close}"))
     };
-    for (tok, span) in tokens {
+    for (i, &(tok, span)) in tokens.iter().enumerate() {
         if closer_of(tok).is_some() {
             stack.push((tok, span));
             out.push((tok, span));
@@ -90,7 +103,7 @@ fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diag
                     );
                 }
             }
-        } else if matches!(tok, Token::Kw(k) if k.starts_item()) && !stack.is_empty() {
+        } else if !stack.is_empty() && starts_item_here(tok, tokens.get(i + 1).map(|t| t.0)) {
             // Items only appear at the top level: close everything still open.
             while let Some(open) = stack.pop() {
                 errors.push(unclosed(open, Span::at(span.start as usize), "before the next item"));
@@ -111,7 +124,13 @@ fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diag
 // ---------------------------------------------------------------------------
 // Pass 2: the grammar.
 
-type In<'t, 's> = MappedInput<'t, Token<'s>, SimpleSpan, &'t [(Token<'s>, SimpleSpan)], fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan)>;
+type In<'t, 's> = MappedInput<
+    't,
+    Token<'s>,
+    SimpleSpan,
+    &'t [(Token<'s>, SimpleSpan)],
+    fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan),
+>;
 type Extra<'t, 's> = extra::Err<Rich<'t, Token<'s>, SimpleSpan>>;
 
 /// Custom errors carry their code and help in the message, separated by `\u{1}`.
@@ -180,9 +199,10 @@ where
         .repeated()
         .then(just(Token::Semi).or_not())
         .ignored();
-    let item = p.then_ignore(just(Token::Semi)).map(Some).recover_with(via_parser(
-        none_of([Token::RBrace]).rewind().ignore_then(skip).map(|_| None),
-    ));
+    let item = p
+        .then_ignore(just(Token::Semi))
+        .map(Some)
+        .recover_with(via_parser(none_of([Token::RBrace]).rewind().ignore_then(skip).map(|_| None)));
     none_of([Token::RBrace])
         .rewind()
         .ignore_then(item)
@@ -200,7 +220,10 @@ where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
 {
     p.delimited_by(just(Token::LBrace), just(Token::RBrace)).recover_with(via_parser(
-        just(Token::LBrace).ignore_then(token_tree().repeated()).then_ignore(just(Token::RBrace)).map(move |_| fallback()),
+        just(Token::LBrace)
+            .ignore_then(token_tree().repeated())
+            .then_ignore(just(Token::RBrace))
+            .map(move |_| fallback()),
     ))
 }
 
@@ -243,25 +266,41 @@ fn empty_block(span: Span) -> Block {
     Block { stmts: vec![stmt_error(span)], span }
 }
 
-/// Tokens that end a statement list (never consumed by statement recovery).
-const STMT_STOP: [Token<'static>; 7] =
-    [Token::LBrace, Token::RBrace, Token::RParen, Token::RBracket, Token::Kw(Kw::Then), Token::Kw(Kw::Do), Token::Kw(Kw::Else)];
+/// Tokens that end a statement list used as a bare condition
+/// (`if A then { B }`, `while A do { B }`); never consumed by statement recovery.
+const STMT_STOP: [Token<'static>; 7] = [
+    Token::LBrace,
+    Token::RBrace,
+    Token::RParen,
+    Token::RBracket,
+    Token::Kw(Kw::Then),
+    Token::Kw(Kw::Do),
+    Token::Kw(Kw::Else),
+];
+
+/// Tokens that end a statement list between delimiters (`{ ... }`, `( ... )`).
+/// The token stream is balanced, so the first of them is the list's own
+/// closing delimiter: a delimited list always extends to it, and a broken
+/// statement is skipped up to the next `;` or that delimiter (skipping whole
+/// `{ ... }` groups), never further and never less.
+const CLOSERS: [Token<'static>; 3] = [Token::RBrace, Token::RParen, Token::RBracket];
 
 fn block<'t, 's: 't, I>(
     stmt: impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone + 't,
+    stops: &'static [Token<'static>],
 ) -> impl Parser<'t, I, Block, Extra<'t, 's>> + Clone
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
 {
-    // A statement that fails is skipped up to the next `;` or closing token.
-    let skip = token_tree().and_is(none_of([Token::Semi]).ignored()).and_is(none_of(STMT_STOP).ignored()).repeated();
+    // A statement that fails is skipped up to the next `;` or stop token.
+    let skip = token_tree().and_is(none_of([Token::Semi]).ignored()).and_is(none_of(stops).ignored()).repeated();
     let recovering = stmt.recover_with(via_parser(
-        token_tree()
-            .and_is(none_of(STMT_STOP).ignored())
-            .then(skip)
-            .map_with(|_, e| stmt_error(Span::from(e.span()))),
+        token_tree().and_is(none_of(stops).ignored()).then(skip).map_with(|_, e| stmt_error(Span::from(e.span()))),
     ));
-    let item = none_of(STMT_STOP).rewind().ignore_then(recovering).then(just(Token::Semi).map_with(|_, e| Span::from(e.span())).or_not());
+    let item = none_of(stops)
+        .rewind()
+        .ignore_then(recovering)
+        .then(just(Token::Semi).map_with(|_, e| Span::from(e.span())).or_not());
     item.repeated().collect::<Vec<(Stmt, Option<Span>)>>().validate(|items, e, emitter| {
         let span = Span::from(e.span());
         if items.is_empty() {
@@ -273,8 +312,11 @@ where
         }
         let n = items.len();
         let mut stmts = Vec::with_capacity(n);
+        let next_ok: Vec<bool> = items.iter().skip(1).map(|(s, _)| s.kind != StmtKind::Error).collect();
         for (i, (s, semi)) in items.into_iter().enumerate() {
-            if i + 1 < n && semi.is_none() && s.kind != StmtKind::Error {
+            // Only between two statements that parsed: after or before a
+            // broken one, the error already reported is enough.
+            if i + 1 < n && semi.is_none() && s.kind != StmtKind::Error && next_ok[i] {
                 emitter.emit(Rich::custom(
                     SimpleSpan::from(s.span.end as usize..s.span.end as usize),
                     custom(codes::UNEXPECTED_TOKEN, "expected `;` between two statements", "`;` runs the statement before it, then the statement after it"),
@@ -291,7 +333,8 @@ where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
 {
     recursive(|stmt| {
-        let block = block(stmt.boxed()).boxed();
+        let bare_block = block(stmt.clone().boxed(), &STMT_STOP).boxed();
+        let block = block(stmt.boxed(), &CLOSERS).boxed();
         let braced_block = braced(block.clone(), || empty_block(Span::default()))
             .map_with(|mut b: Block, e| {
                 b.span = Span::from(e.span());
@@ -310,7 +353,7 @@ where
             ))
             .boxed();
         // A condition: `( A )`, `{ A }` or a bare statement list ending at `then`/`do`.
-        let cond = choice((paren_block.clone(), braced_block.clone(), block.clone())).boxed();
+        let cond = choice((paren_block.clone(), braced_block.clone(), bare_block)).boxed();
 
         let args = value()
             .separated_by(just(Token::Comma))
@@ -381,17 +424,15 @@ where
         let handler_kind = kw(Kw::Condition)
             .map(|s| (MonitorKind::Condition, s))
             .or(kw(Kw::WhileCondition).map(|s| (MonitorKind::WhileCondition, s)));
-        let handler = handler_kind
-            .then(cond.clone())
-            .then_ignore(kw(Kw::Do))
-            .then(braced_block.clone())
-            .map_with(|(((kind, keyword_span), condition), action), e| MonitorHandler {
+        let handler = handler_kind.then(cond.clone()).then_ignore(kw(Kw::Do)).then(braced_block.clone()).map_with(
+            |(((kind, keyword_span), condition), action), e| MonitorHandler {
                 kind,
                 keyword_span,
                 condition,
                 action,
                 span: Span::from(e.span()),
-            });
+            },
+        );
         let monitor = kw(Kw::Monitor)
             .then(braced_block.clone())
             .then(handler.repeated().at_least(1).collect::<Vec<_>>())
@@ -432,7 +473,11 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
                     ActionArg::Command(c) if command.is_none() => command = Some(c),
                     ActionArg::Command(c) => emitter.emit(Rich::custom(
                         SimpleSpan::from(c.span.range()),
-                        custom(codes::MISSING_COMMAND, "an action has exactly one command `c: ...`", "keep one `c:` and pass values with `v:`"),
+                        custom(
+                            codes::MISSING_COMMAND,
+                            "an action has exactly one command `c: ...`",
+                            "keep one `c:` and pass values with `v:`",
+                        ),
                     )),
                     ActionArg::Param(v) => params.push(v),
                 }
@@ -440,23 +485,25 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
             if command.is_none() {
                 emitter.emit(Rich::custom(
                     e.span(),
-                    custom(codes::MISSING_COMMAND, "an action needs a command `c: ...`", "write the command first, e.g. `GotoPrimitive( c: enable, v: way-point )`"),
+                    custom(
+                        codes::MISSING_COMMAND,
+                        "an action needs a command `c: ...`",
+                        "write the command first, e.g. `GotoPrimitive( c: enable, v: way-point )`",
+                    ),
                 ));
             }
             (command, params)
         })
         .delimited_by(just(Token::LParen), just(Token::RParen));
-    let action = name()
-        .then_ignore(just(Token::Eq))
-        .then(name())
-        .then(action_args)
-        .map_with(|((name, primitive), (command, params)), e| ActionDef {
+    let action = name().then_ignore(just(Token::Eq)).then(name()).then(action_args).map_with(
+        |((name, primitive), (command, params)), e| ActionDef {
             name,
             primitive,
             command,
             params,
             span: Span::from(e.span()),
-        });
+        },
+    );
     let actions = kw(Kw::Actions)
         .ignore_then(braced(semi_list(action), Vec::new))
         .map_with(|actions, e| Item::Actions(ActionsBlock { actions, span: Span::from(e.span()) }));
@@ -468,17 +515,15 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
     // Patterns.
     let iface = just(Token::Dot).ignore_then(number());
     let paren_num = number().delimited_by(just(Token::LParen), just(Token::RParen));
-    let place = name()
-        .then(iface.clone().or_not())
-        .then(paren_num.clone().or_not())
-        .then(iface.clone().or_not())
-        .map_with(|(((name, i1), tokens), i2), e| PlaceDef { name, interface: i1.or(i2), tokens, span: Span::from(e.span()) });
-    let delay = choice((number().map(Delay::Fixed), name().map(Delay::Param))).delimited_by(just(Token::LParen), just(Token::RParen));
-    let transition = name()
-        .then(iface.clone().or_not())
-        .then(delay.or_not())
-        .then(iface.clone().or_not())
-        .map_with(|(((name, i1), delay), i2), e| TransitionDef { name, interface: i1.or(i2), delay, span: Span::from(e.span()) });
+    let place =
+        name().then(iface.clone().or_not()).then(paren_num.clone().or_not()).then(iface.clone().or_not()).map_with(
+            |(((name, i1), tokens), i2), e| PlaceDef { name, interface: i1.or(i2), tokens, span: Span::from(e.span()) },
+        );
+    let delay = choice((number().map(Delay::Fixed), name().map(Delay::Param)))
+        .delimited_by(just(Token::LParen), just(Token::RParen));
+    let transition = name().then(iface.clone().or_not()).then(delay.or_not()).then(iface.clone().or_not()).map_with(
+        |(((name, i1), delay), i2), e| TransitionDef { name, interface: i1.or(i2), delay, span: Span::from(e.span()) },
+    );
     let node_ref = name().then(iface.clone().or_not()).map(|(name, interface)| NodeRef { name, interface });
     let arc = node_ref
         .clone()
@@ -512,12 +557,24 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
             .map(|(path, path_span)| PatternBody::File { path, path_span }),
         braced(net.map(PatternBody::Net), || PatternBody::Net(PatternNet::default())),
     ));
-    let pattern = name().then(pattern_body).map_with(|(name, body), e| Pattern { name, body, span: Span::from(e.span()) });
+    let pattern =
+        name().then(pattern_body).map_with(|(name, body), e| Pattern { name, body, span: Span::from(e.span()) });
     let pattern_item = none_of([Token::RBrace])
         .rewind()
-        .ignore_then(pattern.map(Some).recover_with(via_parser(
-            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace]).ignored()).and_is(none_of([Token::LBrace]).ignored()).repeated()).then(just(Token::Semi).or_not()).to(None),
-        )))
+        .ignore_then(
+            pattern.map(Some).recover_with(via_parser(
+                token_tree()
+                    .and_is(none_of([Token::RBrace]).ignored())
+                    .then(
+                        token_tree()
+                            .and_is(none_of([Token::RBrace]).ignored())
+                            .and_is(none_of([Token::LBrace]).ignored())
+                            .repeated(),
+                    )
+                    .then(just(Token::Semi).or_not())
+                    .to(None),
+            )),
+        )
         .repeated()
         .collect::<Vec<Option<Pattern>>>()
         .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
@@ -539,12 +596,24 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
         .then(name_list.clone().delimited_by(just(Token::LParen), just(Token::RParen)))
         .then(just(Token::Colon).ignore_then(name()).or_not())
         .then(braced(semi_list(binding), Vec::new))
-        .map_with(|(((name, params), pattern), bindings), e| TaskDef { name, params, pattern, bindings, span: Span::from(e.span()) });
+        .map_with(|(((name, params), pattern), bindings), e| TaskDef {
+            name,
+            params,
+            pattern,
+            bindings,
+            span: Span::from(e.span()),
+        });
     let task_item = none_of([Token::RBrace])
         .rewind()
-        .ignore_then(task.map(Some).recover_with(via_parser(
-            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated()).then(token_tree().and_is(just(Token::LBrace).ignored()).or_not()).to(None),
-        )))
+        .ignore_then(
+            task.map(Some).recover_with(via_parser(
+                token_tree()
+                    .and_is(none_of([Token::RBrace]).ignored())
+                    .then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated())
+                    .then(token_tree().and_is(just(Token::LBrace).ignored()).or_not())
+                    .to(None),
+            )),
+        )
         .repeated()
         .collect::<Vec<Option<TaskDef>>>()
         .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
@@ -553,39 +622,99 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
         .map_with(|tasks, e| Item::Tasks(TasksBlock { tasks, span: Span::from(e.span()) }));
 
     // Missions.
-    let body = braced(block(stmt().boxed()), || empty_block(Span::default())).map_with(|mut b: Block, e| {
+    let body = braced(block(stmt().boxed(), &CLOSERS), || empty_block(Span::default())).map_with(|mut b: Block, e| {
         if b.span == Span::default() {
             b.span = Span::from(e.span());
         }
         b
     });
-    let params = name_list.delimited_by(just(Token::LParen), just(Token::RParen));
+    let params = name_list
+        .delimited_by(just(Token::LParen), just(Token::RParen))
+        .recover_with(via_parser(
+            just(Token::LParen).ignore_then(token_tree().repeated()).then_ignore(just(Token::RParen)).to(Vec::new()),
+        ))
+        .map_with(|p, e| (p, Span::from(e.span())));
     let placement = name()
         .then_ignore(word("at", "`at`"))
         .then(number())
-        .delimited_by(just(Token::LBracket), just(Token::RBracket));
-    let header = choice((
-        just(Token::Colon).ignore_then(name()).map(Some).then(params.clone().or_not()),
-        name().or_not().then(params.clone().or_not()),
-    ))
-    .then(placement.or_not());
+        .delimited_by(just(Token::LBracket), just(Token::RBracket))
+        .map_with(|p, e| (p, Span::from(e.span())));
+    let starts_item = any().filter(|t: &Token<'_>| matches!(t, Token::Kw(k) if k.starts_item()));
+    // Anything else before the body's `{` is reported once and skipped, so
+    // that the body is still parsed.
+    let junk = any()
+        .filter(|t: &Token<'_>| *t != Token::LBrace && !matches!(t, Token::Kw(k) if k.starts_item()))
+        .map_with(|t, e| (t, e.span()))
+        .rewind()
+        .then_ignore(
+            token_tree().and_is(none_of([Token::LBrace]).ignored()).and_is(starts_item.not()).repeated().at_least(1),
+        )
+        .validate(|(t, span), _, emitter| {
+            emitter.emit(Rich::custom(span, custom(codes::UNEXPECTED_TOKEN, format!("expected `{{`, found {t}"), "")));
+        });
+    // Every part of the header is parsed as optional, and the combination
+    // is checked afterwards: a malformed header is one error, and the
+    // mission is kept.
+    let header = just(Token::Colon)
+        .map_with(|_, e| Span::from(e.span()))
+        .or_not()
+        .then(name().or_not())
+        .then(params.or_not())
+        .then(placement.or_not())
+        .then_ignore(junk.or_not());
     let mission = kw(Kw::Mission)
         .to(MissionKind::Mission)
         .or(kw(Kw::PlanOp).to(MissionKind::PlanOp))
         .map_with(|k, e| (k, Span::from(e.span())))
         .then(header)
         .then(body.clone())
-        .map_with(|(((kind, keyword_span), ((name, params), placement)), body), e| {
-            Item::Mission(Mission { kind, keyword_span, name, params: params.unwrap_or_default(), placement, body, span: Span::from(e.span()) })
+        .validate(|(((kind, keyword_span), (((colon, name), params), placement)), body), e, emitter| {
+            let mut error = |span: Span, msg: &str, help: &str| {
+                emitter.emit(Rich::custom(SimpleSpan::from(span.range()), custom(codes::UNEXPECTED_TOKEN, msg, help)));
+            };
+            let name_span = name.as_ref().map(|n: &Name| n.span);
+            match kind {
+                MissionKind::Mission => {
+                    if let (Some(c), None) = (colon, &name) {
+                        error(c, "expected the mission's name after `:`", "write `mission : name { ... }`");
+                    }
+                    if let (Some(_), Some((_, ps))) = (colon, &params) {
+                        error(*ps, "a named mission has no parameters", "a parametrised mission is written without `:`: `mission Name( x, y ) { ... }`");
+                    }
+                    if let (None, Some(ns), None) = (colon, name_span, &params) {
+                        error(ns, "expected `:` before the mission's name", "write `mission : name { ... }`, or `mission Name( ... ) { ... }` for a parametrised mission");
+                    }
+                    if let (None, None, Some((_, ps))) = (colon, name_span, &params) {
+                        error(*ps, "a parametrised mission needs a name", "write `mission Name( x, y ) { ... }`");
+                    }
+                    if let (Some((_, ps)), true) = (&placement, colon.is_none() || params.is_some()) {
+                        error(*ps, "`[ ID at NUM ]` follows the name of a named mission", "write `mission : name [ ID at NUM ] { ... }`");
+                    }
+                }
+                MissionKind::PlanOp => {
+                    if let Some(c) = colon {
+                        error(c, "`mcl_plan_op` is followed by the operator's name, without `:`", "write `mcl_plan_op Name( x, y ) { ... }`");
+                    }
+                    match (name_span, &params) {
+                        (None, _) => error(Span::at(keyword_span.end as usize), "expected the operator's name after `mcl_plan_op`", "write `mcl_plan_op Name( x, y ) { ... }`"),
+                        (Some(ns), None) => error(Span::at(ns.end as usize), "expected the operator's parameters `( ... )`", "an operator without parameters is written `mcl_plan_op Name() { ... }`"),
+                        _ => {}
+                    }
+                    if let Some((_, ps)) = &placement {
+                        error(*ps, "an operator has no `[ ID at NUM ]` part", "remove it");
+                    }
+                }
+            }
+            let (params, _) = params.unwrap_or_default();
+            let placement = placement.map(|(p, _)| p);
+            Item::Mission(Mission { kind, keyword_span, name, params, placement, body, span: Span::from(e.span()) })
         });
 
     // Constraints.
-    let label_ref = name()
-        .then(just(Token::Colon).ignore_then(name()).or_not())
-        .map_with(|(a, b), e| match b {
-            Some(label) => LabelRef { mission: Some(a), label, span: Span::from(e.span()) },
-            None => LabelRef { mission: None, label: a, span: Span::from(e.span()) },
-        });
+    let label_ref = name().then(just(Token::Colon).ignore_then(name()).or_not()).map_with(|(a, b), e| match b {
+        Some(label) => LabelRef { mission: Some(a), label, span: Span::from(e.span()) },
+        None => LabelRef { mission: None, label: a, span: Span::from(e.span()) },
+    });
     let refs = label_ref.separated_by(just(Token::Comma)).allow_trailing().collect::<Vec<_>>();
     let constraint_kw = choice((
         word("mutex", "`mutex`").map(|s| (ConstraintKind::Mutex, s, false)),
@@ -597,6 +726,7 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
     ))
     .labelled("`mutex`, `order` or `sync`");
     let constraint = constraint_kw
+        .clone()
         .then(braced(refs, Vec::new))
         .then(just(Token::Eq).ignore_then(number()).or_not())
         .then_ignore(just(Token::Semi).or_not())
@@ -610,9 +740,21 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
         });
     let constraint_item = none_of([Token::RBrace])
         .rewind()
-        .ignore_then(constraint.map(Some).recover_with(via_parser(
-            token_tree().and_is(none_of([Token::RBrace]).ignored()).then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated()).then(token_tree().and_is(just(Token::LBrace).ignored()).or_not()).to(None),
-        )))
+        .ignore_then(
+            constraint.map(Some).recover_with(via_parser(
+                // Skip to the next constraint keyword, `;` (included) or `}`.
+                token_tree()
+                    .and_is(none_of([Token::RBrace]).ignored())
+                    .then(
+                        token_tree()
+                            .and_is(none_of([Token::RBrace, Token::Semi]).ignored())
+                            .and_is(constraint_kw.clone().not())
+                            .repeated(),
+                    )
+                    .then(just(Token::Semi).or_not())
+                    .to(None),
+            )),
+        )
         .repeated()
         .collect::<Vec<Option<Constraint>>>()
         .map(|v| v.into_iter().flatten().collect::<Vec<_>>());
@@ -621,9 +763,8 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
         .map_with(|constraints, e| Item::Constraints(ConstraintsBlock { constraints, span: Span::from(e.span()) }));
 
     let item = choice((import, actions, events, patterns, tasks, mission, constraints)).labelled("item");
-    let starts_item = any().filter(|t: &Token<'_>| matches!(t, Token::Kw(k) if k.starts_item()));
     let skip_item = token_tree()
-        .then(token_tree().and_is(starts_item.clone().not()).repeated())
+        .then(token_tree().and_is(starts_item.not()).repeated())
         .map_with(|_, e| {
             let _ = e.span();
         })
@@ -685,8 +826,9 @@ fn rich_to_diagnostic(e: Rich<'_, Token<'_>, SimpleSpan>) -> Diagnostic {
                 Some(t) => format!("{}", &**t),
                 None => "end of file".to_string(),
             };
-            let mut d = Diagnostic::error(codes::UNEXPECTED_TOKEN, format!("expected {expected_s}, found {found_s}"), span)
-                .with_label(span, format!("unexpected {found_s}"));
+            let mut d =
+                Diagnostic::error(codes::UNEXPECTED_TOKEN, format!("expected {expected_s}, found {found_s}"), span)
+                    .with_label(span, format!("unexpected {found_s}"));
             if let Some(Token::Kw(k)) = found.as_deref() {
                 if expected.iter().any(|p| matches!(p, RichPattern::Label(l) if l == "identifier")) {
                     d = d.with_help(format!("`{}` is a keyword and cannot be used as a name", k.as_str()));
@@ -714,9 +856,13 @@ fn lint_spellings(file: &SourceFile, out: &mut Vec<Diagnostic>) {
             StmtKind::If { cond, then, otherwise, else_written_then, .. } => {
                 if let Some(span) = else_written_then {
                     out.push(
-                        Diagnostic::warning(codes::NON_CANONICAL, "the else branch of `if` is written `then`; the canonical keyword is `else`", *span)
-                            .with_label(*span, "accepted for compatibility with the seed's Table B.4")
-                            .with_help("write `else { ... }`"),
+                        Diagnostic::warning(
+                            codes::NON_CANONICAL,
+                            "the else branch of `if` is written `then`; the canonical keyword is `else`",
+                            *span,
+                        )
+                        .with_label(*span, "accepted for compatibility with the seed's Table B.4")
+                        .with_help("write `else { ... }`"),
                     );
                 }
                 block(cond, out);
