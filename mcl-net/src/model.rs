@@ -5,7 +5,7 @@
 //! validates the structure (unique ids, weights ≥ 1, finite delays) and
 //! precomputes the sparse adjacency used by firing and analysis.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 use std::fmt;
 
 use serde::Serialize;
@@ -383,7 +383,6 @@ pub struct Net {
     delta: Csr<(PlaceId, i64)>,
     consumers: Csr<TransitionId>,
     producers: Csr<TransitionId>,
-    affected: Csr<TransitionId>,
     by_id: HashMap<String, NodeId>,
     by_event: HashMap<String, Vec<TransitionId>>,
 }
@@ -501,10 +500,12 @@ impl Net {
     }
 
     /// Transitions whose enabledness may change when `t` fires: the consumers of
-    /// every place whose marking `t` changes. Sorted, without duplicates.
+    /// every place whose marking `t` changes (a transition consuming from two
+    /// such places appears twice). Computed on demand: a place shared by many
+    /// call sites (a task's lock) would make a precomputed table quadratic.
     #[inline]
-    pub fn affected_by(&self, t: TransitionId) -> &[TransitionId] {
-        self.affected.row(t.index())
+    pub fn affected_by(&self, t: TransitionId) -> impl Iterator<Item = TransitionId> + '_ {
+        self.delta(t).iter().flat_map(move |&(p, _)| self.consumers(p).iter().copied())
     }
 
     /// Event-driven transitions waiting for `event`.
@@ -697,7 +698,7 @@ impl NetBuilder {
         if np >= u32::MAX as usize || nt >= u32::MAX as usize {
             return Err(NetError::TooLarge);
         }
-        let mut by_id = HashMap::with_capacity(np + nt);
+        let mut by_id = HashMap::with_capacity_and_hasher(np + nt, Default::default());
         for (i, p) in self.places.iter().enumerate() {
             if p.id.is_empty() {
                 return Err(NetError::EmptyId);
@@ -706,7 +707,7 @@ impl NetBuilder {
                 return Err(NetError::DuplicateId(p.id.clone()));
             }
         }
-        let mut by_event: HashMap<String, Vec<TransitionId>> = HashMap::new();
+        let mut by_event: HashMap<String, Vec<TransitionId>> = HashMap::default();
         for (i, t) in self.transitions.iter().enumerate() {
             if t.id.is_empty() {
                 return Err(NetError::EmptyId);
@@ -726,7 +727,7 @@ impl NetBuilder {
 
         // Merge parallel arcs, keeping the position of the first occurrence.
         let mut arcs: Vec<Arc> = Vec::with_capacity(self.arcs.len());
-        let mut seen: HashMap<(bool, u32, u32), usize> = HashMap::with_capacity(self.arcs.len());
+        let mut seen: HashMap<(bool, u32, u32), usize> = HashMap::with_capacity_and_hasher(self.arcs.len(), Default::default());
         for arc in &self.arcs {
             let (input, p, t, w) = match *arc {
                 Arc::Input { place, transition, weight } => (true, place, transition, weight),
@@ -794,16 +795,6 @@ impl NetBuilder {
                 d
             })
             .collect();
-        let affected: Vec<Vec<TransitionId>> = delta
-            .iter()
-            .map(|d| {
-                let mut a: Vec<TransitionId> =
-                    d.iter().flat_map(|&(p, _)| consumers[p.index()].iter().copied()).collect();
-                a.sort_unstable();
-                a.dedup();
-                a
-            })
-            .collect();
 
         Ok(Net {
             id: self.id,
@@ -817,7 +808,6 @@ impl NetBuilder {
             delta: Csr::from_rows(delta),
             consumers: Csr::from_rows(consumers),
             producers: Csr::from_rows(producers),
-            affected: Csr::from_rows(affected),
             by_id,
             by_event,
         })
@@ -842,7 +832,7 @@ mod tests {
         assert_eq!(net.delta(t), &[(p, -1), (q, 1)]);
         assert_eq!(net.consumers(p), &[t]);
         assert_eq!(net.producers(q), &[t]);
-        assert_eq!(net.affected_by(t), &[t]);
+        assert_eq!(net.affected_by(t).collect::<Vec<_>>(), vec![t]);
         assert_eq!(net.place_by_id("q"), Some(q));
         assert_eq!(net.transition_by_id("p"), None);
     }

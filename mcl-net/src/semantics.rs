@@ -313,7 +313,7 @@ impl EnabledTracker {
             return Err(FireError::UnknownTransition(t));
         }
         fire(net, m, t)?;
-        for &u in net.affected_by(t) {
+        for u in net.affected_by(t) {
             let on = is_enabled(net, m, u);
             self.set(net, u, on);
         }
