@@ -257,6 +257,57 @@ fn explore(net: &Net, max_states: usize) -> Graph {
 }
 
 impl Harness {
+    /// The reachability graph in the DOT language: tangible markings as
+    /// ellipses labelled with their marked places, vanishing markings as
+    /// dots, final markings in bold; edges labelled with the transition.
+    /// `None` when it has more than `max_states` states.
+    pub fn reachability_dot(&self, max_states: usize) -> Option<String> {
+        use std::fmt::Write;
+        let g = explore(&self.net, max_states + 1);
+        if g.markings.len() > max_states {
+            return None;
+        }
+        let mut out = String::from("digraph reachability {\n  rankdir=TB; node [fontname=\"Helvetica\", fontsize=9]; edge [fontname=\"Helvetica\", fontsize=8];\n");
+        for (i, m) in g.markings.iter().enumerate() {
+            let marked: Vec<&str> = self
+                .net
+                .places()
+                .iter()
+                .zip(m)
+                .filter(|(p, &k)| k > 0 && !p.id.starts_with("env.idle"))
+                .map(|(p, _)| p.id.as_str())
+                .collect();
+            let fin = g.succ[i].is_empty() && self.is_final(m);
+            if g.tangible[i] || g.succ[i].is_empty() {
+                let _ = writeln!(out, "  s{i} [shape=ellipse{}, label=\"{}\"];", if fin { ", penwidth=2" } else { "" }, marked.join("\\n"));
+            } else {
+                let _ = writeln!(out, "  s{i} [shape=point, width=0.08, tooltip=\"{}\"];", marked.join(" "));
+            }
+        }
+        for (i, succ) in g.succ.iter().enumerate() {
+            let m = &g.markings[i];
+            for &j in succ {
+                // Find the transition that leads from i to j.
+                let t = self.net.transition_ids().find(|&t| {
+                    enabled(&self.net, m, t) && {
+                        let mut m2 = m.clone();
+                        for &(p, w) in self.net.pre(t) {
+                            m2[p.index()] -= w;
+                        }
+                        for &(p, w) in self.net.post(t) {
+                            m2[p.index()] += w;
+                        }
+                        m2 == g.markings[j as usize]
+                    }
+                });
+                let name = t.and_then(|t| self.net.transition(t)).map(|x| x.id.clone()).unwrap_or_default();
+                let _ = writeln!(out, "  s{i} -> s{j} [label=\"{name}\"];");
+            }
+        }
+        out.push_str("}\n");
+        Some(out)
+    }
+
     fn trace(&self, g: &Graph, mut s: u32) -> Vec<String> {
         let mut out = Vec::new();
         while let Some((p, t)) = g.parent[s as usize] {
