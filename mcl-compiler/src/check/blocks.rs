@@ -49,6 +49,10 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             if !matches!(scope::pattern_net(cx.db, pid), Some(Ok(_))) {
                 continue;
             }
+            // A task already reported as wrong would only fail again here.
+            if cx.out.iter().any(|d| d.is_error() && d.span.start >= t.span.start && d.span.end <= t.span.end) {
+                continue;
+            }
             let key = TaskKey::new(cx.db, cx.file, t.name.text.clone());
             let Some(verdict) = task_verdict(cx.db, key) else {
                 continue;
