@@ -79,6 +79,165 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         threads: usize,
     },
+    /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac).
+    ///
+    /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. Exit status: 0 mission ok,
+    /// 1 mission fail, 2 usage, compile or I/O error, 3 mission stuck or time limit passed.
+    Run {
+        /// The mission: an .mcl or .pnml file.
+        file: PathBuf,
+        /// Play against the in-process mock vehicle.
+        #[arg(long)]
+        mock: bool,
+        /// Play against the AAC listening at HOST:PORT.
+        #[arg(long, value_name = "HOST:PORT")]
+        aac: Option<String>,
+        /// Shared secret for the AAC.
+        #[arg(long)]
+        token: Option<String>,
+        /// How the mock vehicle answers (TOML, see docs/scenarios.md).
+        #[arg(long, value_name = "FILE")]
+        scenario: Option<PathBuf>,
+        /// Seed of the random choices (default: the scenario's seed, else 0).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Run in virtual time: deterministic and instantaneous (needs --mock).
+        #[arg(long)]
+        virtual_time: bool,
+        /// Mission time runs FACTOR times faster than real time (with --aac, only for a mock AAC run with the same --speed).
+        #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
+        speed: f64,
+        /// Write the trace here (JSON lines).
+        #[arg(long, value_name = "FILE")]
+        trace: Option<PathBuf>,
+        /// Write an SVG chronogram of the run here.
+        #[arg(long, value_name = "FILE")]
+        chronogram: Option<PathBuf>,
+        /// Journal every firing and received event here, to --resume after a crash.
+        #[arg(long, value_name = "FILE")]
+        journal: Option<PathBuf>,
+        /// Resume the run journaled in FILE (and keep journaling there).
+        #[arg(long, value_name = "FILE")]
+        resume: Option<PathBuf>,
+        /// Give a symbolic argument a value, e.g. --set timeout=60 (repeatable).
+        #[arg(long, value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Stop (exit status 3) when mission time passes SECONDS.
+        #[arg(long, value_name = "SECONDS")]
+        time_limit: Option<f64>,
+        /// The mission to run when the file defines several (default: the first).
+        #[arg(long, value_name = "NAME")]
+        mission: Option<String>,
+        /// No live log.
+        #[arg(short, long)]
+        quiet: bool,
+        /// Also log every firing and timer.
+        #[arg(short, long)]
+        verbose: bool,
+        /// Test hook: abort after N journal syncs, as a crash would.
+        #[arg(long, hide = true)]
+        crash_after: Option<u64>,
+    },
+    /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
+    Chronogram {
+        /// A JSONL trace.
+        trace: PathBuf,
+        /// The SVG to write.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Only this mission's records (a trace of several missions).
+        #[arg(long)]
+        mission: Option<String>,
+    },
+    /// Run the mock vehicle as an AAC server speaking the TCP protocol (docs/aac-protocol.md).
+    ///
+    /// Prints `listening on ADDR` on standard output, then logs every message on standard error.
+    /// Runs until killed.
+    MockAac {
+        /// The missions: an .mcl or .pnml file (the player's hello names the mission).
+        #[arg(long, value_name = "FILE")]
+        net: PathBuf,
+        /// How the mock vehicle answers (TOML, see docs/scenarios.md).
+        #[arg(long, value_name = "FILE")]
+        scenario: Option<PathBuf>,
+        /// Address to listen on (port 0: any free port).
+        #[arg(long, value_name = "HOST:PORT", default_value = mcl_runtime::protocol::DEFAULT_ADDR)]
+        listen: String,
+        /// Shared secret: refuse players whose hello lacks it.
+        #[arg(long)]
+        token: Option<String>,
+        /// Mission time runs FACTOR times faster than real time.
+        #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
+        speed: f64,
+        /// Save executed actions here and restore them at start (survives a restart).
+        #[arg(long, value_name = "FILE")]
+        state: Option<PathBuf>,
+        /// Seed of the mock's random draws (default: the scenario's seed, else 0).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Seconds of silence after which a player is considered gone.
+        #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+        timeout: f64,
+        /// Log connections and executed actions only, not every message.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Plan with the on-board planner: PDDL domain and problem, MCL mission operators (docs/planning.md).
+    ///
+    /// FILE.mcl names the mission operators, with domain.pddl and problem.pddl beside it unless
+    /// --domain/--problem say otherwise. Prints the plan in the IPC format. Exit status: 0 with a
+    /// plan (or a valid plan with --validate), 1 when the problem has no solution (or the plan is
+    /// invalid), 2 on bad input, 3 when --max-states is reached.
+    Plan {
+        /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
+        file: Option<PathBuf>,
+        /// PDDL domain file (default: domain.pddl beside FILE.mcl).
+        #[arg(long, value_name = "D.pddl")]
+        domain: Option<PathBuf>,
+        /// PDDL problem file (default: problem.pddl beside FILE.mcl).
+        #[arg(long, value_name = "P.pddl")]
+        problem: Option<PathBuf>,
+        /// The .mcl file of mission operators (instead of FILE).
+        #[arg(long, value_name = "FILE.mcl")]
+        operators: Option<PathBuf>,
+        /// Search algorithm.
+        #[arg(long, value_enum, default_value = "astar")]
+        search: cmd::plan::SearchChoice,
+        /// Heuristic of A*.
+        #[arg(long, value_enum, default_value = "hmax")]
+        heuristic: cmd::plan::HeuristicChoice,
+        /// Output format.
+        #[arg(long, value_enum, default_value = "ipc")]
+        format: cmd::plan::PlanFormat,
+        /// Validate this plan (IPC format) instead of planning.
+        #[arg(long, value_name = "PLAN")]
+        validate: Option<PathBuf>,
+        /// Give up after storing this many states.
+        #[arg(long, default_value_t = mcl_plan::search::DEFAULT_MAX_STATES)]
+        max_states: u64,
+        /// Print grounding and search statistics on standard error.
+        #[arg(long)]
+        stats: bool,
+    },
+    /// Run the language server (LSP over standard input and output), for editors.
+    Lsp {
+        /// Accepted for editors that pass it; standard input and output are the only transport.
+        #[arg(long, hide = true)]
+        stdio: bool,
+    },
+    /// Format MCL files in place in the canonical style (files, or folders searched for *.mcl).
+    ///
+    /// `mcl fmt -` formats standard input to standard output. Exit status: 0 when every file is
+    /// formatted, 1 with --check when some file would change (they are listed), 2 on a usage or
+    /// I/O error or a file with syntax errors (left alone).
+    Fmt {
+        /// Files or folders to format, or `-` for standard input.
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Change nothing: list the files that are not formatted and exit with status 1 if any.
+        #[arg(long)]
+        check: bool,
+    },
     /// Explain a diagnostic code, with an example of the error and its fix.
     Explain {
         /// A code such as E0101; without one, lists every code.
@@ -104,6 +263,75 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
+        Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
+        Command::Lsp { stdio: _ } => cmd::lsp::run(),
+        Command::Plan { file, domain, problem, operators, search, heuristic, format, validate, max_states, stats } => {
+            cmd::plan::run(cmd::plan::Options {
+                file,
+                domain,
+                problem,
+                operators,
+                search,
+                heuristic,
+                format,
+                validate,
+                max_states,
+                stats,
+            })
+        }
+        Command::Run {
+            file,
+            mock,
+            aac,
+            token,
+            scenario,
+            seed,
+            virtual_time,
+            speed,
+            trace,
+            chronogram,
+            journal,
+            resume,
+            set,
+            time_limit,
+            mission,
+            quiet,
+            verbose,
+            crash_after,
+        } => cmd::run::run(cmd::run::Options {
+            file,
+            mock,
+            aac,
+            token,
+            scenario,
+            seed,
+            virtual_time,
+            speed,
+            trace,
+            chronogram,
+            journal,
+            resume,
+            set,
+            time_limit,
+            mission,
+            quiet,
+            verbose,
+            crash_after,
+        }),
+        Command::MockAac { net, scenario, listen, token, speed, state, seed, timeout, quiet } => {
+            cmd::mock_aac::run(cmd::mock_aac::Options {
+                net,
+                scenario,
+                listen,
+                token,
+                speed,
+                state,
+                seed,
+                timeout,
+                quiet,
+            })
+        }
+        Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)
         }

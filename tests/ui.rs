@@ -80,14 +80,8 @@ fn ui_snapshots() -> Vec<(String, String)> {
     for e in entries {
         let p = e.expect("readable entry").path();
         let name = p.file_name().unwrap().to_string_lossy().into_owned();
-        if let Some(case) = name
-            .strip_prefix("ui__")
-            .and_then(|n| n.strip_suffix(".snap"))
-        {
-            out.push((
-                case.to_string(),
-                std::fs::read_to_string(&p).expect("readable snapshot"),
-            ));
+        if let Some(case) = name.strip_prefix("ui__").and_then(|n| n.strip_suffix(".snap")) {
+            out.push((case.to_string(), std::fs::read_to_string(&p).expect("readable snapshot")));
         }
     }
     out.sort();
@@ -97,11 +91,7 @@ fn ui_snapshots() -> Vec<(String, String)> {
 #[test]
 fn ui_snapshots_match() {
     let cases = ui_cases();
-    assert!(
-        cases.len() >= codes::ALL.len(),
-        "expected at least one UI case per code, found {}",
-        cases.len()
-    );
+    assert!(cases.len() >= codes::ALL.len(), "expected at least one UI case per code, found {}", cases.len());
     let mut failures = Vec::new();
     for name in &cases {
         let rel = format!("tests/ui/{name}.mcl");
@@ -124,10 +114,7 @@ fn ui_snapshots_match() {
         let has_errors = !summary.contains(": 0 errors");
         let expected_status = i32::from(has_errors);
         if status(&out) != expected_status {
-            problems.push(format!(
-                "exit status {} but the summary says {summary:?}",
-                status(&out)
-            ));
+            problems.push(format!("exit status {} but the summary says {summary:?}", status(&out)));
         }
         if !problems.is_empty() {
             failures.push(format!("{rel}:\n  {}", problems.join("\n  ")));
@@ -141,38 +128,22 @@ fn ui_snapshots_match() {
             settings.bind(|| insta::assert_snapshot!(name.as_str(), text));
         }));
         if result.is_err() {
-            failures.push(format!(
-                "{rel}: the output does not match tests/snapshots/ui__{name}.snap"
-            ));
+            failures.push(format!("{rel}: the output does not match tests/snapshots/ui__{name}.snap"));
         }
     }
-    assert!(
-        failures.is_empty(),
-        "{} UI case(s) failed:\n{}",
-        failures.len(),
-        failures.join("\n")
-    );
+    assert!(failures.is_empty(), "{} UI case(s) failed:\n{}", failures.len(), failures.join("\n"));
 }
 
 #[test]
 fn no_orphan_snapshots() {
     let cases = ui_cases();
-    let orphans: Vec<String> = ui_snapshots()
-        .into_iter()
-        .map(|(c, _)| c)
-        .filter(|c| !cases.contains(c))
-        .collect();
-    assert!(
-        orphans.is_empty(),
-        "snapshots without a tests/ui/NAME.mcl: {orphans:?}"
-    );
+    let orphans: Vec<String> = ui_snapshots().into_iter().map(|(c, _)| c).filter(|c| !cases.contains(c)).collect();
+    assert!(orphans.is_empty(), "snapshots without a tests/ui/NAME.mcl: {orphans:?}");
 }
 
 /// `## Example` with a ```mcl block: the explain test checks that it triggers the code.
 fn has_explain_example(info: &codes::CodeInfo) -> bool {
-    info.explanation
-        .split("\n## ")
-        .any(|s| s.starts_with("Example") && s.contains("```mcl"))
+    info.explanation.split("\n## ").any(|s| s.starts_with("Example") && s.contains("```mcl"))
 }
 
 #[test]
@@ -190,15 +161,9 @@ fn every_code_is_exercised() {
             missing.push(info.code);
         }
     }
-    assert!(
-        missing.is_empty(),
-        "codes in no UI snapshot and no explain example: {missing:?}"
-    );
+    assert!(missing.is_empty(), "codes in no UI snapshot and no explain example: {missing:?}");
     // The corpus is meant to cover every code by itself too.
-    assert!(
-        not_in_ui.is_empty(),
-        "codes in no UI snapshot: {not_in_ui:?}"
-    );
+    assert!(not_in_ui.is_empty(), "codes in no UI snapshot: {not_in_ui:?}");
 }
 
 // ---------------------------------------------------------------------------
@@ -206,63 +171,35 @@ fn every_code_is_exercised() {
 
 #[test]
 fn exit_status_is_0_without_diagnostics() {
-    let out = mcl(&[
-        "check",
-        "--color",
-        "never",
-        "tests/ui/clean_extract_5_4.mcl",
-    ]);
+    let out = mcl(&["check", "--color", "never", "tests/ui/clean_extract_5_4.mcl"]);
     assert_eq!(status(&out), 0, "{}", stdout(&out));
     assert_eq!(stdout(&out), "checked 2 files: 0 errors, 0 warnings\n");
 }
 
 #[test]
 fn exit_status_is_0_with_warnings_only() {
-    for case in [
-        "w0901_unused",
-        "w0902_unused_parameter",
-        "w0015_if_then_then",
-    ] {
+    for case in ["w0901_unused", "w0902_unused_parameter", "w0015_if_then_then"] {
         let out = mcl(&["check", "--color", "never", &format!("tests/ui/{case}.mcl")]);
         assert_eq!(status(&out), 0, "{case}: {}", stdout(&out));
         let text = stdout(&out);
         assert!(text.contains("Warning"), "{case}: {text}");
-        assert!(
-            text.trim_end().ends_with("warning") || text.trim_end().ends_with("warnings"),
-            "{case}: {text}"
-        );
+        assert!(text.trim_end().ends_with("warning") || text.trim_end().ends_with("warnings"), "{case}: {text}");
         assert!(text.contains(": 0 errors,"), "{case}: {text}");
     }
 }
 
 #[test]
 fn exit_status_is_1_with_errors() {
-    for case in [
-        "e0101_did_you_mean",
-        "e0011_missing_brace_depth1",
-        "e0502_import_cycle",
-        "e0102_undefined_action",
-    ] {
+    for case in ["e0101_did_you_mean", "e0011_missing_brace_depth1", "e0502_import_cycle", "e0102_undefined_action"] {
         let out = mcl(&["check", "--color", "never", &format!("tests/ui/{case}.mcl")]);
         assert_eq!(status(&out), 1, "{case}: {}", stdout(&out));
         assert!(stderr(&out).is_empty(), "{case}: {}", stderr(&out));
     }
     // Several files: one with errors is enough.
-    let out = mcl(&[
-        "check",
-        "--color",
-        "never",
-        "tests/ui/clean_extract_5_4.mcl",
-        "tests/ui/e0101_did_you_mean.mcl",
-    ]);
+    let out = mcl(&["check", "--color", "never", "tests/ui/clean_extract_5_4.mcl", "tests/ui/e0101_did_you_mean.mcl"]);
     assert_eq!(status(&out), 1);
     // The JSON format has the same status.
-    let out = mcl(&[
-        "check",
-        "--format",
-        "json",
-        "tests/ui/e0101_did_you_mean.mcl",
-    ]);
+    let out = mcl(&["check", "--format", "json", "tests/ui/e0101_did_you_mean.mcl"]);
     assert_eq!(status(&out), 1);
 }
 
@@ -271,27 +208,14 @@ fn exit_status_is_2_for_a_missing_path() {
     let out = mcl(&["check", "--color", "never", "tests/ui/no_such_mission.mcl"]);
     assert_eq!(status(&out), 2);
     assert!(stdout(&out).is_empty(), "{}", stdout(&out));
-    assert!(
-        stderr(&out).contains("tests/ui/no_such_mission.mcl"),
-        "{}",
-        stderr(&out)
-    );
+    assert!(stderr(&out).contains("tests/ui/no_such_mission.mcl"), "{}", stderr(&out));
     // Even next to a good file.
-    let out = mcl(&[
-        "check",
-        "tests/ui/clean_extract_5_4.mcl",
-        "tests/ui/no_such_mission.mcl",
-    ]);
+    let out = mcl(&["check", "tests/ui/clean_extract_5_4.mcl", "tests/ui/no_such_mission.mcl"]);
     assert_eq!(status(&out), 2);
     // And for a usage error.
     let out = mcl(&["check"]);
     assert_eq!(status(&out), 2);
-    let out = mcl(&[
-        "check",
-        "--format",
-        "yaml",
-        "tests/ui/clean_extract_5_4.mcl",
-    ]);
+    let out = mcl(&["check", "--format", "yaml", "tests/ui/clean_extract_5_4.mcl"]);
     assert_eq!(status(&out), 2);
 }
 
@@ -299,11 +223,7 @@ fn exit_status_is_2_for_a_missing_path() {
 fn explain() {
     let out = mcl(&["explain", "e101"]);
     assert_eq!(status(&out), 0);
-    assert!(
-        stdout(&out).starts_with("# E0101: undefined task\n"),
-        "{}",
-        stdout(&out)
-    );
+    assert!(stdout(&out).starts_with("# E0101: undefined task\n"), "{}", stdout(&out));
     assert!(stdout(&out).contains("## Example") && stdout(&out).contains("## Fix"));
 
     let out = mcl(&["explain", "W0901"]);
@@ -320,11 +240,7 @@ fn explain() {
     let list = stdout(&out);
     assert_eq!(list.lines().count(), codes::ALL.len());
     for info in codes::ALL {
-        assert!(
-            list.contains(&format!("{}  {}", info.code, info.title)),
-            "{} is not listed",
-            info.code
-        );
+        assert!(list.contains(&format!("{}  {}", info.code, info.title)), "{} is not listed", info.code);
     }
 }
 
@@ -334,61 +250,35 @@ fn explain() {
 fn check_json(rel: &str) -> (i32, Vec<Value>) {
     let out = mcl(&["check", "--format", "json", rel]);
     assert!(stderr(&out).is_empty(), "{}", stderr(&out));
-    let v: Value = serde_json::from_str(&stdout(&out))
-        .unwrap_or_else(|e| panic!("{rel}: not JSON ({e}): {}", stdout(&out)));
-    let Value::Array(items) = v else {
-        panic!("{rel}: not one JSON array")
-    };
+    let v: Value =
+        serde_json::from_str(&stdout(&out)).unwrap_or_else(|e| panic!("{rel}: not JSON ({e}): {}", stdout(&out)));
+    let Value::Array(items) = v else { panic!("{rel}: not one JSON array") };
     (status(&out), items)
 }
 
 fn pos(v: &Value, which: &str) -> (u64, u64) {
     let p = &v["range"][which];
-    let line = p["line"]
-        .as_u64()
-        .unwrap_or_else(|| panic!("no range.{which}.line in {v}"));
-    let column = p["column"]
-        .as_u64()
-        .unwrap_or_else(|| panic!("no range.{which}.column in {v}"));
+    let line = p["line"].as_u64().unwrap_or_else(|| panic!("no range.{which}.line in {v}"));
+    let column = p["column"].as_u64().unwrap_or_else(|| panic!("no range.{which}.column in {v}"));
     (line, column)
 }
 
 /// Asserts the documented shape of one diagnostic.
 fn assert_shape(d: &Value) {
-    let severity = d["severity"]
-        .as_str()
-        .unwrap_or_else(|| panic!("no severity: {d}"));
-    assert!(
-        ["error", "warning", "info", "hint"].contains(&severity),
-        "{d}"
-    );
+    let severity = d["severity"].as_str().unwrap_or_else(|| panic!("no severity: {d}"));
+    assert!(["error", "warning", "info", "hint"].contains(&severity), "{d}");
     let code = d["code"].as_str().unwrap_or_else(|| panic!("no code: {d}"));
-    assert!(
-        codes::lookup(code).is_some_and(|c| c.code == code),
-        "unknown code {code}"
-    );
+    assert!(codes::lookup(code).is_some_and(|c| c.code == code), "unknown code {code}");
     assert_eq!(severity == "warning", code.starts_with('W'), "{d}");
     assert!(d["message"].as_str().is_some_and(|m| !m.is_empty()), "{d}");
     let file = d["file"].as_str().unwrap_or_else(|| panic!("no file: {d}"));
-    assert!(
-        !Path::new(file).is_absolute() && file.ends_with(".mcl"),
-        "{d}"
-    );
+    assert!(!Path::new(file).is_absolute() && file.ends_with(".mcl"), "{d}");
     let (sl, sc) = pos(d, "start");
     let (el, ec) = pos(d, "end");
-    assert!(
-        sl >= 1 && sc >= 1 && el >= 1 && ec >= 1,
-        "lines and columns are 1-based: {d}"
-    );
+    assert!(sl >= 1 && sc >= 1 && el >= 1 && ec >= 1, "lines and columns are 1-based: {d}");
     assert!((sl, sc) <= (el, ec), "{d}");
-    for l in d["labels"]
-        .as_array()
-        .unwrap_or_else(|| panic!("no labels: {d}"))
-    {
-        assert!(
-            l["file"].as_str().is_some() && l["message"].as_str().is_some(),
-            "{l}"
-        );
+    for l in d["labels"].as_array().unwrap_or_else(|| panic!("no labels: {d}")) {
+        assert!(l["file"].as_str().is_some() && l["message"].as_str().is_some(), "{l}");
         let (sl, sc) = pos(l, "start");
         assert!(sl >= 1 && sc >= 1, "{l}");
     }
@@ -396,9 +286,7 @@ fn assert_shape(d: &Value) {
 
 /// 1-based line and character column of the first `needle` in `text`.
 fn line_col_of(text: &str, needle: &str) -> (u64, u64) {
-    let offset = text
-        .find(needle)
-        .unwrap_or_else(|| panic!("{needle:?} not found"));
+    let offset = text.find(needle).unwrap_or_else(|| panic!("{needle:?} not found"));
     let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
@@ -428,10 +316,7 @@ fn json_columns_count_characters() {
     assert_eq!(pos(d, "end"), (line, column + "Surfce".len() as u64));
     let error_line = src.lines().nth(line as usize - 1).unwrap();
     let byte_column = error_line.find("Surfce").unwrap() as u64 + 1;
-    assert!(
-        byte_column > column,
-        "the line must hold non-ASCII characters before the error"
-    );
+    assert!(byte_column > column, "the line must hold non-ASCII characters before the error");
     assert_eq!((line, column), (5, 48));
     assert_eq!(d["help"], "did you mean `Surface`?");
 }
@@ -470,17 +355,9 @@ fn json_for_several_files_is_one_array() {
     items.iter().for_each(assert_shape);
     let mut files: Vec<&str> = items.iter().map(|d| d["file"].as_str().unwrap()).collect();
     files.sort();
-    assert_eq!(
-        files,
-        [
-            "tests/ui/e0502_import_cycle.mcl",
-            "tests/ui/multi/cycle_b.mcl"
-        ]
-    );
+    assert_eq!(files, ["tests/ui/e0502_import_cycle.mcl", "tests/ui/multi/cycle_b.mcl"]);
     assert!(items.iter().all(|d| d["code"] == "E0502"));
-    assert!(items
-        .iter()
-        .all(|d| d["notes"].as_array().is_some_and(|n| n.len() == 1)));
+    assert!(items.iter().all(|d| d["notes"].as_array().is_some_and(|n| n.len() == 1)));
 }
 
 #[test]

@@ -10,5 +10,9 @@ fn main() {
     let m = compile_file(&db, f).expect("compiles");
     let t_all = t.elapsed();
     let pnml = mcl_net::write_pnml(&m[0].net).expect("pnml");
-    println!("errors {errors}; check {t_check:?}; check+compile {t_all:?}; pnml {:?} ({} bytes)", t.elapsed() - t_all, pnml.len());
+    println!(
+        "errors {errors}; check {t_check:?}; check+compile {t_all:?}; pnml {:?} ({} bytes)",
+        t.elapsed() - t_all,
+        pnml.len()
+    );
 }

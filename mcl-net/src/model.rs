@@ -727,7 +727,8 @@ impl NetBuilder {
 
         // Merge parallel arcs, keeping the position of the first occurrence.
         let mut arcs: Vec<Arc> = Vec::with_capacity(self.arcs.len());
-        let mut seen: HashMap<(bool, u32, u32), usize> = HashMap::with_capacity_and_hasher(self.arcs.len(), Default::default());
+        let mut seen: HashMap<(bool, u32, u32), usize> =
+            HashMap::with_capacity_and_hasher(self.arcs.len(), Default::default());
         for arc in &self.arcs {
             let (input, p, t, w) = match *arc {
                 Arc::Input { place, transition, weight } => (true, place, transition, weight),

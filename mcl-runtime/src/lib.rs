@@ -6,4 +6,14 @@
 //! over a [`link::Link`] to an Architecture Abstraction Component (AAC), in
 //! process or over TCP.
 
+pub mod chronogram;
+pub mod clock;
+pub mod driver;
+pub mod journal;
 pub mod link;
+pub mod mock;
+pub mod player;
+pub mod protocol;
+pub mod scenario;
+pub mod tcp;
+pub mod trace;

@@ -2,8 +2,14 @@
 
 pub mod analyze;
 pub mod check;
+pub mod chronogram;
 pub mod compile;
 pub mod explain;
+pub mod fmt;
+pub mod lsp;
+pub mod mock_aac;
+pub mod plan;
+pub mod run;
 
 use std::path::{Path, PathBuf};
 

@@ -12,6 +12,7 @@
 //! parameters and its own outcome (seed Figure 4.13, SEED-NOTES item 3).
 
 pub mod builder;
+pub mod calls;
 pub mod dot;
 pub mod structures;
 pub mod verify;

@@ -279,7 +279,12 @@ impl Harness {
                 .collect();
             let fin = g.succ[i].is_empty() && self.is_final(m);
             if g.tangible[i] || g.succ[i].is_empty() {
-                let _ = writeln!(out, "  s{i} [shape=ellipse{}, label=\"{}\"];", if fin { ", penwidth=2" } else { "" }, marked.join("\\n"));
+                let _ = writeln!(
+                    out,
+                    "  s{i} [shape=ellipse{}, label=\"{}\"];",
+                    if fin { ", penwidth=2" } else { "" },
+                    marked.join("\\n")
+                );
             } else {
                 let _ = writeln!(out, "  s{i} [shape=point, width=0.08, tooltip=\"{}\"];", marked.join(" "));
             }

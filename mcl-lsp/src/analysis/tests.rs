@@ -1,0 +1,540 @@
+//! Feature tests on `$0` cursor fixtures, without the transport.
+
+use super::fixture::{apply_edits, Fixture, VEHICLE};
+use super::*;
+use tower_lsp_server::ls_types::*;
+
+const MISSION: &str = r#"import "vehicle.mcl";
+
+mission : auv {
+    Depth( 15, "achieve" ) : dive ;
+    parallel {
+        Depth( 15, "keep" )
+    } or {
+        Goto( [24, 12] ) : go
+    }
+}
+
+mission : asc {
+    Void() : wait ;
+    Goto( [0, 0] )
+}
+
+constraints {
+    order { auv:go, asc:wait }
+}
+"#;
+
+fn with_cursor(text: &str, needle: &str) -> String {
+    let i = text.find(needle).unwrap_or_else(|| panic!("`{needle}` not in fixture"));
+    let mut t = text.to_string();
+    t.insert_str(i, "$0");
+    t
+}
+
+/// A fixture of the vehicle and the mission, with the cursor before the
+/// first `needle` of `which` ("mission" or "vehicle").
+fn fx(which: &str, needle: &str) -> Fixture {
+    let (m, v) = if which == "mission" {
+        (with_cursor(MISSION, needle), VEHICLE.to_string())
+    } else {
+        (MISSION.to_string(), with_cursor(VEHICLE, needle))
+    };
+    Fixture::new(&[("mission.mcl", &m), ("vehicle.mcl", &v)])
+}
+
+fn defs(f: &Fixture) -> Vec<String> {
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    navigation::goto_definition(&a, file, off).iter().map(|l| f.show(l)).collect()
+}
+
+fn refs(f: &Fixture) -> Vec<String> {
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    navigation::references(&a, file, off, true).iter().map(|l| f.show(l)).collect()
+}
+
+#[test]
+fn definition_of_task_call_is_in_the_imported_file() {
+    assert_eq!(defs(&fx("mission", "Goto( [24")), ["vehicle.mcl:15:5: Goto"]);
+    // At the end of the name too.
+    assert_eq!(defs(&fx("mission", "( [24")), ["vehicle.mcl:15:5: Goto"]);
+}
+
+#[test]
+fn definition_of_actions_events_and_patterns() {
+    assert_eq!(defs(&fx("vehicle", "enableGoto -> T0")), ["vehicle.mcl:2:5: enableGoto"]);
+    assert_eq!(defs(&fx("vehicle", "eventDepthFail -> T3")), ["vehicle.mcl:10:19: eventDepthFail"]);
+    // The standard library's pattern: shown from a copy on disk, if any.
+    let f = fx("vehicle", "AchieveOneGoal {\n        a: enableGoto");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    let sym = navigation::symbol_at(&a, file, off).map(|(_, s)| s);
+    assert!(matches!(sym, Some(index::Sym::Def(d)) if d.in_stdlib));
+}
+
+#[test]
+fn definition_of_transition_in_binding_is_in_the_pattern() {
+    let f = Fixture::new(&[(
+        "p.mcl",
+        "pattern {\n  P {\n    places { begin.1; abort.1; ok.1; fail.1; }\n    transitions { Ta; Tb; }\n    arcs { begin -> Ta; Ta -> ok; abort -> Tb; }\n  }\n}\nevents { ev; }\ntasks {\n  T(): P { e: ev -> $0Ta; }\n}\n",
+    )]);
+    assert_eq!(defs(&f), ["p.mcl:4:19: Ta"]);
+    assert_eq!(refs(&f), ["p.mcl:4:19: Ta", "p.mcl:5:21: Ta", "p.mcl:5:25: Ta", "p.mcl:10:21: Ta"]);
+}
+
+#[test]
+fn places_in_arcs_resolve_to_their_declaration() {
+    let f = Fixture::new(&[(
+        "p.mcl",
+        "pattern {\n  P {\n    places { begin.1; abort.1; ok.1; fail.1; off(1); }\n    transitions { Ta; }\n    arcs { begin -> Ta; $0off -> Ta; Ta -> off; Ta -> ok; }\n  }\n}\n",
+    )]);
+    assert_eq!(defs(&f), ["p.mcl:3:46: off"]);
+    assert_eq!(refs(&f).len(), 3);
+}
+
+#[test]
+fn labels_and_missions_in_constraints() {
+    assert_eq!(defs(&fx("mission", "go, asc")), ["mission.mcl:8:28: go"]);
+    assert_eq!(defs(&fx("mission", "asc:wait")), ["mission.mcl:12:11: asc"]);
+    assert_eq!(refs(&fx("mission", "wait ;")), ["mission.mcl:13:14: wait", "mission.mcl:18:25: wait"]);
+}
+
+#[test]
+fn references_of_a_task_across_files() {
+    let r = refs(&fx("vehicle", "Goto( way-point )"));
+    assert_eq!(r, ["mission.mcl:8:9: Goto", "mission.mcl:14:5: Goto", "vehicle.mcl:15:5: Goto"]);
+    let without_decl = {
+        let f = fx("vehicle", "Goto( way-point )");
+        let a = f.analysis();
+        let (file, off) = f.cursor();
+        navigation::references(&a, file, off, false).len()
+    };
+    assert_eq!(without_decl, 2);
+}
+
+#[test]
+fn rename_a_task_everywhere() {
+    let f = fx("mission", "Goto( [0");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    let prep = navigation::prepare_rename(&a, file, off).unwrap();
+    assert!(
+        matches!(prep, PrepareRenameResponse::RangeWithPlaceholder { ref placeholder, .. } if placeholder == "Goto")
+    );
+    let edit = navigation::rename(&a, file, off, "GoTo").unwrap();
+    let files = f.apply(&edit);
+    assert_eq!(files.len(), 2);
+    assert_eq!(files[0].1.matches("GoTo(").count(), 2, "{}", files[0].1);
+    assert!(files[1].1.contains("GoTo( way-point ): AchieveOneGoal"));
+    assert!(!files[1].1.contains("Goto("));
+}
+
+#[test]
+fn rename_a_label_renames_constraint_references() {
+    let f = fx("mission", "go\n");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    let edit = navigation::rename(&a, file, off, "arrive").unwrap();
+    let text = &f.apply(&edit)[0].1;
+    assert!(text.contains("Goto( [24, 12] ) : arrive"));
+    assert!(text.contains("order { auv:arrive, asc:wait }"));
+}
+
+#[test]
+fn rename_refuses_keywords_stdlib_and_bad_names() {
+    let f = fx("mission", "parallel");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    assert_eq!(navigation::prepare_rename(&a, file, off).unwrap_err().0, "keywords cannot be renamed");
+    let f = fx("vehicle", "AchieveOneGoal {\n        a: enableGoto");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    assert!(navigation::prepare_rename(&a, file, off).unwrap_err().0.contains("standard library"));
+    let f = fx("mission", "Goto( [0");
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    assert_eq!(navigation::rename(&a, file, off, "while").unwrap_err().0, "`while` is a keyword");
+    assert_eq!(navigation::rename(&a, file, off, "a b").unwrap_err().0, "`a b` is not an identifier");
+}
+
+fn hover_text(f: &Fixture) -> String {
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    match hover::hover(&a, file, off).map(|h| h.contents) {
+        Some(HoverContents::Markup(m)) => m.value,
+        other => format!("{other:?}"),
+    }
+}
+
+#[test]
+fn hover_on_a_call_shows_the_task() {
+    insta::assert_snapshot!(hover_text(&fx("mission", "Goto( [24")), @r#"
+    ```mcl
+    Goto( way-point ): AchieveOneGoal
+    ```
+    Task on primitive `GotoPrimitive`.
+
+    **Parameters:** `way-point`
+
+    **Actions**
+    - `enableGoto` → `T0`: `GotoPrimitive( c: enable, v: way-point )`
+    - `disableGoto` → `T1`, `T6`, `T7`: `GotoPrimitive( c: disable )`
+
+    **Events**
+    - `eventGotoOk` → `T2`
+    - `eventGotoFail` → `T3`
+
+    **Pattern** `AchieveOneGoal`: 13 places, 10 transitions, 32 arcs (standard library)
+
+    ---
+    Go to one way-point.
+
+    *Defined in `vehicle.mcl`.*
+    "#);
+}
+
+#[test]
+fn hover_on_keywords_describes_the_structure() {
+    let t = hover_text(&fx("mission", "parallel"));
+    assert!(t.starts_with("```mcl\nparallel { A } or { B }\n```\n**parallel-or** (control structure)"), "{t}");
+    let t = hover_text(&fx("mission", "or {"));
+    assert!(t.contains("**parallel-or**"), "{t}");
+}
+
+#[test]
+fn hover_on_action_event_label_and_mission() {
+    let t = hover_text(&fx("vehicle", "enableDepth -> T0"));
+    assert!(t.starts_with("```mcl\nenableDepth = DepthPrimitive( c: enable, v: depth, v: mode )\n```"), "{t}");
+    assert!(t.contains("- `Depth` → `T0`"), "{t}");
+    let t = hover_text(&fx("vehicle", "eventGotoFail;"));
+    assert!(t.contains("**Fires**\n- `Goto` → `T3`"), "{t}");
+    let t = hover_text(&fx("mission", "go, asc"));
+    assert!(t.contains("Goto( [24, 12] ) : go"), "{t}");
+    let t = hover_text(&fx("mission", "auv {"));
+    assert!(t.contains("mission : auv { ... }"), "{t}");
+    assert!(t.contains("**Labels** `dive` `go`"), "{t}");
+}
+
+fn completion_labels(text: &str) -> Vec<String> {
+    let f = Fixture::new(&[("main.mcl", text), ("vehicle.mcl", VEHICLE)]);
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    completion::completion(&a, file, off, true).into_iter().map(|c| c.label).collect()
+}
+
+#[test]
+fn completion_in_a_mission_offers_tasks_and_structures() {
+    let items = {
+        let f = Fixture::new(&[
+            ("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Depth( 1, \"a\" ) ;\n    Go$0\n}\n"),
+            ("vehicle.mcl", VEHICLE),
+        ]);
+        let a = f.analysis();
+        let (file, off) = f.cursor();
+        completion::completion(&a, file, off, true)
+    };
+    let goto = items.iter().find(|c| c.label == "Goto").expect("Goto offered");
+    match &goto.text_edit {
+        Some(CompletionTextEdit::Edit(e)) => {
+            assert_eq!(e.new_text, "Goto(${1:way-point})");
+            assert_eq!((e.range.start.character, e.range.end.character), (4, 6));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(goto.insert_text_format, Some(InsertTextFormat::SNIPPET));
+    let labels: Vec<&str> = items.iter().map(|c| c.label.as_str()).collect();
+    for l in ["Depth", "Void", "while", "parallel or", "monitor condition", "try catch"] {
+        assert!(labels.contains(&l), "{l} in {labels:?}");
+    }
+}
+
+#[test]
+fn completion_in_task_bodies() {
+    let base = |body: &str| {
+        format!("import \"vehicle.mcl\";\ntasks {{\n    T( x ): AchieveOneGoal {{\n        {body}\n    }}\n}}\n")
+    };
+    let actions = completion_labels(&base("a: $0"));
+    assert_eq!(actions, ["disableDepth", "disableGoto", "enableDepth", "enableGoto"]);
+    let events = completion_labels(&base("e: ev$0"));
+    assert_eq!(events, ["eventDepthFail", "eventDepthOk", "eventGotoFail", "eventGotoOk"]);
+    let trs = completion_labels(&base("a: enableGoto -> T0, $0"));
+    assert_eq!(trs, ["TT0", "TT1", "TT2", "TT3", "T0", "T1", "T2", "T3", "T6", "T7"]);
+    let start = completion_labels(&base("$0"));
+    assert_eq!(start, ["a:", "e:"]);
+    let pats = completion_labels("tasks {\n    T( x ): $0\n}\n");
+    assert_eq!(pats, ["AchieveOneGoal", "AchieveOneGoalTimed", "Instant"]);
+}
+
+#[test]
+fn completion_in_constraints_and_at_top_level() {
+    let text = MISSION.replace("order { auv:go, asc:wait }", "order { auv:$0 }");
+    let f = Fixture::new(&[("mission.mcl", &text), ("vehicle.mcl", VEHICLE)]);
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    let labels: Vec<String> = completion::completion(&a, file, off, true).into_iter().map(|c| c.label).collect();
+    assert_eq!(labels, ["dive", "go"]);
+    let text = MISSION.replace("order { auv:go, asc:wait }", "order { $0 }");
+    let labels = completion_labels(&text);
+    assert!(labels.contains(&"asc:".to_string()) && labels.contains(&"auv:go".to_string()), "{labels:?}");
+    let top = completion_labels("mission { Void() }\n$0");
+    assert!(top.contains(&"tasks".to_string()) && top.contains(&"mission :".to_string()), "{top:?}");
+    // Nothing inside comments and strings.
+    assert!(completion_labels("mission {\n  // Go$0\n  Void()\n}").is_empty());
+}
+
+#[test]
+fn signature_help_tracks_the_active_parameter() {
+    let f = Fixture::new(&[
+        ("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Depth( [1, 2], $0\n}\n"),
+        ("vehicle.mcl", VEHICLE),
+    ]);
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    let h = completion::signature_help(&a, file, off).expect("signature");
+    assert_eq!(h.signatures[0].label, "Depth( depth, mode )");
+    assert_eq!(h.active_parameter, Some(1));
+    let p = &h.signatures[0].parameters.as_ref().unwrap()[1];
+    assert!(matches!(p.label, ParameterLabel::LabelOffsets([14, 18])));
+}
+
+#[test]
+fn document_symbols_are_blocks_then_definitions() {
+    let f = fx("mission", "auv");
+    let a = f.analysis();
+    let syms = outline::document_symbols(&a, f.file("mission.mcl"));
+    fn show(s: &DocumentSymbol, depth: usize, out: &mut String) {
+        out.push_str(&format!("{}{} {:?}\n", "  ".repeat(depth), s.name, s.kind));
+        for c in s.children.iter().flatten() {
+            show(c, depth + 1, out);
+        }
+    }
+    let mut out = String::new();
+    for s in &syms {
+        show(s, 0, &mut out);
+    }
+    insta::assert_snapshot!(out, @r#"
+    import "vehicle.mcl" File
+    auv Module
+      dive Key
+      go Key
+    asc Module
+      wait Key
+    constraints Namespace
+      order { auv:go, asc:wait } Operator
+    "#);
+    let v = outline::document_symbols(&a, f.file("vehicle.mcl"));
+    let names: Vec<&str> = v.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["actions", "events", "tasks"]);
+    assert_eq!(v[2].children.as_ref().unwrap()[0].detail.as_deref(), Some("Goto( way-point ): AchieveOneGoal"));
+}
+
+#[test]
+fn workspace_symbols_match_fuzzily() {
+    let f = fx("mission", "auv");
+    let a = f.analysis();
+    let names: Vec<String> = outline::workspace_symbols(&a, "evgo").into_iter().map(|s| s.name).collect();
+    assert_eq!(names, ["eventGotoOk", "eventGotoFail"]);
+}
+
+#[test]
+fn folding_ranges_cover_blocks_and_comments() {
+    let f = Fixture::new(&[(
+        "a.mcl",
+        "// one\n// two\nmission {\n    try {\n        Void()\n    } catch {\n        Void()\n    }\n}\n",
+    )]);
+    let a = f.analysis();
+    let r: Vec<(u32, u32, Option<FoldingRangeKind>)> =
+        outline::folding_ranges(&a, f.file("a.mcl")).into_iter().map(|r| (r.start_line, r.end_line, r.kind)).collect();
+    assert_eq!(r, [(0, 1, Some(FoldingRangeKind::Comment)), (2, 7, None), (3, 4, None), (5, 6, None)]);
+}
+
+#[test]
+fn semantic_tokens_classify_names_by_role() {
+    let f = fx("mission", "auv");
+    let a = f.analysis();
+    let file = f.file("mission.mcl");
+    let text = a.text(file);
+    let shown: Vec<String> = semantic::classified(&a, file)
+        .into_iter()
+        .take(14)
+        .map(|(s, t, m)| {
+            format!(
+                "{} {}{}",
+                &text[s.range()],
+                semantic::TYPES[t as usize].as_str(),
+                if m != 0 { format!(" {m}") } else { String::new() }
+            )
+        })
+        .collect();
+    assert_eq!(
+        shown,
+        [
+            "import keyword",
+            "\"vehicle.mcl\" string",
+            "mission keyword",
+            "auv namespace 1",
+            "Depth function",
+            "15 number",
+            "\"achieve\" string",
+            "dive decorator 1",
+            "parallel keyword",
+            "Depth function",
+            "15 number",
+            "\"keep\" string",
+            "or keyword",
+            "Goto function",
+        ]
+    );
+    // Encoded tokens: one per classified token here (no multi-line comment).
+    assert_eq!(semantic::semantic_tokens(&a, file).len(), semantic::classified(&a, file).len());
+}
+
+#[test]
+fn inlay_hints_name_the_parameters() {
+    let f = fx("mission", "auv");
+    let a = f.analysis();
+    let file = f.file("mission.mcl");
+    let hints: Vec<String> = semantic::inlay_hints(&a, file, mcl_syntax::Span::new(0, 10_000))
+        .into_iter()
+        .map(|h| match h.label {
+            InlayHintLabel::String(s) => format!("{}:{} {s}", h.position.line + 1, h.position.character + 1),
+            _ => String::new(),
+        })
+        .collect();
+    assert_eq!(
+        hints,
+        ["4:12 depth:", "4:16 mode:", "6:16 depth:", "6:20 mode:", "8:15 way-point:", "14:11 way-point:"]
+    );
+}
+
+fn fixes(files: &[(&str, &str)]) -> Vec<(String, Vec<(String, String)>)> {
+    let f = Fixture::new(files);
+    let a = f.analysis();
+    let (file, off) = f.cursor();
+    fixes::code_actions(&a, file, mcl_syntax::Span::at(off))
+        .into_iter()
+        .map(|c| (c.title, f.apply(c.edit.as_ref().unwrap())))
+        .collect()
+}
+
+#[test]
+fn quick_fix_did_you_mean_and_create_task() {
+    let got = fixes(&[
+        ("main.mcl", "import \"vehicle.mcl\";\nmission {\n    $0Gotoo( [1, 2] )\n}\n"),
+        ("vehicle.mcl", VEHICLE),
+    ]);
+    assert_eq!(got[0].0, "Replace with `Goto`");
+    assert_eq!(got[0].1[0].1, "import \"vehicle.mcl\";\nmission {\n    Goto( [1, 2] )\n}\n");
+    assert_eq!(got[1].0, "Create task `Gotoo`");
+    assert_eq!(got[1].1[0].0, "vehicle.mcl");
+    assert!(
+        got[1].1[0].1.contains(
+            "    Void(): Instant { }\n    Gotoo( arg1 ): AchieveOneGoal {\n        // a: enableGotoo -> T0;\n"
+        ),
+        "{}",
+        got[1].1[0].1
+    );
+}
+
+#[test]
+fn quick_fix_create_task_in_a_new_block() {
+    let got = fixes(&[("main.mcl", "mission {\n    $0Survey( depth, [1, 2] )\n}\n")]);
+    assert_eq!(got.len(), 1);
+    assert_eq!(got[0].0, "Create task `Survey`");
+    insta::assert_snapshot!(got[0].1[0].1, @r"
+    tasks {
+        Survey( depth, arg2 ): AchieveOneGoal {
+            // a: enableSurvey -> T0;
+            // a: disableSurvey -> T1, T6, T7;
+            // e: eventSurveyOk -> T2;
+            // e: eventSurveyFail -> T3;
+        }
+    }
+
+    mission {
+        Survey( depth, [1, 2] )
+    }
+    ");
+    // The result is a valid program.
+    let f = Fixture::new(&[("x.mcl", &got[0].1[0].1)]);
+    assert!(mcl_compiler::check_file(&f.db, f.file("x.mcl")).is_empty());
+}
+
+#[test]
+fn quick_fix_declare_event_and_action() {
+    let text = "events {\n    ok;\n}\nactions {\n    enableX = XPrimitive( c: enable );\n}\ntasks {\n    X(): AchieveOneGoal {\n        a: enableX -> T0;\n        a: $0disableX -> T1, T6, T7;\n        e: ok -> T2;\n        e: failed -> T3;\n    }\n}\nmission { X() }\n";
+    let got = fixes(&[("main.mcl", text)]);
+    assert_eq!(got[0].0, "Declare action `disableX`");
+    assert!(
+        got[0].1[0].1.contains("    enableX = XPrimitive( c: enable );\n    disableX = XPrimitive( c: disable );\n}"),
+        "{}",
+        got[0].1[0].1
+    );
+    let text = text.replace("a: $0disableX", "a: disableX").replace("e: failed", "e: $0failed");
+    let got = fixes(&[("main.mcl", &text)]);
+    assert_eq!(got[0].0, "Declare event `failed`");
+    assert!(got[0].1[0].1.starts_with("events {\n    ok;\n    failed;\n}"), "{}", got[0].1[0].1);
+}
+
+#[test]
+fn quick_fix_arity() {
+    let got =
+        fixes(&[("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Depth( $015 )\n}\n"), ("vehicle.mcl", VEHICLE)]);
+    assert_eq!(got[0].0, "Add the missing argument: mode");
+    assert!(got[0].1[0].1.contains("Depth( 15, mode )"));
+    let got = fixes(&[
+        ("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Goto( $024, 12, 3 )\n}\n"),
+        ("vehicle.mcl", VEHICLE),
+    ]);
+    assert_eq!(got[0].0, "Remove 2 extra arguments");
+    assert!(got[0].1[0].1.contains("Goto( 24 )"), "{}", got[0].1[0].1);
+    let got =
+        fixes(&[("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Depth($0)\n}\n"), ("vehicle.mcl", VEHICLE)]);
+    assert!(got[0].1[0].1.contains("Depth( depth, mode )"), "{}", got[0].1[0].1);
+}
+
+#[test]
+fn diagnostics_map_labels_in_other_files_to_related_information() {
+    let f = Fixture::new(&[
+        ("main.mcl", "import \"vehicle.mcl\";\nmission {\n    Goto( 1, 2 )\n}\n"),
+        ("vehicle.mcl", VEHICLE),
+    ]);
+    let a = f.analysis();
+    let d = diagnostics::full(&a, f.file("main.mcl"));
+    assert_eq!(d.len(), 1);
+    let d = &d[0];
+    assert_eq!(d.code, Some(NumberOrString::String("E0201".into())));
+    assert_eq!(d.severity, Some(DiagnosticSeverity::ERROR));
+    assert!(
+        d.message.starts_with("task `Goto` takes 1 argument but 2 were given\nhelp: a composite value"),
+        "{}",
+        d.message
+    );
+    let rel: Vec<String> =
+        d.related_information.iter().flatten().map(|r| format!("{} — {}", f.show(&r.location), r.message)).collect();
+    assert_eq!(rel, ["vehicle.mcl:15:5: Goto — `Goto( way-point )` is declared here"]);
+}
+
+#[test]
+fn utf16_positions_after_non_ascii_text() {
+    // `é` is one UTF-16 unit but two bytes; `𝄞` is two units and four bytes.
+    let f = Fixture::new(&[
+        ("main.mcl", "import \"vehicle.mcl\";\n/* é𝄞 */ mission { Gotoo( [1] ) }\n"),
+        ("vehicle.mcl", VEHICLE),
+    ]);
+    let a = f.analysis();
+    let d = diagnostics::full(&a, f.file("main.mcl"));
+    assert_eq!(d[0].range.start, Position { line: 1, character: 20 });
+    assert_eq!(d[0].range.end, Position { line: 1, character: 25 });
+}
+
+#[test]
+fn apply_edits_helper_works_backwards() {
+    let e = |l1, c1, l2, c2, t: &str| TextEdit {
+        range: Range { start: Position { line: l1, character: c1 }, end: Position { line: l2, character: c2 } },
+        new_text: t.into(),
+    };
+    assert_eq!(apply_edits("abc\ndef", &[e(0, 1, 0, 2, "X"), e(1, 0, 1, 3, "Y")]), "aXc\nY");
+}

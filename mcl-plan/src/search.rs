@@ -1,0 +1,438 @@
+//! State-space search (seed 7.3): breadth-first search (Extract 7.4),
+//! uniform-cost search (the cost-aware variant the seed describes after
+//! Extract 7.5) and A* with h_add or h_max.
+//!
+//! States are bitsets packed in one arena (`W` words each); a Zobrist hash is
+//! updated incrementally from the parent's; an open-addressing table maps
+//! states to node numbers. Successors are generated through watch lists: each
+//! action is tested only when one designated precondition is true. An
+//! expansion allocates nothing.
+
+use crate::ground::Task;
+use crate::heuristic::{BitIter, Kind, Relaxed, INF};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Algorithm {
+    /// Breadth-first: fewest actions (optimal with unit costs).
+    Bfs,
+    /// Uniform-cost (Dijkstra): cheapest plan.
+    Ucs,
+    /// A* with a heuristic: cheapest plan with h_max (admissible); h_add is
+    /// not admissible, so A*/h_add plans are usually, not always, cheapest.
+    Astar(Kind),
+}
+
+impl Algorithm {
+    /// Optimal in plan cost (BFS is optimal in length only).
+    pub fn is_cost_optimal(self) -> bool {
+        matches!(self, Algorithm::Ucs | Algorithm::Astar(Kind::Max))
+    }
+}
+
+/// Search statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Stats {
+    /// Distinct states stored.
+    pub states: u64,
+    pub expanded: u64,
+    pub generated: u64,
+    /// Heuristic evaluations.
+    pub evaluated: u64,
+    /// States pruned because the relaxation cannot reach the goal.
+    pub dead_ends: u64,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// A plan: ground action indices, in order.
+    Plan(Vec<u32>),
+    /// The reachable state space holds no goal state.
+    Unsolvable,
+    /// `max_states` distinct states were stored without finding a plan.
+    LimitReached,
+}
+
+#[derive(Clone, Debug)]
+pub struct Result {
+    pub outcome: Outcome,
+    pub stats: Stats,
+}
+
+/// Default bound on stored states (about 1 GiB for 100-fact tasks).
+pub const DEFAULT_MAX_STATES: u64 = 20_000_000;
+
+/// The compiled search space of one task.
+pub struct Space<'t> {
+    task: &'t Task,
+    w: usize,
+    zobrist: Vec<u64>,
+    /// Fact -> actions it watches, CSR.
+    watch_start: Vec<u32>,
+    watch: Vec<u32>,
+    always: Vec<u32>,
+    goal_mask: Vec<u64>,
+    goal_neg_mask: Vec<u64>,
+}
+
+fn splitmix(x: &mut u64) -> u64 {
+    *x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *x;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[inline]
+fn test(s: &[u64], f: u32) -> bool {
+    s[(f >> 6) as usize] >> (f & 63) & 1 == 1
+}
+
+impl<'t> Space<'t> {
+    pub fn new(task: &'t Task) -> Space<'t> {
+        let nf = task.num_facts();
+        let w = nf.div_ceil(64).max(1);
+        let mut seed = 0x5EED_u64;
+        let zobrist = (0..nf).map(|_| splitmix(&mut seed)).collect();
+        // Each action watches the precondition with the fewest watchers so far
+        // (balancing the lists); actions without preconditions are always tested.
+        let mut owner = vec![u32::MAX; task.actions.len()];
+        let mut load = vec![0u32; nf];
+        let mut always = Vec::new();
+        for (ai, a) in task.actions.iter().enumerate() {
+            match a.pre.iter().min_by_key(|&&f| load[f as usize]) {
+                Some(&f) => {
+                    owner[ai] = f;
+                    load[f as usize] += 1;
+                }
+                None => always.push(ai as u32),
+            }
+        }
+        let mut watch_start = vec![0u32; nf + 1];
+        for f in 0..nf {
+            watch_start[f + 1] = watch_start[f] + load[f];
+        }
+        let mut fill = watch_start.clone();
+        let mut watch = vec![0u32; watch_start[nf] as usize];
+        for (ai, &f) in owner.iter().enumerate() {
+            if f != u32::MAX {
+                watch[fill[f as usize] as usize] = ai as u32;
+                fill[f as usize] += 1;
+            }
+        }
+        let mut goal_mask = vec![0u64; w];
+        for &g in &task.goal {
+            goal_mask[(g >> 6) as usize] |= 1 << (g & 63);
+        }
+        let mut goal_neg_mask = vec![0u64; w];
+        for &g in &task.goal_neg {
+            goal_neg_mask[(g >> 6) as usize] |= 1 << (g & 63);
+        }
+        Space { task, w, zobrist, watch_start, watch, always, goal_mask, goal_neg_mask }
+    }
+
+    /// Words per state.
+    pub fn words(&self) -> usize {
+        self.w
+    }
+
+    pub fn pack(&self, facts: &[u32]) -> Vec<u64> {
+        let mut s = vec![0u64; self.w];
+        for &f in facts {
+            s[(f >> 6) as usize] |= 1 << (f & 63);
+        }
+        s
+    }
+
+    pub fn hash(&self, s: &[u64]) -> u64 {
+        BitIter { words: s, w: 0, cur: s[0] }.fold(0, |h, f| h ^ self.zobrist[f as usize])
+    }
+
+    #[inline]
+    pub fn is_goal(&self, s: &[u64]) -> bool {
+        s.iter().zip(&self.goal_mask).all(|(x, g)| x & g == *g)
+            && s.iter().zip(&self.goal_neg_mask).all(|(x, g)| x & g == 0)
+    }
+
+    #[inline]
+    pub fn applicable(&self, s: &[u64], a: u32) -> bool {
+        let ga = &self.task.actions[a as usize];
+        ga.pre.iter().all(|&f| test(s, f)) && !ga.pre_neg.iter().any(|&f| test(s, f))
+    }
+
+    /// Calls `f` with every action applicable in `s`.
+    #[inline]
+    pub fn for_each_applicable(&self, s: &[u64], mut f: impl FnMut(u32)) {
+        for fact in (BitIter { words: s, w: 0, cur: s[0] }) {
+            let (b, e) = (self.watch_start[fact as usize] as usize, self.watch_start[fact as usize + 1] as usize);
+            for &a in &self.watch[b..e] {
+                if self.applicable(s, a) {
+                    f(a);
+                }
+            }
+        }
+        for &a in &self.always {
+            if self.applicable(s, a) {
+                f(a);
+            }
+        }
+    }
+
+    /// Writes the successor of `s` by `a` into `out`; returns its hash.
+    #[inline]
+    pub fn apply(&self, s: &[u64], h: u64, a: u32, out: &mut [u64]) -> u64 {
+        out.copy_from_slice(s);
+        let ga = &self.task.actions[a as usize];
+        let mut h = h;
+        for &f in ga.del.iter() {
+            let (w, b) = ((f >> 6) as usize, f & 63);
+            if out[w] >> b & 1 == 1 {
+                out[w] &= !(1 << b);
+                h ^= self.zobrist[f as usize];
+            }
+        }
+        for &f in ga.add.iter() {
+            let (w, b) = ((f >> 6) as usize, f & 63);
+            if out[w] >> b & 1 == 0 {
+                out[w] |= 1 << b;
+                h ^= self.zobrist[f as usize];
+            }
+        }
+        h
+    }
+}
+
+/// Distinct states with their search data.
+struct Store {
+    w: usize,
+    words: Vec<u64>,
+    hashes: Vec<u64>,
+    parent: Vec<u32>,
+    via: Vec<u32>,
+    g: Vec<u64>,
+    h: Vec<u64>,
+    table: Vec<u32>,
+    mask: usize,
+}
+
+const EMPTY: u32 = u32::MAX;
+
+impl Store {
+    fn new(w: usize) -> Store {
+        Store {
+            w,
+            words: Vec::new(),
+            hashes: Vec::new(),
+            parent: Vec::new(),
+            via: Vec::new(),
+            g: Vec::new(),
+            h: Vec::new(),
+            table: vec![EMPTY; 1024],
+            mask: 1023,
+        }
+    }
+    fn len(&self) -> usize {
+        self.hashes.len()
+    }
+    fn state(&self, id: u32) -> &[u64] {
+        &self.words[id as usize * self.w..(id as usize + 1) * self.w]
+    }
+    fn grow(&mut self) {
+        let n = self.table.len() * 2;
+        self.table = vec![EMPTY; n];
+        self.mask = n - 1;
+        for id in 0..self.len() {
+            let mut i = self.hashes[id] as usize & self.mask;
+            while self.table[i] != EMPTY {
+                i = (i + 1) & self.mask;
+            }
+            self.table[i] = id as u32;
+        }
+    }
+    /// The node of `s`, inserted if new: (id, inserted).
+    #[inline]
+    fn insert(&mut self, s: &[u64], hash: u64, parent: u32, via: u32, g: u64) -> (u32, bool) {
+        if (self.len() + 1) * 2 > self.table.len() {
+            self.grow();
+        }
+        let mut i = hash as usize & self.mask;
+        loop {
+            let id = self.table[i];
+            if id == EMPTY {
+                let nid = self.len() as u32;
+                self.table[i] = nid;
+                self.words.extend_from_slice(s);
+                self.hashes.push(hash);
+                self.parent.push(parent);
+                self.via.push(via);
+                self.g.push(g);
+                self.h.push(0);
+                return (nid, true);
+            }
+            if self.hashes[id as usize] == hash && self.state(id) == s {
+                return (id, false);
+            }
+            i = (i + 1) & self.mask;
+        }
+    }
+    fn path(&self, mut id: u32) -> Vec<u32> {
+        let mut out = Vec::new();
+        while self.parent[id as usize] != EMPTY {
+            out.push(self.via[id as usize]);
+            id = self.parent[id as usize];
+        }
+        out.reverse();
+        out
+    }
+}
+
+/// Searches a plan from the task's initial state.
+pub fn search(task: &Task, alg: Algorithm, max_states: u64) -> Result {
+    search_from(task, &task.init, alg, max_states)
+}
+
+/// Searches a plan from the state made of `init` (fact indices of `task`).
+pub fn search_from(task: &Task, init: &[u32], alg: Algorithm, max_states: u64) -> Result {
+    let mut stats = Stats::default();
+    if !task.goal_reachable {
+        return Result { outcome: Outcome::Unsolvable, stats };
+    }
+    let sp = Space::new(task);
+    let root = sp.pack(init);
+    let hash = sp.hash(&root);
+    let mut store = Store::new(sp.w);
+    store.insert(&root, hash, EMPTY, EMPTY, 0);
+    stats.states = 1;
+    let outcome = match alg {
+        Algorithm::Bfs => bfs(&sp, &mut store, &mut stats, max_states),
+        Algorithm::Ucs => best_first(&sp, &mut store, &mut stats, max_states, None),
+        Algorithm::Astar(k) => {
+            let mut h = Relaxed::new(task, k);
+            best_first(&sp, &mut store, &mut stats, max_states, Some(&mut h))
+        }
+    };
+    stats.states = store.len() as u64;
+    Result { outcome, stats }
+}
+
+fn bfs(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) -> Outcome {
+    if sp.is_goal(store.state(0)) {
+        return Outcome::Plan(Vec::new());
+    }
+    let w = sp.w;
+    let mut cur = vec![0u64; w];
+    let mut child = vec![0u64; w];
+    let mut found = EMPTY;
+    let mut next = 0usize;
+    while next < store.len() {
+        let id = next as u32;
+        next += 1;
+        cur.copy_from_slice(store.state(id));
+        let (h, g) = (store.hashes[id as usize], store.g[id as usize]);
+        stats.expanded += 1;
+        let mut limit = false;
+        sp.for_each_applicable(&cur, |a| {
+            if found != EMPTY || limit {
+                return;
+            }
+            stats.generated += 1;
+            let ch = sp.apply(&cur, h, a, &mut child);
+            let (cid, new) = store.insert(&child, ch, id, a, g + sp.task.actions[a as usize].cost);
+            if new {
+                if sp.is_goal(&child) {
+                    found = cid;
+                } else if store.len() as u64 >= max_states {
+                    limit = true;
+                }
+            }
+        });
+        if found != EMPTY {
+            return Outcome::Plan(store.path(found));
+        }
+        if limit {
+            return Outcome::LimitReached;
+        }
+    }
+    Outcome::Unsolvable
+}
+
+fn best_first(
+    sp: &Space<'_>,
+    store: &mut Store,
+    stats: &mut Stats,
+    max_states: u64,
+    mut heur: Option<&mut Relaxed>,
+) -> Outcome {
+    let w = sp.w;
+    // (f, h, id): lowest f, then lowest h, then oldest node.
+    let mut open: BinaryHeap<Reverse<(u64, u64, u32)>> = BinaryHeap::new();
+    let h0 = match heur.as_deref_mut() {
+        Some(hr) => {
+            stats.evaluated += 1;
+            hr.eval(store.state(0))
+        }
+        None => 0,
+    };
+    if h0 == INF {
+        stats.dead_ends += 1;
+        return Outcome::Unsolvable;
+    }
+    store.h[0] = h0;
+    open.push(Reverse((h0, h0, 0)));
+    let mut cur = vec![0u64; w];
+    let mut child = vec![0u64; w];
+    let mut closed: Vec<bool> = vec![false; 1];
+    while let Some(Reverse((f, h, id))) = open.pop() {
+        let g = store.g[id as usize];
+        if f != g.saturating_add(h) || h != store.h[id as usize] || closed[id as usize] {
+            continue; // stale entry
+        }
+        cur.copy_from_slice(store.state(id));
+        if sp.is_goal(&cur) {
+            return Outcome::Plan(store.path(id));
+        }
+        closed[id as usize] = true;
+        stats.expanded += 1;
+        let hash = store.hashes[id as usize];
+        let mut limit = false;
+        sp.for_each_applicable(&cur, |a| {
+            stats.generated += 1;
+            let ch = sp.apply(&cur, hash, a, &mut child);
+            let ng = g.saturating_add(sp.task.actions[a as usize].cost);
+            let (cid, new) = store.insert(&child, ch, id, a, ng);
+            let c = cid as usize;
+            if new {
+                closed.push(false);
+                let hv = match heur.as_deref_mut() {
+                    Some(hr) => {
+                        stats.evaluated += 1;
+                        hr.eval(&child)
+                    }
+                    None => 0,
+                };
+                store.h[c] = hv;
+                if hv == INF {
+                    stats.dead_ends += 1;
+                    closed[c] = true;
+                } else {
+                    open.push(Reverse((ng.saturating_add(hv), hv, cid)));
+                }
+                if store.len() as u64 >= max_states {
+                    limit = true;
+                }
+            } else if ng < store.g[c] && store.h[c] != INF {
+                // A cheaper path: update and (re)open.
+                store.g[c] = ng;
+                store.parent[c] = id;
+                store.via[c] = a;
+                closed[c] = false;
+                open.push(Reverse((ng.saturating_add(store.h[c]), store.h[c], cid)));
+            }
+        });
+        if limit {
+            return Outcome::LimitReached;
+        }
+    }
+    Outcome::Unsolvable
+}

@@ -1,0 +1,471 @@
+//! Drivers: what feeds time and messages to a [`Player`].
+//!
+//! * [`run_virtual`]: a discrete-event loop over the player's timers and an
+//!   in-process [`MockVehicle`]'s agenda, in virtual time: deterministic for
+//!   a seed, and instantaneous. At equal times the player's timers go first,
+//!   then the mock's messages in the order they were scheduled; the actions
+//!   an input produces reach the mock before the next message is taken.
+//! * [`run_real_time`]: a tokio loop over a [`Link`] to any AAC (the
+//!   in-process mock served by [`serve_mock`], or a TCP link), selecting
+//!   between the link's inbound channel and a sleep until the player's next
+//!   deadline (scaled by the clock's speed). No busy waiting.
+//!
+//! Both go through a [`Session`], which journals each input and its firings
+//! (synced before the input's actions are sent) and turns outputs into trace
+//! records for a [`Sink`].
+
+use crate::clock::Clock;
+use crate::journal::{Entry, Input, JournalWriter};
+use crate::link::{AacEnd, Action, Inbound, Link};
+use crate::mock::MockVehicle;
+use crate::player::{Outcome, Output, Player};
+use crate::trace::{Record, Tracer};
+
+/// Receives trace records as they are produced.
+pub trait Sink {
+    /// One record.
+    fn record(&mut self, r: &Record);
+    /// False when records are not wanted at all (they are then not built).
+    fn wants_records(&self) -> bool {
+        true
+    }
+}
+
+/// A sink that drops everything (benchmarks).
+#[derive(Debug, Default)]
+pub struct Discard;
+
+impl Sink for Discard {
+    fn record(&mut self, _: &Record) {}
+    fn wants_records(&self) -> bool {
+        false
+    }
+}
+
+/// A sink that keeps every record.
+#[derive(Debug, Default)]
+pub struct Collect(pub Vec<Record>);
+
+impl Sink for Collect {
+    fn record(&mut self, r: &Record) {
+        self.0.push(r.clone());
+    }
+}
+
+/// How a run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum End {
+    /// The player reached an outcome.
+    Outcome(Outcome),
+    /// Virtual time: the player waits for events and nothing is scheduled.
+    Quiescent {
+        /// Events the enabled transitions wait for.
+        awaited: Vec<String>,
+    },
+    /// The time limit passed.
+    TimeLimit(f64),
+}
+
+impl End {
+    /// The exit status of `mcl run`: 0 ok, 1 fail, 3 stuck or time limit.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            End::Outcome(Outcome::Ok) => 0,
+            End::Outcome(Outcome::Fail) => 1,
+            _ => 3,
+        }
+    }
+
+    /// `ok`, `fail`, `stuck` or `time_limit`.
+    pub fn result(&self) -> &'static str {
+        match self {
+            End::Outcome(o) => o.as_str(),
+            End::Quiescent { .. } => "stuck",
+            End::TimeLimit(_) => "time_limit",
+        }
+    }
+}
+
+/// A player with its tracer, sink and optional journal.
+pub struct Session<'a> {
+    /// The player.
+    pub player: Player,
+    /// Turns outputs into records.
+    pub tracer: Tracer,
+    /// Where records go.
+    pub sink: &'a mut (dyn Sink + Send),
+    /// The journal, if any.
+    pub journal: Option<JournalWriter>,
+    /// Test hook: abort the process (as `kill -9` would) right after the
+    /// n-th journal sync of this process, before that input's actions are sent.
+    pub crash_after: Option<u64>,
+    syncs: u64,
+}
+
+impl<'a> Session<'a> {
+    /// A session without journal.
+    pub fn new(player: Player, tracer: Tracer, sink: &'a mut (dyn Sink + Send)) -> Self {
+        Session { player, tracer, sink, journal: None, crash_after: None, syncs: 0 }
+    }
+
+    /// Records one output (used for replayed outputs too).
+    pub fn emit(&mut self, o: &Output) {
+        if !self.sink.wants_records() {
+            return;
+        }
+        let r = self.tracer.record(o);
+        self.sink.record(&r);
+    }
+
+    /// Records a record made by the driver.
+    pub fn emit_record(&mut self, mut r: Record) {
+        r.mission = self.tracer.mission().map(str::to_string);
+        self.sink.record(&r);
+    }
+
+    /// Feeds one input: journals it and its firings (synced), records the
+    /// outputs and returns them; the caller sends their actions
+    /// ([`actions`]).
+    pub fn step(&mut self, input: Input) -> Result<Vec<Output>, String> {
+        let out = input.apply(&mut self.player);
+        if let Some(j) = &mut self.journal {
+            j.append(&input.entry());
+            let ids = self.player.net().transitions();
+            for o in &out {
+                if let Output::Fired { t, transition, .. } = o {
+                    j.append(&Entry::Fire { t: *t, transition: ids[transition.index()].id.clone() });
+                }
+            }
+            j.sync()?;
+            self.syncs += 1;
+            if self.crash_after.is_some_and(|n| self.syncs >= n) {
+                std::process::abort();
+            }
+        }
+        for o in &out {
+            self.emit(o);
+        }
+        Ok(out)
+    }
+
+    /// Journals an acknowledgement (written with the next sync).
+    pub fn ack(&mut self, seq: u64) {
+        if let Some(j) = &mut self.journal {
+            j.append(&Entry::Ack { seq });
+        }
+    }
+
+    /// Records the end of a run that the player did not decide itself.
+    fn end_by_driver(&mut self, t: f64, result: &str, reason: String) {
+        let mut r = Record::new(t, "outcome");
+        r.result = Some(result.to_string());
+        r.reason = Some(reason);
+        self.emit_record(r);
+    }
+
+    fn warn(&mut self, t: f64, message: String) {
+        let mut r = Record::new(t, "warning");
+        r.message = Some(message);
+        self.emit_record(r);
+    }
+}
+
+/// The actions among outputs.
+pub fn actions(out: &[Output]) -> impl Iterator<Item = &Action> {
+    out.iter().filter_map(|o| match o {
+        Output::Send { action, .. } => Some(action),
+        _ => None,
+    })
+}
+
+/// Limits of a run.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Limits {
+    /// Stop when mission time passes this.
+    pub time_limit: Option<f64>,
+}
+
+fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
+    match m {
+        Inbound::Event { event } => Some(Input::Event(t, event)),
+        Inbound::Perception { name, value } => Some(Input::Perception(t, name, value)),
+        _ => None,
+    }
+}
+
+fn feed_mock(s: &mut Session, mock: &mut MockVehicle, t: f64, out: &[Output]) {
+    for a in actions(out) {
+        mock.on_action(t, a);
+    }
+    for w in mock.take_warnings() {
+        s.warn(t, w);
+    }
+}
+
+/// Runs `s` against `mock` in virtual time until the mission ends, nothing
+/// more can happen, or the time limit passes. Starts the player if it has
+/// not started (a resumed player has). `mock.initial()` must have been called.
+pub fn run_virtual(s: &mut Session, mock: &mut MockVehicle, limits: Limits) -> Result<End, String> {
+    if !started(s) {
+        let actions = s.step(Input::Start(0.0))?;
+        feed_mock(s, mock, 0.0, &actions);
+    }
+    loop {
+        if let Some(o) = s.player.outcome() {
+            return Ok(End::Outcome(o));
+        }
+        let tp = s.player.next_deadline();
+        let tm = mock.next_deadline();
+        let next = match (tp, tm) {
+            (None, None) => {
+                let awaited = s.player.awaited_events();
+                let t = s.player.now();
+                s.end_by_driver(
+                    t,
+                    "stuck",
+                    format!(
+                        "nothing more can happen: no timer is pending and the mock vehicle has nothing left to send; the mission waits for {}",
+                        if awaited.is_empty() { "nothing".to_string() } else { awaited.join(", ") }
+                    ),
+                );
+                return Ok(End::Quiescent { awaited });
+            }
+            (Some(a), Some(b)) => a.min(b),
+            (Some(a), None) => a,
+            (None, Some(b)) => b,
+        };
+        if let Some(limit) = limits.time_limit {
+            if next > limit {
+                s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                return Ok(End::TimeLimit(limit));
+            }
+        }
+        let actions = if tp.is_some_and(|a| a <= next) {
+            s.step(Input::Timer(next))?
+        } else {
+            let Some((t, m)) = mock.pop_due(next) else { continue };
+            match perception_or_event(t, m) {
+                Some(input) => s.step(input)?,
+                None => continue,
+            }
+        };
+        let now = s.player.now();
+        feed_mock(s, mock, now, &actions);
+    }
+}
+
+fn started(s: &Session) -> bool {
+    s.player.is_started()
+}
+
+/// Runs `s` over `link` in real time with `clock` until the mission ends or
+/// the time limit passes. `resend` are actions to send first (after a resume).
+pub async fn run_real_time(
+    s: &mut Session<'_>,
+    link: &mut Link,
+    clock: Clock,
+    limits: Limits,
+    resend: Vec<Action>,
+) -> Result<End, String> {
+    let send = |link: &mut Link, out: Vec<Output>| -> Result<(), String> {
+        for o in out {
+            if let Output::Send { action, .. } = o {
+                link.actions.send(action).map_err(|_| "the link to the AAC is closed".to_string())?;
+            }
+        }
+        Ok(())
+    };
+    for a in resend {
+        link.actions.send(a).map_err(|_| "the link to the AAC is closed".to_string())?;
+    }
+    if !started(s) {
+        let out = s.step(Input::Start(clock.now()))?;
+        send(link, out)?;
+    }
+    loop {
+        if let Some(o) = s.player.outcome() {
+            if let Some(j) = &mut s.journal {
+                j.sync()?;
+            }
+            return Ok(End::Outcome(o));
+        }
+        let deadline = s.player.next_deadline();
+        let wake = match (deadline, limits.time_limit) {
+            (Some(d), Some(l)) => Some(d.min(l)),
+            (d, l) => d.or(l),
+        };
+        let sleep = async {
+            match wake {
+                Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
+                None => std::future::pending::<()>().await,
+            }
+        };
+        let actions = tokio::select! {
+            m = link.inbound.recv() => {
+                let now = clock.now().max(s.player.now());
+                match m {
+                    None => return Err("the link to the AAC closed".into()),
+                    Some(Inbound::Ack { seq }) => { s.ack(seq); Vec::new() }
+                    Some(Inbound::Disconnected) => { s.warn(now, "link to the AAC lost; reconnecting".into()); Vec::new() }
+                    Some(Inbound::Connected) => { s.warn(now, "link to the AAC up".into()); Vec::new() }
+                    Some(m) => match perception_or_event(now, m) {
+                        Some(input) => s.step(input)?,
+                        None => Vec::new(),
+                    },
+                }
+            }
+            _ = sleep => {
+                let w = wake.unwrap_or_default();
+                match deadline {
+                    Some(d) if d <= w => s.step(Input::Timer(d.max(s.player.now())))?,
+                    _ => {
+                        let limit = limits.time_limit.unwrap_or(w);
+                        s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                        if let Some(j) = &mut s.journal {
+                            j.sync()?;
+                        }
+                        return Ok(End::TimeLimit(limit));
+                    }
+                }
+            }
+        };
+        send(link, actions)?;
+    }
+}
+
+/// Serves `mock` on `end` in real time: answers actions (with an `Ack`) and
+/// sends its scheduled messages when they are due. Ends when the player's
+/// end of the link is dropped. Warnings go to `warn`.
+pub async fn serve_mock(mut mock: MockVehicle, mut end: AacEnd, clock: Clock, mut warn: impl FnMut(String)) {
+    mock.initial();
+    loop {
+        let wake = mock.next_deadline();
+        let sleep = async {
+            match wake {
+                Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
+                None => std::future::pending::<()>().await,
+            }
+        };
+        tokio::select! {
+            a = end.actions.recv() => match a {
+                None => return,
+                Some(a) => {
+                    mock.on_action(clock.now(), &a);
+                    for w in mock.take_warnings() { warn(w); }
+                    if end.inbound.send(Inbound::Ack { seq: a.seq }).is_err() { return; }
+                }
+            },
+            _ = sleep => {
+                let now = clock.now().max(wake.unwrap_or_default());
+                while let Some((_, m)) = mock.pop_due(now) {
+                    if end.inbound.send(m).is_err() { return; }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::player::PlayerOptions;
+    use crate::scenario::Scenario;
+    use crate::trace::SourceMap;
+    use mcl_net::{ActionRef, Delay, NetBuilder, Place, Transition, TransitionKind};
+    use std::sync::Arc;
+
+    /// begin → enable X (T0) → X's ok event (T2) or a 30 s time-out (TO) → ok / fail.
+    fn net() -> Arc<mcl_net::Net> {
+        let mut b = NetBuilder::new("m");
+        b.property("task_events:X", r#"{"ok":["evXOk"],"fail":["evXFail"]}"#);
+        let begin = b.add_place(Place::new("mission.begin").with_tokens(1));
+        let run = b.add_place(Place::new("run"));
+        let ok = b.add_place(Place::new("mission.ok"));
+        let fail = b.add_place(Place::new("mission.fail"));
+        let task =
+            |t: Transition| t.with_provenance(mcl_net::Provenance { task: Some("X".into()), ..Default::default() });
+        let enable = ActionRef {
+            action: "enableX".into(),
+            primitive: "XPrimitive".into(),
+            command: "enable".into(),
+            params: vec![],
+        };
+        let disable = ActionRef { command: "disable".into(), action: "disableX".into(), ..enable.clone() };
+        let t0 = b.add_transition(task(Transition::new("T0").with_action(enable)));
+        let t2 = b.add_transition(task(
+            Transition::new("T2").with_kind(TransitionKind::Event("evXOk".into())).with_action(disable.clone()),
+        ));
+        let to = b.add_transition(task(
+            Transition::new("TO").with_kind(TransitionKind::Timed(Delay::Fixed(30.0))).with_action(disable),
+        ));
+        b.add_input(begin, t0, 1).add_output(t0, run, 1);
+        b.add_input(run, t2, 1).add_output(t2, ok, 1);
+        b.add_input(run, to, 1).add_output(to, fail, 1);
+        Arc::new(b.build().unwrap())
+    }
+
+    fn run_both(scenario: &str) -> (Vec<String>, Vec<String>, End, End) {
+        let net = net();
+        let names = |c: &Collect| -> Vec<String> {
+            c.0.iter()
+                .filter(|r| matches!(r.kind.as_str(), "action" | "event" | "outcome"))
+                .map(|r| {
+                    format!("{} {}", r.t, r.action.clone().or(r.event.clone()).or(r.result.clone()).unwrap_or_default())
+                })
+                .collect()
+        };
+        // Virtual time.
+        let mut sink = Collect::default();
+        let tracer = Tracer::new(&net, None, &mut SourceMap::default());
+        let mut s = Session::new(Player::new(net.clone(), PlayerOptions::seeded(3)), tracer, &mut sink);
+        let mut mock = MockVehicle::from_net(&net, Scenario::from_toml(scenario, "s").unwrap(), 3);
+        mock.initial();
+        let ev = run_virtual(&mut s, &mut mock, Limits::default()).unwrap();
+        drop(s);
+        let virtual_names = names(&sink);
+        // Real time on a paused tokio clock, through the link and the mock task.
+        let rt = tokio::runtime::Builder::new_current_thread().enable_all().start_paused(true).build().unwrap();
+        let (er, real_names) = rt.block_on(async {
+            let clock = Clock::new(1.0, 0.0);
+            let (mut link, end) = crate::link::pair();
+            let mock = MockVehicle::from_net(&net, Scenario::from_toml(scenario, "s").unwrap(), 3);
+            let server = tokio::spawn(serve_mock(mock, end, clock, |_| {}));
+            let mut sink = Collect::default();
+            let tracer = Tracer::new(&net, None, &mut SourceMap::default());
+            let mut s = Session::new(Player::new(net.clone(), PlayerOptions::seeded(3)), tracer, &mut sink);
+            let e = run_real_time(&mut s, &mut link, clock, Limits::default(), Vec::new()).await.unwrap();
+            drop(s);
+            drop(link);
+            server.await.unwrap();
+            (e, names(&sink))
+        });
+        (virtual_names, real_names, ev, er)
+    }
+
+    #[test]
+    fn real_time_on_a_paused_clock_equals_virtual_time() {
+        let (v, r, ev, er) = run_both("[tasks.X]\ndelay = 12\n");
+        assert_eq!(v, ["0 enableX", "12 evXOk", "12 disableX", "12 ok"]);
+        assert_eq!(ev, End::Outcome(Outcome::Ok));
+        assert_eq!(er, ev);
+        // Real time reads the clock: times are equal up to the clock's resolution.
+        let strip = |v: &[String]| v.iter().map(|s| s.split_once(' ').unwrap().1.to_string()).collect::<Vec<_>>();
+        assert_eq!(strip(&r), strip(&v));
+
+        let (v, r, ev, er) = run_both("[tasks.X]\noutcome = \"never\"\n");
+        assert_eq!(v, ["0 enableX", "30 disableX", "30 fail"]);
+        assert_eq!((ev.clone(), er), (End::Outcome(Outcome::Fail), ev));
+        assert_eq!(strip(&r), strip(&v));
+    }
+
+    #[test]
+    fn time_limit() {
+        let net = net();
+        let mut sink = Collect::default();
+        let tracer = Tracer::new(&net, None, &mut SourceMap::default());
+        let mut s = Session::new(Player::new(net.clone(), PlayerOptions::seeded(3)), tracer, &mut sink);
+        let mut mock = MockVehicle::from_net(&net, Scenario::from_toml("[tasks.X]\ndelay = 50", "s").unwrap(), 3);
+        mock.initial();
+        assert_eq!(run_virtual(&mut s, &mut mock, Limits { time_limit: Some(10.0) }).unwrap(), End::TimeLimit(10.0));
+    }
+}

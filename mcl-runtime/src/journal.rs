@@ -1,0 +1,406 @@
+//! The journal: what a player needs to survive a crash (`mcl run --journal
+//! FILE`, `mcl run --resume FILE`).
+//!
+//! A journal is a JSONL file. Its first line is a [`Entry::Header`] (seed,
+//! symbols, mission, a fingerprint of the net, the scenario of an in-process
+//! mock). Then, for every input the player handled, in order, the input
+//! ([`Entry::Start`], [`Entry::Event`], [`Entry::Perception`],
+//! [`Entry::Timer`]) followed by the transitions it fired ([`Entry::Fire`]).
+//! The entries of one input are written and the file is `fsync`ed *before*
+//! the actions of that input are sent: an action is never sent that the
+//! journal does not explain, and an input whose actions went out is never
+//! lost. [`Entry::Ack`] records the actions the AAC acknowledged (not
+//! synced: losing one only re-sends an action, which the AAC drops by its
+//! `seq`).
+//!
+//! The player is deterministic for a seed and a sequence of inputs, so
+//! resuming ([`replay`]) feeds the journaled inputs again, at their
+//! journaled times, to a fresh player with the journaled seed: this restores
+//! the exact marking, bindings, pending timers (with their deadlines), the
+//! random generator and the action counter. Each input's firings are checked
+//! against the journal; any difference (another net, another seed) stops the
+//! resume with an error. The mission clock then continues from the time of
+//! the last journaled input: the time the player was down does not count
+//! (a pending timer keeps the remaining time it had at that input).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::link::{Action, Inbound};
+use crate::player::{Output, Player};
+
+/// Journal format version.
+pub const VERSION: u32 = 1;
+
+/// One line of a journal.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "j", rename_all = "snake_case")]
+pub enum Entry {
+    /// First line: how the run was set up.
+    Header {
+        /// [`VERSION`].
+        version: u32,
+        /// Mission name.
+        mission: String,
+        /// Player seed.
+        seed: u64,
+        /// [`fingerprint`] of the net.
+        fingerprint: String,
+        /// Symbol table of the run.
+        #[serde(default)]
+        symbols: BTreeMap<String, Value>,
+        /// Scenario text of the in-process mock, if any.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scenario: Option<String>,
+        /// Seed of the mock.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mock_seed: Option<u64>,
+        /// Run id given to a TCP AAC (the same run id resumes its session).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        run: Option<String>,
+        /// Wall-clock start, seconds since the Unix epoch (informative).
+        #[serde(default)]
+        unix_start: f64,
+    },
+    /// The mission started.
+    Start {
+        /// Mission time.
+        t: f64,
+    },
+    /// An event was received.
+    Event {
+        /// Mission time.
+        t: f64,
+        /// Event name.
+        event: String,
+    },
+    /// A perception was received.
+    Perception {
+        /// Mission time.
+        t: f64,
+        /// Name.
+        name: String,
+        /// Value.
+        value: Value,
+    },
+    /// The player was woken for its timers.
+    Timer {
+        /// Mission time.
+        t: f64,
+    },
+    /// A transition fired.
+    Fire {
+        /// Mission time.
+        t: f64,
+        /// Transition id.
+        transition: String,
+    },
+    /// The AAC acknowledged an action.
+    Ack {
+        /// Its sequence number.
+        seq: u64,
+    },
+}
+
+/// An input of the player.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    /// Start the mission.
+    Start(f64),
+    /// An event.
+    Event(f64, String),
+    /// A perception.
+    Perception(f64, String, Value),
+    /// Timers.
+    Timer(f64),
+}
+
+impl Input {
+    /// Its journal entry.
+    pub fn entry(&self) -> Entry {
+        match self {
+            Input::Start(t) => Entry::Start { t: *t },
+            Input::Event(t, e) => Entry::Event { t: *t, event: e.clone() },
+            Input::Perception(t, n, v) => Entry::Perception { t: *t, name: n.clone(), value: v.clone() },
+            Input::Timer(t) => Entry::Timer { t: *t },
+        }
+    }
+
+    /// The input of a journal entry (None for other entries).
+    pub fn of_entry(e: &Entry) -> Option<Input> {
+        Some(match e {
+            Entry::Start { t } => Input::Start(*t),
+            Entry::Event { t, event } => Input::Event(*t, event.clone()),
+            Entry::Perception { t, name, value } => Input::Perception(*t, name.clone(), value.clone()),
+            Entry::Timer { t } => Input::Timer(*t),
+            _ => return None,
+        })
+    }
+
+    /// Applies it to a player.
+    pub fn apply(&self, p: &mut Player) -> Vec<Output> {
+        match self {
+            Input::Start(t) => p.start(*t),
+            Input::Event(t, e) => p.on_event(*t, e),
+            Input::Perception(t, n, v) => p.on_perception(*t, n, v.clone()),
+            Input::Timer(t) => p.on_timer(*t),
+        }
+    }
+
+    /// The message a vehicle sent for this input, if it is one.
+    pub fn message(&self) -> Option<Inbound> {
+        match self {
+            Input::Event(_, e) => Some(Inbound::Event { event: e.clone() }),
+            Input::Perception(_, n, v) => Some(Inbound::Perception { name: n.clone(), value: v.clone() }),
+            _ => None,
+        }
+    }
+
+    /// Its time.
+    pub fn time(&self) -> f64 {
+        match self {
+            Input::Start(t) | Input::Event(t, _) | Input::Perception(t, _, _) | Input::Timer(t) => *t,
+        }
+    }
+}
+
+/// A 64-bit FNV-1a fingerprint of the net's PNML, in hex.
+pub fn fingerprint(net: &mcl_net::Net) -> String {
+    let text = mcl_net::write_pnml(net).unwrap_or_default();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// Appends entries to a journal file.
+pub struct JournalWriter {
+    file: File,
+    path: PathBuf,
+    buf: Vec<u8>,
+}
+
+impl JournalWriter {
+    /// Creates (truncates) a journal and writes its header, synced.
+    pub fn create(path: &Path, header: &Entry) -> Result<Self, String> {
+        if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
+        }
+        let file = File::create(path).map_err(|e| format!("cannot create journal `{}`: {e}", path.display()))?;
+        let mut w = JournalWriter { file, path: path.to_path_buf(), buf: Vec::new() };
+        w.append(header);
+        w.sync()?;
+        Ok(w)
+    }
+
+    /// Opens a journal to continue it, cutting an incomplete last line.
+    pub fn append_to(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read(path).map_err(|e| format!("cannot read journal `{}`: {e}", path.display()))?;
+        let keep = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let file = OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| format!("cannot open journal `{}`: {e}", path.display()))?;
+        file.set_len(keep as u64).map_err(|e| format!("cannot write journal `{}`: {e}", path.display()))?;
+        let mut file = file;
+        use std::io::Seek;
+        file.seek(std::io::SeekFrom::End(0)).map_err(|e| e.to_string())?;
+        Ok(JournalWriter { file, path: path.to_path_buf(), buf: Vec::new() })
+    }
+
+    /// Buffers an entry.
+    pub fn append(&mut self, e: &Entry) {
+        if serde_json::to_writer(&mut self.buf, e).is_ok() {
+            self.buf.push(b'\n');
+        }
+    }
+
+    /// Writes the buffered entries and waits until they are on disk.
+    pub fn sync(&mut self) -> Result<(), String> {
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        self.file
+            .write_all(&self.buf)
+            .and_then(|_| self.file.sync_data())
+            .map_err(|e| format!("cannot write journal `{}`: {e}", self.path.display()))?;
+        self.buf.clear();
+        Ok(())
+    }
+}
+
+/// Reads a journal. A last line cut by a crash is ignored.
+pub fn read_journal(path: &Path) -> Result<Vec<Entry>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read journal `{}`: {e}", path.display()))?;
+    let complete = text.rfind('\n').map_or("", |i| &text[..=i]);
+    let mut out = Vec::new();
+    for (i, line) in complete.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let e: Entry = serde_json::from_str(line)
+            .map_err(|e| format!("{}:{}: not a journal entry: {e}", path.display(), i + 1))?;
+        out.push(e);
+    }
+    match out.first() {
+        Some(Entry::Header { version, .. }) if *version == VERSION => Ok(out),
+        Some(Entry::Header { version, .. }) => {
+            Err(format!("{}: journal version {version}, this player reads version {VERSION}", path.display()))
+        }
+        _ => Err(format!("{}: not a journal (no header line)", path.display())),
+    }
+}
+
+/// What a replay restored.
+#[derive(Debug, Default)]
+pub struct Replayed {
+    /// Inputs replayed.
+    pub inputs: usize,
+    /// Actions the replayed firings sent, in order.
+    pub actions: Vec<Action>,
+    /// Sequence numbers the AAC acknowledged.
+    pub acked: BTreeSet<u64>,
+    /// Time of the last journaled input.
+    pub last_time: f64,
+}
+
+impl Replayed {
+    /// Actions to send again: those never acknowledged.
+    pub fn unacknowledged(&self) -> Vec<Action> {
+        self.actions.iter().filter(|a| !self.acked.contains(&a.seq)).cloned().collect()
+    }
+}
+
+/// Replays the inputs of `entries` into `player` (fresh, with the journal's
+/// seed and symbols), checking each input's firings against the journal.
+/// `each` sees every input with the outputs it produced (to rebuild a mock
+/// vehicle and the trace).
+pub fn replay(
+    player: &mut Player,
+    entries: &[Entry],
+    mut each: impl FnMut(&Input, &[Output]),
+) -> Result<Replayed, String> {
+    let mut r = Replayed::default();
+    let mut i = 0;
+    while i < entries.len() {
+        let e = &entries[i];
+        i += 1;
+        if let Entry::Ack { seq } = e {
+            r.acked.insert(*seq);
+            continue;
+        }
+        let Some(input) = Input::of_entry(e) else { continue };
+        let mut expected: Vec<&str> = Vec::new();
+        while let Some(Entry::Fire { transition, .. }) = entries.get(i) {
+            expected.push(transition);
+            i += 1;
+        }
+        let out = input.apply(player);
+        let ids = player.net().transitions();
+        let fired: Vec<&str> = out
+            .iter()
+            .filter_map(|o| match o {
+                Output::Fired { transition, .. } => Some(ids[transition.index()].id.as_str()),
+                _ => None,
+            })
+            .collect();
+        let last = !entries[i..].iter().any(|e| Input::of_entry(e).is_some());
+        let agrees = fired == expected || (last && fired.starts_with(&expected));
+        if !agrees {
+            let k = fired.iter().zip(&expected).take_while(|(a, b)| a == b).count();
+            return Err(format!(
+                "the journal does not match this mission: after input {} ({:?}) the journal fired `{}` where the player fires `{}` (another net, seed or symbol table?)",
+                r.inputs + 1,
+                input,
+                expected.get(k).copied().unwrap_or("nothing"),
+                fired.get(k).copied().unwrap_or("nothing"),
+            ));
+        }
+        for o in &out {
+            if let Output::Send { action, .. } = o {
+                r.actions.push(action.clone());
+            }
+        }
+        r.last_time = r.last_time.max(input.time());
+        r.inputs += 1;
+        each(&input, &out);
+    }
+    Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::player::PlayerOptions;
+    use mcl_net::{NetBuilder, Place, Transition, TransitionKind};
+    use std::sync::Arc;
+
+    /// p --(event e)--> q --(event e)--> mission.ok
+    fn net() -> Arc<mcl_net::Net> {
+        let mut b = NetBuilder::new("m");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let q = b.add_place(Place::new("q"));
+        let ok = b.add_place(Place::new("mission.ok"));
+        let a = b.add_transition(Transition::new("a").with_kind(TransitionKind::Event("e".into())));
+        let c = b.add_transition(Transition::new("c").with_kind(TransitionKind::Event("e".into())));
+        b.add_input(p, a, 1).add_output(a, q, 1);
+        b.add_input(q, c, 1).add_output(c, ok, 1);
+        Arc::new(b.build().unwrap())
+    }
+
+    fn header() -> Entry {
+        Entry::Header {
+            version: VERSION,
+            mission: "m".into(),
+            seed: 0,
+            fingerprint: fingerprint(&net()),
+            symbols: BTreeMap::new(),
+            scenario: None,
+            mock_seed: None,
+            run: None,
+            unix_start: 0.0,
+        }
+    }
+
+    #[test]
+    fn write_read_replay() {
+        let dir = std::env::temp_dir().join(format!("mcl-journal-{}", std::process::id()));
+        let path = dir.join("j.jsonl");
+        let mut w = JournalWriter::create(&path, &header()).unwrap();
+        w.append(&Entry::Start { t: 0.0 });
+        w.append(&Entry::Event { t: 2.0, event: "e".into() });
+        w.append(&Entry::Fire { t: 2.0, transition: "a".into() });
+        w.append(&Entry::Ack { seq: 1 });
+        w.sync().unwrap();
+        drop(w);
+        // A line cut by a crash is ignored and then cut off.
+        std::fs::write(&path, std::fs::read_to_string(&path).unwrap() + "{\"j\":\"eve").unwrap();
+        let entries = read_journal(&path).unwrap();
+        assert_eq!(entries.len(), 5);
+        let mut p = Player::new(net(), PlayerOptions::default());
+        let mut seen = 0;
+        let r = replay(&mut p, &entries, |_, _| seen += 1).unwrap();
+        assert_eq!((r.inputs, seen, r.last_time, r.acked.len()), (2, 2, 2.0, 1));
+        assert_eq!(p.marking().0, vec![0, 1, 0]);
+        let mut w = JournalWriter::append_to(&path).unwrap();
+        w.append(&Entry::Event { t: 3.0, event: "e".into() });
+        w.sync().unwrap();
+        assert_eq!(read_journal(&path).unwrap().len(), 6);
+
+        // A journal that disagrees with the net is refused.
+        let mut bad = entries.clone();
+        bad[3] = Entry::Fire { t: 2.0, transition: "c".into() };
+        bad.push(Entry::Event { t: 3.0, event: "e".into() });
+        let mut p = Player::new(net(), PlayerOptions::default());
+        let e = replay(&mut p, &bad, |_, _| {}).unwrap_err();
+        assert!(e.contains("the journal fired `c` where the player fires `a`"), "{e}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}

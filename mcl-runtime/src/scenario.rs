@@ -1,0 +1,412 @@
+//! Scenario files: how the mock vehicle answers, in TOML
+//! (`docs/scenarios.md`, examples in `examples/scenarios/`).
+//!
+//! ```toml
+//! default_duration = 5.0      # seconds a primitive takes when nothing else is said
+//! seed = 7                    # seed of the random draws (default: the run's --seed)
+//!
+//! [symbols]                   # values of symbolic call arguments
+//! timeout = 30
+//!
+//! [tasks.Goto]                # every call of Goto
+//! delay = 12.0                # or [10.0, 20.0]: uniform in that range
+//! outcome = "ok"              # "ok" | "fail" | "never"
+//!
+//! [tasks.Goto.activation.2]   # the 2nd activation of Goto overrides the above
+//! outcome = "fail"
+//!
+//! [tasks.Altitude.label.deploy]   # the call labelled `deploy`
+//! probabilities = { ok = 0.8, fail = 0.2 }
+//!
+//! [[events]]                  # scripted events, sent whatever the vehicle does
+//! at = 120.0
+//! event = "eventAlarmOk"
+//!
+//! [[perceptions]]
+//! at = 10
+//! name = "battery"
+//! value = 0.8
+//! ```
+//!
+//! Unknown keys and malformed values are errors that point at their line
+//! and column.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::Path;
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
+use serde_json::Value;
+
+/// A scenario for the mock vehicle.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Seconds a primitive takes to answer when no rule gives a delay.
+    #[serde(default, deserialize_with = "non_negative_opt")]
+    pub default_duration: Option<f64>,
+    /// Seed of the random draws (probabilities, delay ranges).
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// Values of symbolic call arguments.
+    #[serde(default)]
+    pub symbols: BTreeMap<String, Value>,
+    /// Rules per task name.
+    #[serde(default)]
+    pub tasks: BTreeMap<String, TaskRule>,
+    /// Events sent at fixed times.
+    #[serde(default)]
+    pub events: Vec<ScriptedEvent>,
+    /// Perceptions sent at fixed times.
+    #[serde(default)]
+    pub perceptions: Vec<ScriptedPerception>,
+}
+
+/// How a task's primitive ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OutcomeRule {
+    /// Send the task's ok event.
+    Ok,
+    /// Send the task's fail event.
+    Fail,
+    /// Send nothing.
+    Never,
+}
+
+/// A delay: fixed, or drawn uniformly in `[min, max]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DelaySpec {
+    /// Exactly this many seconds.
+    Fixed(f64),
+    /// Uniform between the two bounds.
+    Range(f64, f64),
+}
+
+/// Probabilities of each outcome (weights, normalised by their sum).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "RawProbabilities")]
+pub struct Probabilities {
+    /// Weight of ok.
+    pub ok: f64,
+    /// Weight of fail.
+    pub fail: f64,
+    /// Weight of never.
+    pub never: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawProbabilities {
+    #[serde(default)]
+    ok: f64,
+    #[serde(default)]
+    fail: f64,
+    #[serde(default)]
+    never: f64,
+}
+
+impl TryFrom<RawProbabilities> for Probabilities {
+    type Error = String;
+    fn try_from(r: RawProbabilities) -> Result<Self, String> {
+        for (k, v) in [("ok", r.ok), ("fail", r.fail), ("never", r.never)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("probability `{k}` must be a number ≥ 0, found {v}"));
+            }
+        }
+        if r.ok + r.fail + r.never <= 0.0 {
+            return Err("probabilities must not all be 0".into());
+        }
+        Ok(Probabilities { ok: r.ok, fail: r.fail, never: r.never })
+    }
+}
+
+/// The answer of one call: every field is optional and falls back to the
+/// less specific rule (activation, then label, then task, then defaults).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rule {
+    /// Fixed outcome.
+    #[serde(default)]
+    pub outcome: Option<OutcomeRule>,
+    /// Random outcome (exclusive with `outcome` at the same level).
+    #[serde(default)]
+    pub probabilities: Option<Probabilities>,
+    /// Seconds between the activation and the answer.
+    #[serde(default)]
+    pub delay: Option<DelaySpec>,
+    /// Event to send instead of the task's ok or fail event.
+    #[serde(default)]
+    pub event: Option<String>,
+}
+
+/// The rule of a task, with overrides per call label and per activation.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskRule {
+    /// Fixed outcome.
+    #[serde(default)]
+    pub outcome: Option<OutcomeRule>,
+    /// Random outcome.
+    #[serde(default)]
+    pub probabilities: Option<Probabilities>,
+    /// Seconds between the activation and the answer.
+    #[serde(default)]
+    pub delay: Option<DelaySpec>,
+    /// Event to send instead of the task's ok or fail event.
+    #[serde(default)]
+    pub event: Option<String>,
+    /// Overrides for the calls labelled `Task(...) : label`.
+    #[serde(default)]
+    pub label: BTreeMap<String, Rule>,
+    /// Overrides for the n-th activation of the task (1 is the first).
+    #[serde(default)]
+    pub activation: BTreeMap<Activation, Rule>,
+}
+
+impl TaskRule {
+    /// The task-level fields as a [`Rule`].
+    pub fn base(&self) -> Rule {
+        Rule { outcome: self.outcome, probabilities: self.probabilities, delay: self.delay, event: self.event.clone() }
+    }
+}
+
+/// The number of an activation (1-based), a table key such as `activation.2`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Activation(pub u32);
+
+impl<'de> Deserialize<'de> for Activation {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        match s.parse::<u32>() {
+            Ok(n) if n >= 1 => Ok(Activation(n)),
+            _ => Err(de::Error::custom(format!(
+                "activation `{s}`: expected the number of an activation, 1 for the first"
+            ))),
+        }
+    }
+}
+
+/// An event sent at a fixed time.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScriptedEvent {
+    /// Seconds from the start of the mission.
+    #[serde(deserialize_with = "non_negative")]
+    pub at: f64,
+    /// Event name.
+    pub event: String,
+}
+
+/// A perception sent at a fixed time.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScriptedPerception {
+    /// Seconds from the start of the mission.
+    #[serde(deserialize_with = "non_negative")]
+    pub at: f64,
+    /// Perception name.
+    pub name: String,
+    /// Its value (any TOML value).
+    pub value: Value,
+}
+
+fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(de::Error::custom(format!("expected a number of seconds ≥ 0, found {v}")))
+    }
+}
+
+fn non_negative_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    non_negative(d).map(Some)
+}
+
+impl<'de> Deserialize<'de> for DelaySpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = DelaySpec;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "a number of seconds ≥ 0, or a range [min, max]")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<DelaySpec, E> {
+                if v.is_finite() && v >= 0.0 {
+                    Ok(DelaySpec::Fixed(v))
+                } else {
+                    Err(E::custom(format!("delay must be a number of seconds ≥ 0, found {v}")))
+                }
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<DelaySpec, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<DelaySpec, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<DelaySpec, A::Error> {
+                let lo: f64 = seq.next_element()?.ok_or_else(|| de::Error::custom("a delay range needs [min, max]"))?;
+                let hi: f64 = seq.next_element()?.ok_or_else(|| de::Error::custom("a delay range needs [min, max]"))?;
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(de::Error::custom("a delay range has two numbers, [min, max]"));
+                }
+                if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+                    return Err(de::Error::custom(format!("delay range [{lo}, {hi}] must satisfy 0 ≤ min ≤ max")));
+                }
+                Ok(DelaySpec::Range(lo, hi))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Scenario {
+    /// Parses a scenario. Errors name the line and column (and `origin`, a
+    /// file name for messages).
+    pub fn from_toml(text: &str, origin: &str) -> Result<Scenario, String> {
+        let s: Scenario = toml::from_str(text).map_err(|e| format_toml_error(origin, text, &e))?;
+        for (task, rule) in &s.tasks {
+            let levels = std::iter::once((format!("tasks.{task}"), rule.base()))
+                .chain(rule.label.iter().map(|(l, r)| (format!("tasks.{task}.label.{l}"), r.clone())))
+                .chain(rule.activation.iter().map(|(a, r)| (format!("tasks.{task}.activation.{}", a.0), r.clone())));
+            for (path, r) in levels {
+                if r.outcome.is_some() && r.probabilities.is_some() {
+                    let (line, col) = find_key(text, &path);
+                    return Err(format!(
+                        "{origin}:{line}:{col}: [{path}] gives both `outcome` and `probabilities`; keep one"
+                    ));
+                }
+            }
+        }
+        Ok(s)
+    }
+
+    /// Reads and parses a scenario file.
+    pub fn load(path: &Path) -> Result<Scenario, String> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| format!("cannot read scenario `{}`: {e}", path.display()))?;
+        Scenario::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Warnings about names the mission does not know: tasks never called,
+    /// labels no call carries.
+    pub fn check_against(&self, tasks: &[String], labels: &[(String, String)]) -> Vec<String> {
+        let mut w = Vec::new();
+        for (name, rule) in &self.tasks {
+            if !tasks.contains(name) {
+                w.push(format!("scenario: the mission never calls task `{name}`"));
+                continue;
+            }
+            for l in rule.label.keys() {
+                if !labels.iter().any(|(t, lab)| t == name && lab == l) {
+                    w.push(format!("scenario: no call of `{name}` is labelled `{l}`"));
+                }
+            }
+        }
+        w
+    }
+}
+
+/// The line and column (1-based) of `[path]` or of the last key of `path`
+/// in the text, for messages about a whole table; (1, 1) if not found.
+fn find_key(text: &str, path: &str) -> (usize, usize) {
+    let header = format!("[{path}]");
+    for (i, line) in text.lines().enumerate() {
+        if let Some(c) = line.find(&header) {
+            return (i + 1, c + 1);
+        }
+    }
+    let last = path.rsplit('.').next().unwrap_or(path);
+    for (i, line) in text.lines().enumerate() {
+        if let Some(c) = line.find(last) {
+            return (i + 1, c + 1);
+        }
+    }
+    (1, 1)
+}
+
+fn format_toml_error(origin: &str, text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim_end().to_string();
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            let src = text.lines().nth(line - 1).unwrap_or("");
+            let width = text[span.start.min(text.len())..span.end.min(text.len())]
+                .lines()
+                .next()
+                .map_or(1, |s| s.chars().count().max(1));
+            format!(
+                "{origin}:{line}:{col}: {msg}\n{:>4} | {src}\n     | {}{}",
+                line,
+                " ".repeat(col - 1),
+                "^".repeat(width)
+            )
+        }
+        None => format!("{origin}: {msg}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_every_feature() {
+        let s = Scenario::from_toml(
+            r#"
+default_duration = 4
+seed = 9
+[symbols]
+timeout = 30
+[tasks.Goto]
+delay = [1, 2.5]
+outcome = "fail"
+[tasks.Goto.activation.2]
+outcome = "ok"
+[tasks.Alarm.label.al]
+probabilities = { ok = 0.8, fail = 0.2 }
+event = "eventAlarmOk"
+[[events]]
+at = 120.0
+event = "eventAlarmOk"
+[[perceptions]]
+at = 10
+name = "battery"
+value = 0.8
+"#,
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.default_duration, Some(4.0));
+        assert_eq!(s.symbols["timeout"], serde_json::json!(30));
+        let g = &s.tasks["Goto"];
+        assert_eq!(g.delay, Some(DelaySpec::Range(1.0, 2.5)));
+        assert_eq!(g.activation[&Activation(2)].outcome, Some(OutcomeRule::Ok));
+        assert_eq!(s.tasks["Alarm"].label["al"].probabilities.unwrap().ok, 0.8);
+        assert_eq!(s.events[0].at, 120.0);
+        assert_eq!(s.perceptions[0].value, serde_json::json!(0.8));
+    }
+
+    #[test]
+    fn errors_have_line_and_column() {
+        let e = Scenario::from_toml("seed = 1\n[tasks.Goto]\ndelai = 3\n", "x.toml").unwrap_err();
+        assert!(e.starts_with("x.toml:3:1: unknown field `delai`"), "{e}");
+        let e = Scenario::from_toml("[tasks.Goto]\ndelay = -3\n", "x.toml").unwrap_err();
+        assert!(e.starts_with("x.toml:2:9:"), "{e}");
+        let e = Scenario::from_toml("[tasks.Goto]\noutcome = \"maybe\"\n", "x.toml").unwrap_err();
+        assert!(e.starts_with("x.toml:2:11:"), "{e}");
+        let e = Scenario::from_toml("[tasks.Goto.activation.zero]\noutcome = \"ok\"\n", "x.toml").unwrap_err();
+        assert!(e.contains("x.toml:1:"), "{e}");
+        let e =
+            Scenario::from_toml("[tasks.Goto]\noutcome = \"ok\"\nprobabilities = { ok = 1 }\n", "x.toml").unwrap_err();
+        assert!(e.contains("both"), "{e}");
+        let e = Scenario::from_toml("[[events]]\nat = 1\n", "x.toml").unwrap_err();
+        assert!(e.contains("missing field `event`"), "{e}");
+        let e = Scenario::from_toml("seed = ", "x.toml").unwrap_err();
+        assert!(e.starts_with("x.toml:1:"), "{e}");
+    }
+}

@@ -1,0 +1,353 @@
+//! Traces: one JSON object per line (JSONL), and the live log.
+//!
+//! Every record has `t` (seconds from the start of the mission) and `kind`;
+//! `mission` is present when the mission is named (or when the file holds
+//! several missions). Kinds and their fields:
+//!
+//! | kind | fields |
+//! |---|---|
+//! | `action` | `seq`, `action`, `primitive`, `command`, `params`, `task`, `call_site`, `label`, `src` |
+//! | `event` | `event`, `task` (whose transition it fired), `transition`, `call_site`, `src` |
+//! | `fire` | `transition`, `task`, `call_site` |
+//! | `unexpected_event` | `event`, `reason` |
+//! | `timer` | `transition`, `task`, `deadline` (a timer of a positive delay started) |
+//! | `perception` | `name`, `value` |
+//! | `warning` | `message` |
+//! | `outcome` | `result` (`ok`, `fail`, `stuck`, `time_limit`), `reason` |
+//!
+//! `src` is `file:line` of the call that sent the action or received the
+//! event (from the net's provenance; the line is computed from the source
+//! file when it is readable).
+
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use mcl_net::{Net, SourceSpan};
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+
+use crate::player::Output;
+
+/// One line of a trace.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    /// Seconds from the start of the mission.
+    pub t: f64,
+    /// The mission's name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<String>,
+    /// `action`, `event`, `fire`, `unexpected_event`, `timer`, `perception`, `warning`, `outcome`.
+    pub kind: String,
+    /// Action sequence number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seq: Option<u64>,
+    /// Action name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub action: Option<String>,
+    /// Primitive of the action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub primitive: Option<String>,
+    /// Command of the action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub command: Option<String>,
+    /// Parameters of the action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub params: Option<Map<String, Value>>,
+    /// Event name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub event: Option<String>,
+    /// Transition id.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transition: Option<String>,
+    /// Task concerned.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<String>,
+    /// Call site concerned.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub call_site: Option<u32>,
+    /// Label of that call.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// Timer deadline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deadline: Option<f64>,
+    /// Perception name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Perception value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<Value>,
+    /// Mission result.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub result: Option<String>,
+    /// Why (outcome, unexpected event).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// Warning text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+    /// `file:line` of the call.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub src: Option<String>,
+}
+
+impl Record {
+    /// A record of this kind at time `t`.
+    pub fn new(t: f64, kind: &str) -> Self {
+        Record { t: round_time(t), kind: kind.to_string(), ..Default::default() }
+    }
+}
+
+/// Times are written to the microsecond.
+pub fn round_time(t: f64) -> f64 {
+    (t * 1e6).round() / 1e6
+}
+
+/// Line numbers of source files, read on demand.
+#[derive(Debug, Default)]
+pub struct SourceMap {
+    files: HashMap<String, Option<Vec<u32>>>,
+    base: Option<PathBuf>,
+}
+
+impl SourceMap {
+    /// Paths are shown relative to the current directory when they are under it.
+    pub fn new() -> Self {
+        SourceMap { files: HashMap::new(), base: std::env::current_dir().ok() }
+    }
+
+    /// `file:line` of the start of `span`, or `file` alone when the file cannot be read.
+    pub fn locate(&mut self, span: &SourceSpan) -> String {
+        let shown = match &self.base {
+            Some(b) => {
+                Path::new(&span.file).strip_prefix(b).map(|p| p.display().to_string()).unwrap_or(span.file.clone())
+            }
+            None => span.file.clone(),
+        };
+        let starts = self.files.entry(span.file.clone()).or_insert_with(|| {
+            std::fs::read(&span.file).ok().map(|bytes| {
+                std::iter::once(0u32)
+                    .chain(bytes.iter().enumerate().filter(|(_, &b)| b == b'\n').map(|(i, _)| i as u32 + 1))
+                    .collect()
+            })
+        });
+        match starts {
+            Some(s) => {
+                let line = s.partition_point(|&x| x <= span.start);
+                format!("{shown}:{line}")
+            }
+            None => shown,
+        }
+    }
+}
+
+/// Turns player outputs into trace records and live-log lines.
+#[derive(Clone, Debug)]
+pub struct Tracer {
+    mission: Option<String>,
+    ids: Vec<String>,
+    tasks: Vec<Option<String>>,
+    /// Per call site: (label, `file:line`).
+    calls: HashMap<u32, (Option<String>, Option<String>)>,
+}
+
+impl Tracer {
+    /// A tracer for `net`; `mission` goes on every record when given.
+    pub fn new(net: &Net, mission: Option<String>, sources: &mut SourceMap) -> Self {
+        let mut calls = HashMap::new();
+        for t in net.transitions() {
+            if let Some(b) = &t.binding {
+                let src = t.provenance.span.as_ref().map(|s| sources.locate(s));
+                calls.insert(b.call_site, (b.label.clone(), src));
+            }
+        }
+        Tracer {
+            mission,
+            ids: net.transitions().iter().map(|t| t.id.clone()).collect(),
+            tasks: net
+                .transitions()
+                .iter()
+                .map(|t| t.provenance.task.clone().or_else(|| t.binding.as_ref().map(|b| b.task.clone())))
+                .collect(),
+            calls,
+        }
+    }
+
+    /// The mission name written on records.
+    pub fn mission(&self) -> Option<&str> {
+        self.mission.as_deref()
+    }
+
+    fn call(&self, r: &mut Record, call_site: Option<u32>) {
+        r.call_site = call_site;
+        if let Some((label, src)) = call_site.and_then(|c| self.calls.get(&c)) {
+            r.label = label.clone();
+            r.src = src.clone();
+        }
+    }
+
+    /// The record of an output.
+    pub fn record(&self, out: &Output) -> Record {
+        let mut r = match out {
+            Output::Send { t, action } => {
+                let mut r = Record::new(*t, "action");
+                r.seq = Some(action.seq);
+                r.action = Some(action.action.clone());
+                r.primitive = Some(action.primitive.clone());
+                r.command = Some(action.command.clone());
+                r.params = Some(action.params.clone());
+                r.task = action.task.clone();
+                self.call(&mut r, action.call_site);
+                r
+            }
+            Output::Fired { t, transition, call_site } => {
+                let mut r = Record::new(*t, "fire");
+                r.transition = Some(self.ids[transition.index()].clone());
+                r.task = self.tasks[transition.index()].clone();
+                r.call_site = *call_site;
+                r
+            }
+            Output::Event { t, event, transition, call_site } => {
+                let mut r = Record::new(*t, "event");
+                r.event = Some(event.clone());
+                r.task = self.tasks[transition.index()].clone();
+                r.transition = Some(self.ids[transition.index()].clone());
+                self.call(&mut r, *call_site);
+                r
+            }
+            Output::Unexpected { t, event, reason } => {
+                let mut r = Record::new(*t, "unexpected_event");
+                r.event = Some(event.clone());
+                r.reason = Some(reason.to_string());
+                r
+            }
+            Output::Timer { t, transition, deadline } => {
+                let mut r = Record::new(*t, "timer");
+                r.transition = Some(self.ids[transition.index()].clone());
+                r.task = self.tasks[transition.index()].clone();
+                r.deadline = Some(round_time(*deadline));
+                r
+            }
+            Output::Perception { t, name, value } => {
+                let mut r = Record::new(*t, "perception");
+                r.name = Some(name.clone());
+                r.value = Some(value.clone());
+                r
+            }
+            Output::Warning { t, message } => {
+                let mut r = Record::new(*t, "warning");
+                r.message = Some(message.clone());
+                r
+            }
+            Output::Outcome { t, outcome, reason } => {
+                let mut r = Record::new(*t, "outcome");
+                r.result = Some(outcome.as_str().to_string());
+                r.reason = reason.clone();
+                r
+            }
+        };
+        r.mission = self.mission.clone();
+        r
+    }
+}
+
+/// The live-log line of a record (None for records not shown: fires and
+/// timers unless `verbose`).
+pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
+    let what = match r.kind.as_str() {
+        "action" => {
+            let params: Vec<String> = r.params.iter().flatten().map(|(k, v)| format!("{k}={v}")).collect();
+            format!(
+                "action   {} {}({}){}",
+                r.primitive.as_deref().unwrap_or("?"),
+                r.command.as_deref().unwrap_or("?"),
+                params.join(", "),
+                r.action.as_ref().map(|a| format!("  [{a}]")).unwrap_or_default()
+            )
+        }
+        "event" => format!("event    {}", r.event.as_deref().unwrap_or("?")),
+        "unexpected_event" => {
+            format!("UNEXPECTED event {} ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
+        }
+        "perception" => format!(
+            "percept  {} = {}",
+            r.name.as_deref().unwrap_or("?"),
+            r.value.as_ref().map(|v| v.to_string()).unwrap_or_default()
+        ),
+        "warning" => format!("warning  {}", r.message.as_deref().unwrap_or("")),
+        "outcome" => format!(
+            "MISSION {}{}",
+            r.result.as_deref().unwrap_or("?").to_uppercase(),
+            r.reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default()
+        ),
+        "fire" if verbose => format!("fire     {}", r.transition.as_deref().unwrap_or("?")),
+        "timer" if verbose => format!(
+            "timer    {} until {}",
+            r.transition.as_deref().unwrap_or("?"),
+            r.deadline.map(|d| format!("{d:.3}")).unwrap_or_default()
+        ),
+        _ => return None,
+    };
+    let mut line = format!("[{:>10.3}] ", r.t);
+    if let Some(m) = &r.mission {
+        line.push_str(&format!("{m}: "));
+    }
+    line.push_str(&what);
+    if matches!(r.kind.as_str(), "action" | "event" | "fire" | "timer") {
+        if let Some(task) = &r.task {
+            line.push_str(&format!("  task={task}"));
+        }
+        if let Some(l) = &r.label {
+            line.push_str(&format!(":{l}"));
+        }
+        if let Some(src) = &r.src {
+            line.push_str(&format!("  at {src}"));
+        }
+    }
+    Some(line)
+}
+
+/// Writes records as JSON lines.
+pub struct TraceWriter {
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl TraceWriter {
+    /// Creates (truncates) the file.
+    pub fn create(path: &Path) -> std::io::Result<Self> {
+        if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        Ok(TraceWriter { out: std::io::BufWriter::new(std::fs::File::create(path)?) })
+    }
+
+    /// Appends one record.
+    pub fn write(&mut self, r: &Record) -> std::io::Result<()> {
+        serde_json::to_writer(&mut self.out, r)?;
+        self.out.write_all(b"\n")
+    }
+
+    /// Flushes to the file.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+/// Reads a JSONL trace. Errors name the line.
+pub fn read_trace(path: &Path) -> Result<Vec<Record>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    parse_trace(&text).map_err(|e| format!("{}:{e}", path.display()))
+}
+
+/// Parses JSONL trace text. Errors are `line: message`.
+pub fn parse_trace(text: &str) -> Result<Vec<Record>, String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        out.push(serde_json::from_str(line).map_err(|e| format!("{}: {e}", i + 1))?);
+    }
+    Ok(out)
+}

@@ -1,0 +1,469 @@
+//! `mcl run`: play a mission against a mock vehicle (virtual or real time)
+//! or a vehicle's AAC over TCP.
+//!
+//! Exit status: 0 mission ok, 1 mission fail, 2 usage, compile or I/O error,
+//! 3 mission stuck or time limit passed.
+
+use mcl_compiler::compile::{compile_file, CompileError};
+use mcl_compiler::diagnostics::render_human;
+use mcl_compiler::{check_file, Database, Db};
+use mcl_net::Net;
+use mcl_runtime::clock::Clock;
+use mcl_runtime::driver::{self, End, Limits, Session, Sink};
+use mcl_runtime::journal::{self, Entry, JournalWriter};
+use mcl_runtime::mock::MockVehicle;
+use mcl_runtime::player::{Output, Player, PlayerOptions};
+use mcl_runtime::scenario::Scenario;
+use mcl_runtime::trace::{live_line, Record, SourceMap, TraceWriter, Tracer};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Options of `mcl run`.
+#[derive(Debug, Default)]
+pub struct Options {
+    pub file: PathBuf,
+    pub mock: bool,
+    pub aac: Option<String>,
+    pub token: Option<String>,
+    pub scenario: Option<PathBuf>,
+    pub seed: Option<u64>,
+    pub virtual_time: bool,
+    pub speed: f64,
+    pub trace: Option<PathBuf>,
+    pub chronogram: Option<PathBuf>,
+    pub journal: Option<PathBuf>,
+    pub resume: Option<PathBuf>,
+    pub set: Vec<String>,
+    pub time_limit: Option<f64>,
+    pub mission: Option<String>,
+    pub quiet: bool,
+    pub verbose: bool,
+    pub crash_after: Option<u64>,
+}
+
+/// A loaded mission.
+pub struct LoadedMission {
+    pub name: String,
+    pub net: Net,
+}
+
+/// Loads the missions of an `.mcl` file (compiled in memory) or a `.pnml`
+/// file. On error, prints it (diagnostics like `mcl check`) and returns the
+/// exit status.
+pub fn load_missions(file: &Path) -> Result<Vec<LoadedMission>, u8> {
+    if !file.is_file() {
+        eprintln!("error: no such file: `{}`", file.display());
+        return Err(2);
+    }
+    if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml")) {
+        let text = std::fs::read_to_string(file).map_err(|e| {
+            eprintln!("error: cannot read `{}`: {e}", file.display());
+            2u8
+        })?;
+        let nets = mcl_net::read_pnml_nets(&text).map_err(|e| {
+            eprintln!("error: `{}`: {e}", file.display());
+            2u8
+        })?;
+        return Ok(nets.into_iter().map(|net| LoadedMission { name: net.name().to_string(), net }).collect());
+    }
+    let db = Database::new();
+    let f = db.file(file);
+    if f.text(&db).is_none() {
+        eprintln!("error: cannot read `{}` (is it UTF-8 text?)", file.display());
+        return Err(2);
+    }
+    match compile_file(&db, f) {
+        Ok(ms) => Ok(ms.into_iter().map(|m| LoadedMission { name: m.name, net: m.net }).collect()),
+        Err(CompileError::HasErrors) => {
+            let diags: Vec<_> = check_file(&db, f).iter().filter(|d| d.diag.is_error()).cloned().collect();
+            eprint!("{}", render_human(&db, &diags, std::io::stderr().is_terminal()));
+            eprintln!("error: `{}` has errors; nothing was run", file.display());
+            Err(2)
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            Err(2)
+        }
+    }
+}
+
+/// Parses `NAME=VALUE`; VALUE is JSON when it parses as JSON, a string otherwise.
+pub fn parse_set(s: &str) -> Result<(String, Value), String> {
+    let (k, v) = s.split_once('=').ok_or_else(|| format!("--set `{s}`: expected NAME=VALUE"))?;
+    let k = k.trim();
+    if k.is_empty() {
+        return Err(format!("--set `{s}`: the name is empty"));
+    }
+    let v = serde_json::from_str(v.trim()).unwrap_or_else(|_| Value::String(v.to_string()));
+    Ok((k.to_string(), v))
+}
+
+/// Trace file, live log and the records kept for the chronogram.
+struct RunSink {
+    trace: Option<TraceWriter>,
+    live: bool,
+    verbose: bool,
+    quiet_replay: bool,
+    records: Vec<Record>,
+    error: Option<String>,
+}
+
+impl Sink for RunSink {
+    fn record(&mut self, r: &Record) {
+        if let Some(w) = &mut self.trace {
+            if let Err(e) = w.write(r) {
+                self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        if self.live && !self.quiet_replay {
+            if let Some(line) = live_line(r, self.verbose) {
+                let mut out = std::io::stdout().lock();
+                let _ = writeln!(out, "{line}");
+                let _ = out.flush();
+            }
+        }
+        self.records.push(r.clone());
+    }
+}
+
+fn usage(msg: &str) -> u8 {
+    eprintln!("error: {msg}");
+    2
+}
+
+pub fn run(o: Options) -> u8 {
+    // Usage checks.
+    if o.mock == o.aac.is_some() {
+        return usage("give exactly one of --mock (in-process mock vehicle) and --aac HOST:PORT");
+    }
+    if o.virtual_time && !o.mock {
+        return usage("--virtual-time needs --mock (a real AAC runs in real time)");
+    }
+    if o.scenario.is_some() && !o.mock {
+        return usage(
+            "--scenario configures the in-process mock; use it with --mock (give it to `mcl mock-aac` otherwise)",
+        );
+    }
+    if !(o.speed.is_finite() && o.speed > 0.0) {
+        return usage("--speed must be a positive number");
+    }
+    if o.journal.is_some() && o.resume.is_some() {
+        return usage("--resume FILE continues the journal FILE; do not give --journal as well");
+    }
+    if o.time_limit.is_some_and(|t| !(t.is_finite() && t >= 0.0)) {
+        return usage("--time-limit must be a number of seconds ≥ 0");
+    }
+    let mut symbols: BTreeMap<String, Value> = BTreeMap::new();
+    let mut sets = Vec::new();
+    for s in &o.set {
+        match parse_set(s) {
+            Ok(kv) => sets.push(kv),
+            Err(e) => return usage(&e),
+        }
+    }
+
+    // The mission.
+    let missions = match load_missions(&o.file) {
+        Ok(m) => m,
+        Err(code) => return code,
+    };
+    if missions.is_empty() {
+        eprintln!("error: `{}` defines no mission", o.file.display());
+        return 2;
+    }
+    let several = missions.len() > 1;
+    let names: Vec<String> = missions.iter().map(|m| m.name.clone()).collect();
+    let chosen = match &o.mission {
+        Some(n) => match missions.into_iter().find(|m| &m.name == n) {
+            Some(m) => m,
+            None => {
+                return usage(&format!("`{}` has no mission `{n}` (missions: {})", o.file.display(), names.join(", ")))
+            }
+        },
+        None => {
+            if several {
+                eprintln!(
+                    "note: `{}` defines {} missions ({}); running the first, `{}` (pick one with --mission NAME)",
+                    o.file.display(),
+                    names.len(),
+                    names.join(", "),
+                    names[0]
+                );
+            }
+            missions.into_iter().next().expect("not empty")
+        }
+    };
+    if chosen.net.properties().iter().any(|(k, _)| k == "mission_param") {
+        eprintln!(
+            "warning: mission `{}` has parameters (a planner operator); its parameters are sent unresolved",
+            chosen.name
+        );
+    }
+    let net = Arc::new(chosen.net);
+    let mission_label = if several || chosen.name != "mission" { Some(chosen.name.clone()) } else { None };
+
+    // Journal to resume.
+    let resume_entries = match &o.resume {
+        Some(p) => match journal::read_journal(p) {
+            Ok(e) => Some(e),
+            Err(e) => return usage(&e),
+        },
+        None => None,
+    };
+    let fingerprint = journal::fingerprint(&net);
+    // The run id given to a TCP AAC: the journal's when resuming.
+    let run_id: Option<String> = match &resume_entries {
+        Some(entries) => match &entries[0] {
+            Entry::Header { run, .. } => run.clone(),
+            _ => None,
+        },
+        None => o.aac.is_some().then(mcl_runtime::tcp::new_id),
+    };
+
+    // Scenario, seeds and symbols.
+    let (scenario_text, scenario) = match (&resume_entries, &o.scenario) {
+        (Some(entries), given) => {
+            let Entry::Header { scenario, .. } = &entries[0] else { unreachable!("read_journal checks the header") };
+            if let (Some(p), Some(text)) = (given, scenario) {
+                if std::fs::read_to_string(p).ok().as_deref() != Some(text.as_str()) {
+                    return usage("--scenario differs from the scenario recorded in the journal");
+                }
+            }
+            match scenario {
+                Some(text) => match Scenario::from_toml(text, "scenario recorded in the journal") {
+                    Ok(s) => (Some(text.clone()), s),
+                    Err(e) => return usage(&e),
+                },
+                None => (None, Scenario::default()),
+            }
+        }
+        (None, Some(p)) => {
+            let text = match std::fs::read_to_string(p) {
+                Ok(t) => t,
+                Err(e) => return usage(&format!("cannot read scenario `{}`: {e}", p.display())),
+            };
+            match Scenario::from_toml(&text, &p.display().to_string()) {
+                Ok(s) => (Some(text), s),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 2;
+                }
+            }
+        }
+        (None, None) => (None, Scenario::default()),
+    };
+    let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
+    let mut mock_seed = scenario.seed.unwrap_or(seed);
+    symbols.extend(scenario.symbols.clone());
+    symbols.extend(sets);
+    if let Some(entries) = &resume_entries {
+        let Entry::Header { mission, seed: s, fingerprint: f, symbols: syms, mock_seed: ms, .. } = &entries[0] else {
+            unreachable!("read_journal checks the header")
+        };
+        if *f != fingerprint || *mission != chosen.name {
+            return usage(&format!(
+                "the journal was written by another mission or another version of it (journal: `{mission}` {f}; now: `{}` {fingerprint})",
+                chosen.name
+            ));
+        }
+        if o.seed.is_some_and(|x| x != *s) {
+            return usage(&format!("--seed {} differs from the journal's seed {s}", o.seed.unwrap_or_default()));
+        }
+        if !o.set.is_empty() && symbols != *syms {
+            return usage("--set differs from the symbols recorded in the journal");
+        }
+        seed = *s;
+        mock_seed = ms.unwrap_or(seed);
+        symbols = syms.clone();
+    }
+
+    let player = Player::new(net.clone(), PlayerOptions { seed, symbols: symbols.clone(), ..Default::default() });
+    let mut sources = SourceMap::new();
+    let tracer = Tracer::new(&net, mission_label, &mut sources);
+    let trace = match &o.trace {
+        Some(p) => match TraceWriter::create(p) {
+            Ok(w) => Some(w),
+            Err(e) => return usage(&format!("cannot write trace `{}`: {e}", p.display())),
+        },
+        None => None,
+    };
+    let mut sink =
+        RunSink { trace, live: !o.quiet, verbose: o.verbose, quiet_replay: false, records: Vec::new(), error: None };
+    if o.mock {
+        let called: Vec<String> = {
+            let mut v: Vec<String> =
+                net.transitions().iter().filter_map(|t| t.binding.as_ref().map(|b| b.task.clone())).collect();
+            v.sort();
+            v.dedup();
+            v
+        };
+        let labels: Vec<(String, String)> = net
+            .transitions()
+            .iter()
+            .filter_map(|t| t.binding.as_ref().and_then(|b| b.label.clone().map(|l| (b.task.clone(), l))))
+            .collect();
+        for w in scenario.check_against(&called, &labels) {
+            eprintln!("warning: {w}");
+        }
+    }
+    let mut mock = MockVehicle::from_net(&net, scenario, mock_seed);
+    mock.initial();
+
+    // Replay the journal.
+    let mut player = player;
+    let mut resend = Vec::new();
+    let mut offset = 0.0;
+    let mut journal_writer = None;
+    if let (Some(entries), Some(path)) = (&resume_entries, &o.resume) {
+        sink.quiet_replay = true;
+        let replayed = journal::replay(&mut player, entries, |input, outs| {
+            if let Some(m) = input.message() {
+                mock.take_delivered(&m);
+            }
+            for out in outs {
+                sink.record(&tracer.record(out));
+                if let Output::Send { t, action } = out {
+                    mock.on_action(*t, action);
+                }
+            }
+        });
+        sink.quiet_replay = false;
+        let replayed = match replayed {
+            Ok(r) => r,
+            Err(e) => return usage(&format!("cannot resume from `{}`: {e}", path.display())),
+        };
+        let _ = mock.take_warnings();
+        offset = replayed.last_time;
+        resend = replayed.unacknowledged();
+        if !o.quiet {
+            println!(
+                "[{offset:>10.3}] resumed from {}: {} inputs replayed, {} transitions fired, {} actions sent{}",
+                path.display(),
+                replayed.inputs,
+                player.fired_count(),
+                replayed.actions.len(),
+                if o.virtual_time || resend.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({} not acknowledged: sent again)", resend.len())
+                }
+            );
+        }
+        match JournalWriter::append_to(path) {
+            Ok(w) => journal_writer = Some(w),
+            Err(e) => return usage(&e),
+        }
+    } else if let Some(path) = &o.journal {
+        let header = Entry::Header {
+            version: journal::VERSION,
+            mission: chosen.name.clone(),
+            seed,
+            fingerprint: fingerprint.clone(),
+            symbols: symbols.clone(),
+            scenario: if o.mock { scenario_text.clone().or(Some(String::new())) } else { None },
+            mock_seed: o.mock.then_some(mock_seed),
+            run: run_id.clone(),
+            unix_start: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_secs_f64())
+                .unwrap_or(0.0),
+        };
+        match JournalWriter::create(path, &header) {
+            Ok(w) => journal_writer = Some(w),
+            Err(e) => return usage(&e),
+        }
+    }
+
+    let limits = Limits { time_limit: o.time_limit };
+    let mut session = Session::new(player, tracer, &mut sink);
+    session.journal = journal_writer;
+    session.crash_after = o.crash_after;
+    let result: Result<End, String> = if o.virtual_time {
+        driver::run_virtual(&mut session, &mut mock, limits)
+    } else {
+        let rt = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+            Ok(rt) => rt,
+            Err(e) => return usage(&format!("cannot start the runtime: {e}")),
+        };
+        let speed = o.speed;
+        let aac = o.aac.clone();
+        let token = o.token.clone();
+        let mission_name = chosen.name.clone();
+        rt.block_on(async {
+            let clock = Clock::new(speed, offset);
+            match aac {
+                None => {
+                    let (mut link, end) = mcl_runtime::link::pair();
+                    let server = tokio::spawn(driver::serve_mock(mock, end, clock, |w| eprintln!("warning: {w}")));
+                    let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
+                    drop(link);
+                    let _ = server.await;
+                    r
+                }
+                Some(addr) => {
+                    let opts = mcl_runtime::tcp::ConnectOptions {
+                        token,
+                        mission: mission_name,
+                        run: run_id,
+                        ..Default::default()
+                    };
+                    let (mut link, handle) = mcl_runtime::tcp::connect_with_handle(addr, opts);
+                    let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
+                    // Let the last actions reach the vehicle before leaving.
+                    let mcl_runtime::link::Link { actions, inbound } = link;
+                    drop(actions);
+                    match handle.await {
+                        Ok(Err(e)) => eprintln!("warning: {e}"),
+                        Err(e) => eprintln!("warning: the link task failed: {e}"),
+                        Ok(Ok(_)) => {}
+                    }
+                    drop(inbound);
+                    r
+                }
+            }
+        })
+    };
+    let end_time = session.player.now();
+    let fired = session.player.fired_count();
+    drop(session);
+
+    if let Some(w) = &mut sink.trace {
+        if let Err(e) = w.flush() {
+            sink.error.get_or_insert(format!("cannot write the trace: {e}"));
+        }
+    }
+    let end = match result {
+        Ok(end) => end,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    if let Some(p) = &o.chronogram {
+        let svg = mcl_runtime::chronogram::render(&sink.records, &mcl_runtime::chronogram::Options::default());
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        if let Err(e) = std::fs::write(p, svg) {
+            eprintln!("error: cannot write `{}`: {e}", p.display());
+            return 2;
+        }
+    }
+    if let Some(e) = sink.error {
+        eprintln!("error: {e}");
+        return 2;
+    }
+    let count = |k: &str| sink.records.iter().filter(|r| r.kind == k).count();
+    eprintln!(
+        "mission `{}`: {} at t={end_time:.3} s ({} actions, {} events, {} unexpected events, {fired} firings)",
+        chosen.name,
+        end.result().to_uppercase(),
+        count("action"),
+        count("event"),
+        count("unexpected_event"),
+    );
+    end.exit_code()
+}

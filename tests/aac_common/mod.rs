@@ -1,0 +1,291 @@
+//! Shared by the AAC tests: spawning AAC processes, a blocking raw client,
+//! and a conformance suite any AAC must pass (`mcl mock-aac` and the Python
+//! reference, `clients/python/mcl_aac.py`).
+
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use serde_json::{json, Value};
+
+pub const STEP: Duration = Duration::from_secs(10);
+
+pub fn mcl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mcl"))
+}
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh scratch folder.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mcl-aac-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A server process that prints `listening on ADDR` first on stdout; its
+/// standard error is collected line by line. Killed when dropped.
+pub struct Proc {
+    pub child: Child,
+    pub addr: String,
+    pub stderr: Arc<Mutex<Vec<String>>>,
+}
+
+impl Proc {
+    pub fn spawn(mut cmd: Command) -> Proc {
+        cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null());
+        let mut child = cmd.spawn().expect("cannot start the AAC process");
+        let stdout = child.stdout.take().unwrap();
+        let stderr = child.stderr.take().unwrap();
+        let lines = Arc::new(Mutex::new(Vec::new()));
+        let l = lines.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines() {
+                let Ok(line) = line else { break };
+                l.lock().unwrap().push(line);
+            }
+        });
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut r = BufReader::new(stdout);
+            let mut first = String::new();
+            let _ = r.read_line(&mut first);
+            let _ = tx.send(first);
+            let mut rest = Vec::new();
+            let _ = r.read_to_end(&mut rest);
+        });
+        let first = match rx.recv_timeout(STEP) {
+            Ok(f) => f,
+            Err(_) => {
+                let _ = child.kill();
+                panic!("no `listening on` line within {STEP:?}; stderr: {:?}", lines.lock().unwrap());
+            }
+        };
+        let Some(addr) = first.trim().strip_prefix("listening on ") else {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("unexpected first line {first:?}; stderr: {:?}", lines.lock().unwrap());
+        };
+        Proc { child, addr: addr.to_string(), stderr: lines }
+    }
+
+    pub fn log(&self) -> Vec<String> {
+        self.stderr.lock().unwrap().clone()
+    }
+
+    /// Waits until a stderr line satisfies `f` (bounded).
+    pub fn wait_log(&self, what: &str, f: impl Fn(&str) -> bool) {
+        let deadline = Instant::now() + STEP;
+        while Instant::now() < deadline {
+            if self.log().iter().any(|l| f(l)) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        panic!("never logged {what}; stderr:\n{}", self.log().join("\n"));
+    }
+
+    /// The seqs of the `executed seq=N` lines.
+    pub fn executed(&self) -> Vec<u64> {
+        seqs(&self.log(), "executed seq=")
+    }
+
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+pub fn seqs(lines: &[String], marker: &str) -> Vec<u64> {
+    lines
+        .iter()
+        .filter_map(|l| {
+            let rest = &l[l.find(marker)? + marker.len()..];
+            rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()
+        })
+        .collect()
+}
+
+/// Runs a command to completion within `limit`, returning (status code, stdout, stderr).
+pub fn run_bounded(mut cmd: Command, limit: Duration) -> (Option<i32>, String, String) {
+    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null());
+    let mut child = cmd.spawn().expect("cannot start command");
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let to = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let te = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
+    let deadline = Instant::now() + limit;
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s.code();
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            let (o, e) = (to.join().unwrap(), te.join().unwrap());
+            panic!("command did not finish within {limit:?}\nstdout:\n{o}\nstderr:\n{e}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    (status, to.join().unwrap(), te.join().unwrap())
+}
+
+/// A blocking JSON-lines client.
+pub struct Raw {
+    rd: BufReader<TcpStream>,
+    wr: TcpStream,
+}
+
+impl Raw {
+    pub fn connect(addr: &str) -> Raw {
+        let s = TcpStream::connect(addr).unwrap();
+        s.set_read_timeout(Some(STEP)).unwrap();
+        Raw { rd: BufReader::new(s.try_clone().unwrap()), wr: s }
+    }
+
+    pub fn send_raw(&mut self, b: &[u8]) {
+        self.wr.write_all(b).unwrap();
+    }
+
+    pub fn send(&mut self, v: Value) {
+        let mut s = v.to_string();
+        s.push('\n');
+        self.send_raw(s.as_bytes());
+    }
+
+    /// The next message; None when the peer closed.
+    pub fn recv(&mut self) -> Option<Value> {
+        let mut line = String::new();
+        match self.rd.read_line(&mut line) {
+            Ok(0) => None,
+            Ok(_) => Some(serde_json::from_str(line.trim_end()).unwrap_or_else(|e| panic!("{e}: {line:?}"))),
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => None,
+            Err(e) => panic!("no message within {STEP:?}: {e}"),
+        }
+    }
+
+    /// The next message that is not an event or a perception.
+    pub fn recv_reply(&mut self) -> Option<Value> {
+        loop {
+            let m = self.recv()?;
+            if m["type"] != "event" && m["type"] != "perception" {
+                return Some(m);
+            }
+        }
+    }
+
+    pub fn hello(&mut self, fields: Value) -> Value {
+        let mut h = json!({"type":"hello","version":1,"player":"conformance","mission":"mission","run":"conf"});
+        for (k, v) in fields.as_object().unwrap() {
+            h[k] = v.clone();
+        }
+        self.send(h);
+        self.recv().expect("closed after hello")
+    }
+}
+
+fn assert_error(m: &Option<Value>, code: &str, ctx: &str) {
+    let m = m.as_ref().unwrap_or_else(|| panic!("{ctx}: connection closed, expected error {code}"));
+    assert_eq!((m["type"].as_str(), m["code"].as_str()), (Some("error"), Some(code)), "{ctx}: {m}");
+    assert!(m["message"].as_str().is_some_and(|s| !s.is_empty()), "{ctx}: {m}");
+}
+
+/// The protocol rules every AAC must follow, checked over the wire. `token`
+/// is the server's token; `aac.executed()` must list executed seqs.
+/// `run` names the session used (fresh for each call).
+pub fn conformance(aac: &Proc, token: &str, run: &str) {
+    let addr = aac.addr.as_str();
+    // Version mismatch: error, then the AAC closes.
+    let mut c = Raw::connect(addr);
+    let e = c.hello(json!({"version": 99, "token": token, "run": run}));
+    assert_error(&Some(e), "version", "version 99");
+    assert_eq!(c.recv(), None, "closed after a version error");
+    // Token refusal.
+    for bad in [json!({"run": run}), json!({"token": "wrong", "run": run})] {
+        let mut c = Raw::connect(addr);
+        let e = c.hello(bad.clone());
+        assert_error(&Some(e), "unauthorized", &bad.to_string());
+        assert_eq!(c.recv(), None, "closed after unauthorized");
+    }
+    // Before hello: errors, connection kept.
+    let mut c = Raw::connect(addr);
+    c.send_raw(b"{\"type\":\"action\",\"seq\":1,\"action\":\"a\",\"primitive\":\"P\",\"command\":\"enable\"}\n");
+    assert_error(&c.recv(), "unexpected", "action before hello");
+    let w = c.hello(json!({"token": token, "run": run}));
+    assert_eq!(w["type"], "welcome", "{w}");
+    assert_eq!((w["version"].as_u64(), w["last_seq"].as_u64()), (Some(1), Some(0)), "{w}");
+    assert!(w["session"].as_str().is_some_and(|s| !s.is_empty()), "{w}");
+    // Malformed input: one error each, the session survives.
+    for (line, code) in [
+        (&b"{this is not json\n"[..], "malformed"),
+        (b"42\n", "malformed"),
+        (b"{\"seq\":3}\n", "malformed"),
+        (b"{\"type\":\"warp\"}\n", "unknown_type"),
+        (b"{\"type\":\"action\",\"seq\":9}\n", "malformed"),
+        (b"{\"type\":\"welcome\",\"version\":1,\"last_seq\":0}\n", "unexpected"),
+    ] {
+        c.send_raw(line);
+        assert_error(&c.recv_reply(), code, &String::from_utf8_lossy(line));
+    }
+    // A line over 64 KiB: error, discarded, the session survives.
+    let big = format!("{{\"type\":\"ping\",\"pad\":\"{}\"}}\n", "z".repeat(100_000));
+    c.send_raw(big.as_bytes());
+    assert_error(&c.recv_reply(), "too_long", "100 kB line");
+    c.send(json!({"type":"ping"}));
+    assert_eq!(c.recv_reply().unwrap(), json!({"type":"pong"}));
+    // Duplicates: acknowledged, executed once.
+    let before = aac.executed().len();
+    let act = |seq: u64| {
+        json!({"type":"action","seq":seq,"action":"enableGoto","primitive":"GotoPrimitive","command":"enable",
+               "params":{"way-point":[1,2]},"task":"Goto","call_site":3})
+    };
+    for seq in [1, 1, 2, 1, 2] {
+        c.send(act(seq));
+        assert_eq!(c.recv_reply().unwrap(), json!({"type":"ack","seq":seq}));
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(aac.executed().len() - before, 2, "each seq executed once:\n{}", aac.log().join("\n"));
+    drop(c);
+    // Same run again: the session is resumed, last_seq remembered.
+    let mut c = Raw::connect(addr);
+    let w = c.hello(json!({"token": token, "run": run}));
+    assert_eq!(w["last_seq"], 2, "{w}");
+    c.send(act(2));
+    assert_eq!(c.recv_reply().unwrap(), json!({"type":"ack","seq":2}));
+    c.send(json!({"type":"action","seq":3,"action":"disableGoto","primitive":"GotoPrimitive","command":"disable","task":"Goto"}));
+    assert_eq!(c.recv_reply().unwrap(), json!({"type":"ack","seq":3}));
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(aac.executed().len() - before, 3, "{}", aac.log().join("\n"));
+}
+
+/// The path of a file under the repository root.
+pub fn at_root(p: &str) -> PathBuf {
+    root().join(p)
+}
+
+pub fn exists(p: &Path) -> bool {
+    p.exists()
+}

@@ -1,0 +1,83 @@
+//! The Python reference AAC (`clients/python/mcl_aac.py`, standard library
+//! only) against the Rust side: protocol conformance over the wire, and a
+//! whole mission played by `mcl run --aac`.
+
+mod aac_common;
+
+use std::process::Command;
+use std::time::Duration;
+
+use aac_common::*;
+
+/// `python3`, or None (the test is then skipped, except under CI).
+fn python() -> Option<Command> {
+    let ok = Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(std::env::var_os("CI").is_none(), "python3 is required under CI");
+        eprintln!("python3 not found: skipped");
+        return None;
+    }
+    Some(Command::new("python3"))
+}
+
+fn python_aac(args: &[&str]) -> Option<Proc> {
+    let mut cmd = python()?;
+    cmd.arg(at_root("clients/python/mcl_aac.py")).args(["--listen", "127.0.0.1:0"]).args(args);
+    Some(Proc::spawn(cmd))
+}
+
+#[test]
+fn python_aac_conforms_to_the_protocol() {
+    let Some(aac) = python_aac(&["--token", "s3cret"]) else { return };
+    conformance(&aac, "s3cret", "python-conformance");
+}
+
+#[test]
+fn mission_completes_against_the_python_aac() {
+    let Some(aac) = python_aac(&["--token", "tok", "--delay", "0.05"]) else { return };
+    let mut cmd = mcl();
+    cmd.arg("run").args(["--aac", &aac.addr, "--token", "tok"]).arg(at_root("examples/extract-5-4.mcl"));
+    let (code, out, err) = run_bounded(cmd, Duration::from_secs(60));
+    let ctx = format!("stdout:\n{out}\nstderr:\n{err}\nAAC:\n{}", aac.log().join("\n"));
+    assert_eq!(code, Some(0), "{ctx}");
+    assert!(err.contains("mission `mission`: OK"), "{ctx}");
+    // Every action executed exactly once.
+    let executed = aac.executed();
+    let mut unique = executed.clone();
+    unique.sort_unstable();
+    unique.dedup();
+    assert_eq!(unique.len(), executed.len(), "{ctx}");
+    assert_eq!(unique, (1..=executed.len() as u64).collect::<Vec<_>>(), "{ctx}");
+}
+
+/// The survey mission, whose alarm monitor must never answer: mapped to
+/// nothing with --map-file, the others by the default naming.
+#[test]
+fn python_aac_event_mapping_from_a_file() {
+    let dir = scratch("python-map");
+    let map = dir.join("map.json");
+    std::fs::write(&map, r#"{"AlarmPrimitive": "", "TakeImagesPrimitive": ""}"#).unwrap();
+    let Some(aac) = python_aac(&[
+        "--map-file",
+        map.to_str().unwrap(),
+        "--map",
+        "AltitudePrimitive=eventAltitudeOk",
+        "--delay",
+        "0.05",
+    ]) else {
+        return;
+    };
+    let mut cmd = mcl();
+    cmd.arg("run").args(["--aac", &aac.addr]).arg(at_root("examples/survey.mcl")).args([
+        "--set",
+        "timeout=60",
+        "--set",
+        "altitude=2.5",
+        "--set",
+        "velocity=0.5",
+    ]);
+    let (code, out, err) = run_bounded(cmd, Duration::from_secs(60));
+    let ctx = format!("stdout:\n{out}\nstderr:\n{err}\nAAC:\n{}", aac.log().join("\n"));
+    assert_eq!(code, Some(0), "{ctx}");
+    assert!(!out.contains("EmergencySurfacePrimitive enable"), "the alarm never fires\n{ctx}");
+}
