@@ -173,21 +173,17 @@ impl Lsp {
 
     /// Reads one message; answers the server's own requests (registrations, refreshes).
     fn recv(&mut self, deadline: Instant) -> Option<Value> {
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.rx.recv_timeout(left) {
-                Ok(m) => {
-                    if m.get("method").is_some() && m.get("id").is_some() {
-                        let id = m["id"].clone();
-                        self.send(&json!({"jsonrpc": "2.0", "id": id, "result": null}));
-                        self.stash.push_back(m);
-                        continue;
-                    }
-                    return Some(m);
+        let left = deadline.saturating_duration_since(Instant::now());
+        match self.rx.recv_timeout(left) {
+            Ok(m) => {
+                if m.get("method").is_some() && m.get("id").is_some() {
+                    let id = m["id"].clone();
+                    self.send(&json!({"jsonrpc": "2.0", "id": id, "result": null}));
                 }
-                Err(RecvTimeoutError::Timeout) => return None,
-                Err(RecvTimeoutError::Disconnected) => panic!("the server closed its output"),
+                Some(m)
             }
+            Err(RecvTimeoutError::Timeout) => None,
+            Err(RecvTimeoutError::Disconnected) => panic!("the server closed its output"),
         }
     }
 
@@ -549,6 +545,44 @@ fn editing_the_vehicle_republishes_its_importers() {
 }
 
 #[test]
+fn a_vehicle_changed_on_disk_is_reloaded() {
+    let root = workspace("watched", &[("vehicle.mcl", VEHICLE), ("mission.mcl", MISSION)]);
+    let mut lsp = Lsp::start(&root);
+    lsp.initialize(client_caps());
+    // The server asks to watch MCL and PNML files.
+    let reg = lsp.wait_for("client/registerCapability", |_| true);
+    assert_eq!(reg["registrations"][0]["method"], "workspace/didChangeWatchedFiles");
+    lsp.open("mission.mcl", MISSION);
+    assert_eq!(lsp.diagnostics("mission.mcl", Some(1))["diagnostics"], json!([]));
+    std::fs::write(root.join("vehicle.mcl"), VEHICLE.replace("Void(): Instant", "Nothing(): Instant")).unwrap();
+    let uri = lsp.uri("vehicle.mcl");
+    lsp.notify("workspace/didChangeWatchedFiles", json!({"changes": [{"uri": uri, "type": 2}]}));
+    let d = lsp.wait_for("textDocument/publishDiagnostics", |p| {
+        p["uri"].as_str().unwrap().ends_with("/mission.mcl")
+            && p["diagnostics"].as_array().is_some_and(|d| !d.is_empty())
+    });
+    assert_eq!(d["diagnostics"][0]["code"], "E0101", "{d}");
+    assert_eq!(lsp.shutdown(), 0);
+}
+
+#[test]
+fn exit_without_shutdown_is_status_1() {
+    let root = workspace("exit", &[]);
+    let mut lsp = Lsp::start(&root);
+    lsp.initialize(client_caps());
+    lsp.notify("exit", Value::Null);
+    let deadline = Instant::now() + TIMEOUT;
+    loop {
+        if let Some(s) = lsp.child.try_wait().unwrap() {
+            assert_eq!(s.code(), Some(1));
+            break;
+        }
+        assert!(Instant::now() < deadline, "the server did not exit");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
 fn pull_diagnostics_when_the_client_supports_them() {
     let broken = MISSION.replace("Goto( [0, 0] )", "Goto( 0, 0 )");
     let root = workspace("pull", &[("vehicle.mcl", VEHICLE), ("mission.mcl", &broken)]);
@@ -586,7 +620,9 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
     lsp.initialize(client_caps());
     lsp.open("mission.mcl", MISSION);
     let uri = lsp.uri("mission.mcl");
-    let mut rng = Rng(0x5eed_1234_abcd);
+    // Another seed: MCL_LSP_FUZZ_SEED=n.
+    let seed = std::env::var("MCL_LSP_FUZZ_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0x5eed_1234_abcd);
+    let mut rng = Rng(seed | 1);
     let pieces = [
         "{", "}", "(", ")", "[", "]", ";", ":", ",", "->", "→", "é", "𝄞", "\n", " ", "Goto", "mission", "tasks {",
         "/*", "*/", "//", "\"", "0", "-1.5", "a: ", "e: ", "parallel", "and", "or",
@@ -602,9 +638,18 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
     ];
     let mut version = 1;
     let started = Instant::now();
-    for step in 0..300 {
-        if started.elapsed() > Duration::from_secs(120) {
+    for step in 0..1500 {
+        if started.elapsed() > Duration::from_secs(90) {
             break;
+        }
+        if step % 200 == 199 {
+            // Close and reopen the document.
+            lsp.notify("textDocument/didClose", json!({"textDocument": {"uri": uri}}));
+            version += 1;
+            let reopened =
+                json!({"textDocument": {"uri": uri, "languageId": "mcl", "version": version, "text": MISSION}});
+            lsp.notify("textDocument/didOpen", reopened);
+            continue;
         }
         match rng.below(10) {
             0..=4 => {
@@ -627,6 +672,7 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
                 }
                 let r = lsp.request_full(m, params);
                 assert!(r.get("result").is_some() || r.get("error").is_some(), "{r}");
+                assert_ne!(r["error"]["code"], -32603, "a feature failed: {r}");
             }
             8 => {
                 let uri = uri.clone();
@@ -646,6 +692,7 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
                 let (m, p) = whole[rng.below(whole.len() as u64) as usize].clone();
                 let r = lsp.request_full(m, p);
                 assert!(r.get("result").is_some() || r.get("error").is_some(), "{r}");
+                assert_ne!(r["error"]["code"], -32603, "a feature failed: {r}");
             }
             _ => {
                 // Malformed: wrong params, unknown documents and methods, broken JSON.
@@ -660,6 +707,7 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
                             lsp.at("nowhere.mcl", json!({"line": 3, "character": 2})),
                         );
                         assert!(r.get("result").is_some() || r.get("error").is_some(), "{r}");
+                        assert_ne!(r["error"]["code"], -32603, "a feature failed: {r}");
                     }
                     2 => {
                         let r = lsp.request_full("mcl/unknownMethod", json!([1, 2]));

@@ -8,6 +8,7 @@
 pub mod analysis;
 pub mod central;
 pub mod compact;
+pub mod decentral;
 pub mod error;
 pub mod model;
 pub mod source;
@@ -17,6 +18,7 @@ pub mod verify;
 
 pub use analysis::{analyze, analyze_with, AnalyzeOptions, Problem, Report, Verdict};
 pub use central::{centralize, Part, Plant};
+pub use decentral::{decentralize, VehicleNet};
 pub use error::CoordError;
 pub use model::{Activity, CallRef, Constraint, ConstraintKind, Mission};
 pub use supervisor::{Origin, Supervisor};

@@ -28,7 +28,7 @@
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, SolverModel};
 use mcl_net::structural::{max_siphon_within, max_trap_within, p_invariants, Limits};
-use mcl_net::{Net, NetBuilder, PlaceId, TransitionId};
+use mcl_net::{Net, NetBuilder, PlaceId};
 use serde::Serialize;
 
 use crate::central::Plant;

@@ -445,6 +445,7 @@ struct Effect {
 
 struct Product<'a> {
     quots: &'a [Quotient],
+    can_end: &'a [bool],
     effects: &'a [Effect],
     cap: u32,
     nv: usize,
@@ -456,8 +457,27 @@ impl Product<'_> {
     }
 
     /// Successors of `st`: (next state, vehicle, label, pessimistic).
-    fn successors(&self, st: &[u32], out: &mut Vec<(Vec<u32>, usize, u32, bool)>, over: &mut bool) {
-        for v in 0..self.nv {
+    /// A vehicle whose moves form a persistent set in `st`: not ended, able
+    /// to end alone, and every move of its class a silent unguarded step
+    /// (independent of every other vehicle and of the supervisor places,
+    /// and never disabled by them).
+    fn ample_vehicle(&self, st: &[u32]) -> Option<usize> {
+        (0..self.nv).find(|&v| {
+            let q = &self.quots[v];
+            let c = st[v];
+            self.can_end[v] && !q.fin[c as usize] && !q.out(c).is_empty() && q.out(c).iter().all(|&(l, _)| l == TAU)
+        })
+    }
+
+    /// Successors of `st` by the moves of the vehicles in `vehicles`.
+    fn successors(
+        &self,
+        st: &[u32],
+        vehicles: std::ops::Range<usize>,
+        out: &mut Vec<(Vec<u32>, usize, u32, bool)>,
+        over: &mut bool,
+    ) {
+        for v in vehicles {
             let q = st[v];
             let qt = &self.quots[v];
             let any_gate_allowed = || qt.gates[q as usize].iter().any(|&g| self.allowed(st, g));
@@ -547,7 +567,22 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
     while i < index.len() {
         let st = g.state(i as u32).to_vec();
         succ.clear();
-        p.successors(&st, &mut succ, &mut g.over);
+        // Partial-order reduction: the moves of one vehicle only, when they
+        // form a persistent set and all lead to new states (which keeps
+        // every cycle through a fully expanded state). Dead states and the
+        // reachability of the end are preserved (docs/coordination.md).
+        let mut reduced = false;
+        if let Some(v) = p.ample_vehicle(&st) {
+            p.successors(&st, v..v + 1, &mut succ, &mut g.over);
+            if succ.iter().all(|(x, ..)| !index.contains_key(x)) {
+                reduced = true;
+            } else {
+                succ.clear();
+            }
+        }
+        if !reduced {
+            p.successors(&st, 0..p.nv, &mut succ, &mut g.over);
+        }
         if succ.is_empty() {
             g.dead.push(i as u32);
         }
@@ -642,7 +677,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
     loop {
         stats.counter_cap = cap;
-        let prod = Product { quots: &quots, effects: &effects, cap, nv: missions.len() };
+        let prod = Product { quots: &quots, can_end: &can_end, effects: &effects, cap, nv: missions.len() };
         let mut init: Vec<u32> = quots.iter().map(|q| q.block[0]).collect();
         init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
         let g = explore_product(&prod, init, opts.max_product_states);

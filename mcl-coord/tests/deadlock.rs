@@ -180,9 +180,10 @@ fn brute_force_minimal_siphons(net: &Net) -> usize {
     assert!(n <= 20);
     let is_siphon = |set: u32| {
         set != 0
-            && net.place_ids().filter(|p| set & (1 << p.0) != 0).all(|p| {
-                net.producers(p).iter().all(|&t| net.pre(t).iter().any(|(q, _)| set & (1 << q.0) != 0))
-            })
+            && net
+                .place_ids()
+                .filter(|p| set & (1 << p.0) != 0)
+                .all(|p| net.producers(p).iter().all(|&t| net.pre(t).iter().any(|(q, _)| set & (1 << q.0) != 0)))
     };
     let siphons: Vec<u32> = (1..(1u32 << n)).filter(|&s| is_siphon(s)).collect();
     siphons.iter().filter(|&&s| !siphons.iter().any(|&o| o != s && o & s == o)).count()

@@ -125,6 +125,7 @@ fn in_process(text: &str) {
     println!("  speed-up over scratch (p50):    {:.1}x", sp50 / f50);
     // Where the time goes: the parse alone, and the parse of one mission.
     let mut parse = Vec::new();
+    let mut lex = Vec::new();
     let mut item = Vec::new();
     let one = &text[sites[sites.len() / 2] - 20..];
     let one = &one[..one.find("\n}\n").map_or(one.len(), |i| i + 3)];
@@ -133,10 +134,14 @@ fn in_process(text: &str) {
         std::hint::black_box(mcl_syntax::parse(text));
         parse.push(t.elapsed().as_secs_f64() * 1e3);
         let t = Instant::now();
+        std::hint::black_box(mcl_syntax::lexer::lex(text));
+        lex.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
         std::hint::black_box(mcl_syntax::parse(one));
         item.push(t.elapsed().as_secs_f64() * 1e3);
     }
     println!("  mcl_syntax::parse, whole file:  p50 {:.2} ms", percentile(&mut parse, 0.5));
+    println!("  mcl_syntax::lexer::lex, whole:  p50 {:.2} ms", percentile(&mut lex, 0.5));
     println!(
         "  mcl_syntax::parse, one mission: p50 {:.3} ms ({} lines)",
         percentile(&mut item, 0.5),
@@ -161,7 +166,10 @@ fn in_process(text: &str) {
     use mcl_lsp::analysis::{completion, hover, navigation, outline, semantic};
     time("hover (task call):", &mut || assert!(hover::hover(&a, f, call).is_some()));
     time("definition (task call):", &mut || assert_eq!(navigation::goto_definition(&a, f, call).len(), 1));
-    time("references (task, ~900 uses):", &mut || assert!(navigation::references(&a, f, call, true).len() > 100));
+    let uses = navigation::references(&a, f, call, true).len();
+    time(&format!("references (`Goto`, {uses}):"), &mut || {
+        assert!(navigation::references(&a, f, call, true).len() > 100)
+    });
     time("completion (statement):", &mut || assert!(!completion::completion(&a, f, stmt, true).is_empty()));
     time("semantic tokens (full):", &mut || assert!(!semantic::semantic_tokens(&a, f).is_empty()));
     time("document symbols:", &mut || assert!(!outline::document_symbols(&a, f).is_empty()));

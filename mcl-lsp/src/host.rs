@@ -14,11 +14,26 @@ use tower_lsp_server::ls_types::{FileChangeType, FileEvent, TextDocumentContentC
 /// A change of the server's inputs, in protocol order.
 #[derive(Debug)]
 pub enum Edit {
-    Open { uri: Uri, version: i32, text: String },
-    Change { uri: Uri, version: i32, changes: Vec<TextDocumentContentChangeEvent> },
-    Close { uri: Uri },
-    Watched { changes: Vec<FileEvent> },
-    Workspace { roots: Vec<PathBuf> },
+    Open {
+        uri: Uri,
+        version: i32,
+        text: String,
+    },
+    Change {
+        uri: Uri,
+        version: i32,
+        changes: Vec<TextDocumentContentChangeEvent>,
+    },
+    Close {
+        uri: Uri,
+    },
+    Watched {
+        changes: Vec<FileEvent>,
+    },
+    /// The `*.mcl` files of the workspace folders (see [`scan_workspace`]).
+    Workspace {
+        files: Vec<PathBuf>,
+    },
 }
 
 /// A read-only view: never keep one across an `.await`, and drop it soon:
@@ -143,12 +158,7 @@ impl Host {
                         s.pending.push((generation, path));
                     }
                 }
-                Edit::Workspace { roots } => {
-                    let mut files = Vec::new();
-                    let mut seen = HashSet::new();
-                    for r in roots {
-                        walk(&r, &mut files, &mut seen, 0);
-                    }
+                Edit::Workspace { files } => {
                     Arc::make_mut(&mut s.world).workspace_files = Arc::new(files);
                 }
             }
@@ -170,8 +180,20 @@ pub fn apply_change(text: &mut String, change: TextDocumentContentChangeEvent) {
     }
 }
 
-fn walk(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut HashSet<PathBuf>, depth: usize) {
-    if depth > 12 || out.len() >= MAX_WORKSPACE_FILES {
+/// The `*.mcl` files under the workspace folders (sorted, without hidden
+/// folders and build output; at most 5,000 files, 12 levels and 5 seconds).
+pub fn scan_workspace(roots: &[PathBuf]) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut seen = HashSet::new();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    for r in roots {
+        walk(r, &mut files, &mut seen, 0, deadline);
+    }
+    files
+}
+
+fn walk(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut HashSet<PathBuf>, depth: usize, deadline: std::time::Instant) {
+    if depth > 12 || out.len() >= MAX_WORKSPACE_FILES || std::time::Instant::now() > deadline {
         return;
     }
     let Ok(rd) = std::fs::read_dir(dir) else { return };
@@ -183,7 +205,7 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut HashSet<PathBuf>, depth: 
         let Ok(ft) = e.file_type() else { continue };
         if ft.is_dir() {
             if !name.starts_with('.') && name != "target" && name != "node_modules" {
-                walk(&path, out, seen, depth + 1);
+                walk(&path, out, seen, depth + 1, deadline);
             }
         } else if path.extension().is_some_and(|x| x == "mcl") && out.len() < MAX_WORKSPACE_FILES {
             let p = mcl_compiler::db::normalize(&path);

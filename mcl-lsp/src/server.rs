@@ -44,6 +44,9 @@ struct Shared {
     edits: std::sync::Mutex<mpsc::Sender<(u64, Edit)>>,
     /// `shutdown` was received (the exit status is 0 only then).
     shut_down: AtomicBool,
+    /// `exit` was received: stop at once, even with handlers still waiting
+    /// for the client (a registration it never answered).
+    exit: tokio::sync::Notify,
 }
 
 impl Shared {
@@ -136,7 +139,12 @@ impl LanguageServer for Backend {
         }
         roots.retain(|r| r.is_dir());
         if !roots.is_empty() {
-            self.shared.enqueue(Edit::Workspace { roots });
+            // Off the edit path: a large folder must not delay the first edits.
+            let shared = self.shared.clone();
+            std::thread::spawn(move || {
+                let files = crate::host::scan_workspace(&roots);
+                shared.enqueue(Edit::Workspace { files });
+            });
         }
 
         let capabilities = ServerCapabilities {
@@ -427,6 +435,9 @@ impl tower::Service<Request> for Ordered {
             }
             return Box::pin(async { Ok(None) });
         }
+        if req.method() == "exit" {
+            self.shared.exit.notify_one();
+        }
         self.inner.call(req)
     }
 }
@@ -601,6 +612,7 @@ pub fn service() -> (Ordered, tower_lsp_server::ClientSocket) {
         enqueued: AtomicU64::new(0),
         edits: std::sync::Mutex::new(edit_tx),
         shut_down: AtomicBool::new(false),
+        exit: tokio::sync::Notify::new(),
     });
     let (applied_tx, applied_rx) = watch::channel(0u64);
     let (wake_tx, wake_rx) = mpsc::channel();
@@ -706,7 +718,10 @@ where
 {
     let (service, socket) = service();
     let shared = service.shared.clone();
-    Server::new(sanitized(input), output, socket).serve(service).await;
+    tokio::select! {
+        _ = Server::new(sanitized(input), output, socket).serve(service) => {}
+        _ = shared.exit.notified() => {}
+    }
     shared.shut_down.load(Ordering::SeqCst)
 }
 

@@ -1,7 +1,7 @@
 //! Times planning in-process (parse + ground + search, no process start-up)
 //! for the benchmark script: prints one JSON line.
 //!
-//! `cargo run --release -p mcl-plan --example plan_time -- DOMAIN PROBLEM bfs|ucs|astar-hadd|astar-hmax [REPEAT]`
+//! `cargo run --release -p mcl-plan --example plan_time -- DOMAIN PROBLEM bfs|ucs|astar-hadd|astar-hmax|gbfs-hadd [REPEAT]`
 
 use mcl_plan::{Algorithm, Heuristic, Outcome};
 use std::time::Instant;
@@ -9,7 +9,7 @@ use std::time::Instant;
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
     if a.len() < 3 {
-        eprintln!("usage: plan_time DOMAIN PROBLEM bfs|ucs|astar-hadd|astar-hmax [REPEAT]");
+        eprintln!("usage: plan_time DOMAIN PROBLEM bfs|ucs|astar-hadd|astar-hmax|gbfs-hadd [REPEAT]");
         std::process::exit(2);
     }
     let alg = match a[2].as_str() {
@@ -17,6 +17,7 @@ fn main() {
         "ucs" => Algorithm::Ucs,
         "astar-hadd" => Algorithm::Astar(Heuristic::Add),
         "astar-hmax" => Algorithm::Astar(Heuristic::Max),
+        "gbfs-hadd" => Algorithm::Greedy(Heuristic::Add),
         other => {
             eprintln!("unknown search {other}");
             std::process::exit(2);
@@ -40,12 +41,13 @@ fn main() {
         if secs < best {
             best = secs;
             line = format!(
-                "{{\"seconds\": {secs:.6}, \"cost\": {cost}, \"expanded\": {}, \"states\": {}, \"actions\": {}, \"facts\": {}, \"ground_s\": {:.6}}}",
+                "{{\"seconds\": {secs:.6}, \"cost\": {cost}, \"expanded\": {}, \"states\": {}, \"actions\": {}, \"facts\": {}, \"ground_s\": {:.6}, \"search_s\": {:.6}}}",
                 s.stats.expanded,
                 s.stats.states,
                 s.actions,
                 s.facts,
-                s.ground_time.as_secs_f64()
+                s.ground_time.as_secs_f64(),
+                s.search_time.as_secs_f64()
             );
         }
     }

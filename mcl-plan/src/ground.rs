@@ -130,9 +130,12 @@ impl Types {
     fn new(d: &Domain) -> Result<Types, String> {
         let mut ids = HashMap::new();
         ids.insert(OBJECT.to_string(), 0);
-        for (t, _) in &d.types {
-            let n = ids.len();
-            ids.entry(t.clone()).or_insert(n);
+        // Supertypes named only after `-` are types too (subtypes of `object`).
+        for (t, p) in &d.types {
+            for x in [t, p] {
+                let n = ids.len();
+                ids.entry(x.clone()).or_insert(n);
+            }
         }
         let mut parent = vec![0; ids.len()];
         for (t, p) in &d.types {

@@ -418,7 +418,7 @@ impl<'a> P<'a> {
     /// True when `e` is written as an object term (for `=`).
     fn is_object_term(e: &Sexpr) -> bool {
         match e.atom() {
-            Some(a) => !is_number(&a) && !(a.starts_with('?') && a.contains('.')),
+            Some(a) => !(is_number(&a) || a.starts_with('?') && a.contains('.')),
             None => false,
         }
     }
@@ -756,13 +756,8 @@ pub fn parse_domain(file: &str, text: &str) -> Result<Domain, Vec<Error>> {
 /// Domain-level checks: known types, predicates with the right arity.
 fn check_domain(p: &P<'_>, d: &Domain) -> Vec<Error> {
     let mut errs = Vec::new();
-    let file_err = |msg: String| Error { file: d.file.clone(), line: 0, column: 0, message: msg };
-    let types: HashSet<&str> = d.types.iter().map(|(t, _)| t.as_str()).chain([OBJECT]).collect();
-    for (t, parent) in &d.types {
-        if !types.contains(parent.as_str()) {
-            errs.push(file_err(format!("type `{t}` has the undeclared supertype `{parent}`")));
-        }
-    }
+    // A supertype named after `-` is declared by that use (a subtype of `object`).
+    let types: HashSet<&str> = d.types.iter().flat_map(|(t, p)| [t.as_str(), p.as_str()]).chain([OBJECT]).collect();
     let check_types = |errs: &mut Vec<Error>, tn: &TypedName, line: usize| {
         for t in &tn.types {
             if !types.contains(t.as_str()) {

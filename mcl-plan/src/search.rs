@@ -22,6 +22,9 @@ pub enum Algorithm {
     /// A* with a heuristic: cheapest plan with h_max (admissible); h_add is
     /// not admissible, so A*/h_add plans are usually, not always, cheapest.
     Astar(Kind),
+    /// Greedy best-first search on the heuristic alone (seed 7.3.1.2 names
+    /// best-first search): no cost guarantee, fastest on large problems.
+    Greedy(Kind),
 }
 
 impl Algorithm {
@@ -74,6 +77,35 @@ pub struct Space<'t> {
     always: Vec<u32>,
     goal_mask: Vec<u64>,
     goal_neg_mask: Vec<u64>,
+    /// Per action, CSR: (word, bits that must be set, bits that must be clear).
+    cond_start: Vec<u32>,
+    conds: Vec<(u32, u64, u64)>,
+    /// Per action, CSR: (word, bits deleted, bits added).
+    eff_start: Vec<u32>,
+    effs: Vec<(u32, u64, u64)>,
+}
+
+/// Groups two fact lists by 64-bit word: (word, mask of the first, mask of the second).
+fn by_word(a: &[u32], b: &[u32]) -> Vec<(u32, u64, u64)> {
+    let mut v: Vec<(u32, u64, u64)> = Vec::new();
+    for (&f, first) in a.iter().map(|f| (f, true)).chain(b.iter().map(|f| (f, false))) {
+        let w = f >> 6;
+        let bit = 1u64 << (f & 63);
+        let k = match v.iter().position(|e| e.0 == w) {
+            Some(k) => k,
+            None => {
+                v.push((w, 0, 0));
+                v.len() - 1
+            }
+        };
+        if first {
+            v[k].1 |= bit;
+        } else {
+            v[k].2 |= bit;
+        }
+    }
+    v.sort_unstable_by_key(|e| e.0);
+    v
 }
 
 fn splitmix(x: &mut u64) -> u64 {
@@ -82,11 +114,6 @@ fn splitmix(x: &mut u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-#[inline]
-fn test(s: &[u64], f: u32) -> bool {
-    s[(f >> 6) as usize] >> (f & 63) & 1 == 1
 }
 
 impl<'t> Space<'t> {
@@ -129,7 +156,27 @@ impl<'t> Space<'t> {
         for &g in &task.goal_neg {
             goal_neg_mask[(g >> 6) as usize] |= 1 << (g & 63);
         }
-        Space { task, w, zobrist, watch_start, watch, always, goal_mask, goal_neg_mask }
+        let (mut cond_start, mut conds, mut eff_start, mut effs) = (vec![0u32], Vec::new(), vec![0u32], Vec::new());
+        for a in &task.actions {
+            conds.extend(by_word(&a.pre, &a.pre_neg));
+            cond_start.push(conds.len() as u32);
+            effs.extend(by_word(&a.del, &a.add));
+            eff_start.push(effs.len() as u32);
+        }
+        Space {
+            task,
+            w,
+            zobrist,
+            watch_start,
+            watch,
+            always,
+            goal_mask,
+            goal_neg_mask,
+            cond_start,
+            conds,
+            eff_start,
+            effs,
+        }
     }
 
     /// Words per state.
@@ -157,8 +204,11 @@ impl<'t> Space<'t> {
 
     #[inline]
     pub fn applicable(&self, s: &[u64], a: u32) -> bool {
-        let ga = &self.task.actions[a as usize];
-        ga.pre.iter().all(|&f| test(s, f)) && !ga.pre_neg.iter().any(|&f| test(s, f))
+        let (b, e) = (self.cond_start[a as usize] as usize, self.cond_start[a as usize + 1] as usize);
+        self.conds[b..e].iter().all(|&(w, set, clear)| {
+            let x = s[w as usize];
+            x & set == set && x & clear == 0
+        })
     }
 
     /// Calls `f` with every action applicable in `s`.
@@ -182,24 +232,34 @@ impl<'t> Space<'t> {
     /// Writes the successor of `s` by `a` into `out`; returns its hash.
     #[inline]
     pub fn apply(&self, s: &[u64], h: u64, a: u32, out: &mut [u64]) -> u64 {
-        out.copy_from_slice(s);
-        let ga = &self.task.actions[a as usize];
+        copy(out, s);
         let mut h = h;
-        for &f in ga.del.iter() {
-            let (w, b) = ((f >> 6) as usize, f & 63);
-            if out[w] >> b & 1 == 1 {
-                out[w] &= !(1 << b);
-                h ^= self.zobrist[f as usize];
-            }
-        }
-        for &f in ga.add.iter() {
-            let (w, b) = ((f >> 6) as usize, f & 63);
-            if out[w] >> b & 1 == 0 {
-                out[w] |= 1 << b;
-                h ^= self.zobrist[f as usize];
+        let (b, e) = (self.eff_start[a as usize] as usize, self.eff_start[a as usize + 1] as usize);
+        for &(w, del, add) in &self.effs[b..e] {
+            let old = out[w as usize];
+            let new = (old & !del) | add;
+            out[w as usize] = new;
+            let mut diff = old ^ new;
+            while diff != 0 {
+                h ^= self.zobrist[(w as usize) * 64 + diff.trailing_zeros() as usize];
+                diff &= diff - 1;
             }
         }
         h
+    }
+}
+
+/// Word-by-word equality (short states: cheaper than a `memcmp` call).
+#[inline(always)]
+fn same(a: &[u64], b: &[u64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x == y)
+}
+
+/// Word-by-word copy (short states: cheaper than a `memmove` call).
+#[inline(always)]
+fn copy(dst: &mut [u64], src: &[u64]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
     }
 }
 
@@ -214,6 +274,14 @@ struct Store {
     h: Vec<u64>,
     table: Vec<u32>,
     mask: usize,
+    /// 64 - log2(table size): slots are the high bits of a multiplicative mix
+    /// (Zobrist hashes are linear, their low bits alone cluster).
+    shift: u32,
+}
+
+#[inline(always)]
+fn slot(hash: u64, shift: u32) -> usize {
+    (hash >> shift) as usize
 }
 
 const EMPTY: u32 = u32::MAX;
@@ -230,6 +298,7 @@ impl Store {
             h: Vec::new(),
             table: vec![EMPTY; 1024],
             mask: 1023,
+            shift: 64 - 10,
         }
     }
     fn len(&self) -> usize {
@@ -242,8 +311,9 @@ impl Store {
         let n = self.table.len() * 2;
         self.table = vec![EMPTY; n];
         self.mask = n - 1;
+        self.shift -= 1;
         for id in 0..self.len() {
-            let mut i = self.hashes[id] as usize & self.mask;
+            let mut i = slot(self.hashes[id], self.shift);
             while self.table[i] != EMPTY {
                 i = (i + 1) & self.mask;
             }
@@ -256,7 +326,7 @@ impl Store {
         if (self.len() + 1) * 2 > self.table.len() {
             self.grow();
         }
-        let mut i = hash as usize & self.mask;
+        let mut i = slot(hash, self.shift);
         loop {
             let id = self.table[i];
             if id == EMPTY {
@@ -270,7 +340,7 @@ impl Store {
                 self.h.push(0);
                 return (nid, true);
             }
-            if self.hashes[id as usize] == hash && self.state(id) == s {
+            if self.hashes[id as usize] == hash && same(self.state(id), s) {
                 return (id, false);
             }
             i = (i + 1) & self.mask;
@@ -306,13 +376,32 @@ pub fn search_from(task: &Task, init: &[u32], alg: Algorithm, max_states: u64) -
     stats.states = 1;
     let outcome = match alg {
         Algorithm::Bfs => bfs(&sp, &mut store, &mut stats, max_states),
-        Algorithm::Ucs => best_first(&sp, &mut store, &mut stats, max_states, None),
+        Algorithm::Ucs => best_first(&sp, &mut store, &mut stats, max_states, None, false),
         Algorithm::Astar(k) => {
             let mut h = Relaxed::new(task, k);
-            best_first(&sp, &mut store, &mut stats, max_states, Some(&mut h))
+            best_first(&sp, &mut store, &mut stats, max_states, Some(&mut h), false)
+        }
+        Algorithm::Greedy(k) => {
+            let mut h = Relaxed::new(task, k);
+            best_first(&sp, &mut store, &mut stats, max_states, Some(&mut h), true)
         }
     };
     stats.states = store.len() as u64;
+    if std::env::var("MCL_PLAN_PROBES").is_ok() {
+        let mut tot = 0usize;
+        for (i, &id) in store.table.iter().enumerate() {
+            if id != EMPTY {
+                let s0 = slot(store.hashes[id as usize], store.shift);
+                tot += (i + store.table.len() - s0) & store.mask;
+            }
+        }
+        eprintln!(
+            "avg displacement {} over {} states, table {}",
+            tot as f64 / store.len() as f64,
+            store.len(),
+            store.table.len()
+        );
+    }
     Result { outcome, stats }
 }
 
@@ -328,7 +417,7 @@ fn bfs(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) ->
     while next < store.len() {
         let id = next as u32;
         next += 1;
-        cur.copy_from_slice(store.state(id));
+        copy(&mut cur, store.state(id));
         let (h, g) = (store.hashes[id as usize], store.g[id as usize]);
         stats.expanded += 1;
         let mut limit = false;
@@ -357,14 +446,17 @@ fn bfs(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) ->
     Outcome::Unsolvable
 }
 
+/// Uniform-cost search (no heuristic), A* (f = g + h) or greedy best-first (f = h).
 fn best_first(
     sp: &Space<'_>,
     store: &mut Store,
     stats: &mut Stats,
     max_states: u64,
     mut heur: Option<&mut Relaxed>,
+    greedy: bool,
 ) -> Outcome {
     let w = sp.w;
+    let key = |g: u64, h: u64| if greedy { h } else { g.saturating_add(h) };
     // (f, h, id): lowest f, then lowest h, then oldest node.
     let mut open: BinaryHeap<Reverse<(u64, u64, u32)>> = BinaryHeap::new();
     let h0 = match heur.as_deref_mut() {
@@ -385,10 +477,10 @@ fn best_first(
     let mut closed: Vec<bool> = vec![false; 1];
     while let Some(Reverse((f, h, id))) = open.pop() {
         let g = store.g[id as usize];
-        if f != g.saturating_add(h) || h != store.h[id as usize] || closed[id as usize] {
+        if f != key(g, h) || h != store.h[id as usize] || closed[id as usize] {
             continue; // stale entry
         }
-        cur.copy_from_slice(store.state(id));
+        copy(&mut cur, store.state(id));
         if sp.is_goal(&cur) {
             return Outcome::Plan(store.path(id));
         }
@@ -416,18 +508,18 @@ fn best_first(
                     stats.dead_ends += 1;
                     closed[c] = true;
                 } else {
-                    open.push(Reverse((ng.saturating_add(hv), hv, cid)));
+                    open.push(Reverse((key(ng, hv), hv, cid)));
                 }
                 if store.len() as u64 >= max_states {
                     limit = true;
                 }
-            } else if ng < store.g[c] && store.h[c] != INF {
+            } else if ng < store.g[c] && store.h[c] != INF && !greedy {
                 // A cheaper path: update and (re)open.
                 store.g[c] = ng;
                 store.parent[c] = id;
                 store.via[c] = a;
                 closed[c] = false;
-                open.push(Reverse((ng.saturating_add(store.h[c]), store.h[c], cid)));
+                open.push(Reverse((key(ng, store.h[c]), store.h[c], cid)));
             }
         });
         if limit {

@@ -216,7 +216,7 @@ mod tests {
         assert_eq!(v.len(), 1);
         let l = v[0].list().unwrap();
         assert_eq!(l[0].atom().unwrap(), "a");
-        assert_eq!(l[2], Sexpr::Str("x y".into(), Span { start: 12, end: 17 }));
+        assert_eq!(l[2], Sexpr::Str("x y".into(), Span { start: 14, end: 19 }));
     }
 
     #[test]

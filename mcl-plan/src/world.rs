@@ -120,8 +120,11 @@ pub fn parse_scripts(file: &str, xml: &str) -> Result<Vec<Script>, String> {
     let mut scripts: Vec<Script> = Vec::new();
     let mut current: Option<Script> = None;
     loop {
-        let pos = reader.buffer_position() as usize;
-        let ev = reader.read_event().map_err(|e| format!("{file}:{}: XML error: {e}", line_of(&text, pos)))?;
+        let before = reader.buffer_position() as usize;
+        let ev = reader.read_event().map_err(|e| format!("{file}:{}: XML error: {e}", line_of(&text, before)))?;
+        // The line where the element just read starts.
+        let end = (reader.buffer_position() as usize).min(text.len());
+        let pos = text[..end].rfind('<').unwrap_or(before);
         let at = |msg: String| format!("{file}:{}: {msg}", line_of(&text, pos));
         let (e, empty) = match ev {
             Event::Eof => break,

@@ -85,7 +85,7 @@ fn syntax_errors_name_file_line_column_and_what_was_expected() {
         ("(define (domain m)\n (:predicates (p))\n (:action go :effect (and (p) (increase (fuel) 3))))", "d.pddl:3:41: only `(total-cost)` can be increased"),
         ("(define (domain m)\n (:predicates (p ?x))\n (:action go :parameters (?x) :effect (p)))", "action `go`: predicate `p` takes 1 argument(s), given 0"),
         ("(define (domain m)\n (:action go :effect (q)))", "action `go`: unknown predicate `q`"),
-        ("(define (domain m)\n (:types a - b))", "type `a` has the undeclared supertype `b`"),
+        ("(define (domain m)\n (:types a - b)\n (:constants c - d))", "`c` has the undeclared type `d`"),
         ("(define (domain m)\n (:predicates (p))\n (:action go :effect (p) :mcl (?x)))", "d.pddl:3:32: expected the name of an MCL mission"),
         ("(define (domain m)\n (:predicates (p))\n (:action go :parameters (?l) :effect (p) :mcl (Go ?k.x)))", "d.pddl:3:52: unknown variable `?k`"),
         ("(define (domain m) (:predicates (p)) (:action go :effect (p) :mcl (Go \"x)))", "unterminated string"),
@@ -265,7 +265,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, .. ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1500, .. ProptestConfig::default() })]
 
     #[test]
     fn mutated_pddl_never_panics(which in 0usize..7, on_domain in any::<bool>(), muts in prop::collection::vec(mutation(), 1..4)) {
@@ -276,7 +276,7 @@ proptest! {
         }
         let (Ok(dd), Ok(pp)) = (parse_domain("d.pddl", &d), parse_problem("p.pddl", &p)) else { return Ok(()) };
         let Ok(task) = mcl_plan::ground::ground_with_budget(&dd, &pp, 2_000_000) else { return Ok(()) };
-        for alg in [Algorithm::Bfs, Algorithm::Ucs, Algorithm::Astar(Heuristic::Add), Algorithm::Astar(Heuristic::Max)] {
+        for alg in [Algorithm::Bfs, Algorithm::Ucs, Algorithm::Astar(Heuristic::Add), Algorithm::Astar(Heuristic::Max), Algorithm::Greedy(Heuristic::Add)] {
             let r = mcl_plan::search::search(&task, alg, 20_000);
             if let mcl_plan::search::Outcome::Plan(actions) = r.outcome {
                 let plan = mcl_plan::Plan::new(&task, &task.init, &actions);

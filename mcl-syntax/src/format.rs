@@ -31,13 +31,15 @@
 //!   Lines are never wrapped: MCL has no expressions to break.
 //!
 //! Comments stay next to the token they were next to. A comment on its own
-//! line stays on its own line, at the indentation of what follows it; a
-//! comment after code on the same line stays at the end of that line (a
-//! `// ...` comment is moved past the `;`, `,`, `)` or `]` that follow it on
-//! its line, and past a block's opening `{`); a `/* ... */` comment between
-//! two tokens of a line stays between them. When a `// ...` comment sits
-//! where the canonical layout has no line break, the line is broken after it
-//! and continues one level deeper.
+//! line stays on its own line, at the indentation of what follows it (a
+//! blank line before it is kept); a comment after code on the same line
+//! stays at the end of that line (a `// ...` comment is moved past the `;`,
+//! `,`, `)`, `]`, `{`, `}` or `do` that follow it, so `A // c` + `;` gives
+//! `A ; // c`); a `/* ... */` comment between two tokens of a line stays
+//! between them. When a `// ...` comment sits where the canonical layout has
+//! no line break, the line is broken after it: before `else`, `and`, `or`,
+//! `catch`, `condition` and `while_condition` the next line starts at the
+//! same level, elsewhere it continues one level deeper.
 //!
 //! The result is checked before it is returned: it must parse without errors
 //! to the same tree (modulo spans and spellings) with the same comments.

@@ -19,6 +19,8 @@ pub enum SearchChoice {
     Ucs,
     /// A* with --heuristic.
     Astar,
+    /// Greedy best-first search with --heuristic: fast, no cost guarantee.
+    Gbfs,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -158,6 +160,8 @@ pub fn run(o: Options) -> u8 {
         (SearchChoice::Ucs, _) => Algorithm::Ucs,
         (SearchChoice::Astar, HeuristicChoice::Hadd) => Algorithm::Astar(Heuristic::Add),
         (SearchChoice::Astar, HeuristicChoice::Hmax) => Algorithm::Astar(Heuristic::Max),
+        (SearchChoice::Gbfs, HeuristicChoice::Hadd) => Algorithm::Greedy(Heuristic::Add),
+        (SearchChoice::Gbfs, HeuristicChoice::Hmax) => Algorithm::Greedy(Heuristic::Max),
     };
     let sol = match mcl_plan::solve(&domain, &problem, alg, o.max_states) {
         Ok(s) => s,

@@ -3,7 +3,7 @@
 //! labels, parameters and missions with their definition; control-structure
 //! keywords with what the structure does.
 
-use super::index::{occurrence_at, occurrences, resolve, task_at, written_net, Role, Sym};
+use super::index::{occurrence_at, occurrences, resolve, task_at, Role, Sym};
 use super::Analysis;
 use mcl_compiler::compile::structures::Structure;
 use mcl_compiler::queries::parse;
@@ -76,6 +76,15 @@ fn primitive_text(a: &Analysis<'_>, file: SourceFile, name: &str) -> String {
         let _ = writeln!(out, "- `{def}`");
     }
     out
+}
+
+/// A place or transition as declared (its name alone for a PNML pattern).
+fn node_text(a: &Analysis<'_>, file: SourceFile, span: Span, name: &str) -> String {
+    if span.is_empty() {
+        name.to_string()
+    } else {
+        slice(a, file, span).trim_end_matches(';').to_string()
+    }
 }
 
 fn slice(a: &Analysis<'_>, file: SourceFile, span: Span) -> String {
@@ -329,7 +338,7 @@ pub fn sym_text(a: &Analysis<'_>, file: SourceFile, sym: &Sym) -> Option<String>
             }
         },
         Sym::Node { pattern, place, name } => {
-            let net = written_net(a.db, *pattern)?;
+            let net = super::index::any_net(a.db, *pattern)?;
             let pname = scope::pattern(a.db, *pattern)?.name.text.clone();
             if *place {
                 let p = net.places.iter().find(|p| &p.name.text == name)?;
@@ -338,7 +347,7 @@ pub fn sym_text(a: &Analysis<'_>, file: SourceFile, sym: &Sym) -> Option<String>
                 let what = if iface == 1 { "interface place" } else { "place" };
                 format!(
                     "```mcl\n{}\n```\n{what} of pattern `{pname}`, initial marking {tokens}.",
-                    slice(a, pattern.file, p.span).trim_end_matches(';')
+                    node_text(a, pattern.file, p.span, name)
                 )
             } else {
                 let t = net.transitions.iter().find(|t| &t.name.text == name)?;
@@ -361,7 +370,7 @@ pub fn sym_text(a: &Analysis<'_>, file: SourceFile, sym: &Sym) -> Option<String>
                     .collect();
                 format!(
                     "```mcl\n{}\n```\n{kind} of pattern `{pname}`: {} → {name} → {}.",
-                    slice(a, pattern.file, t.span).trim_end_matches(';'),
+                    node_text(a, pattern.file, t.span, name),
                     if ins.is_empty() { "∅".to_string() } else { ins.join(", ") },
                     if outs.is_empty() { "∅".to_string() } else { outs.join(", ") },
                 )

@@ -11,7 +11,7 @@ use mcl_syntax::visit::walk_block;
 use mcl_syntax::Span;
 
 /// Where a name occurs and what it does there.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Role {
     /// The name of a definition: action, event, pattern, task, named mission.
     Def(DefKind),
@@ -69,7 +69,7 @@ pub enum Role {
     Structure(Structure),
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Occ {
     pub span: Span,
     pub name: String,
@@ -112,8 +112,14 @@ impl Sym {
     }
 }
 
-/// Every occurrence of a file, in source order.
-pub fn occurrences(db: &Database, file: SourceFile) -> Vec<Occ> {
+/// Every occurrence of a file, in source order (a salsa query of this
+/// crate: computed once per revision of the file).
+pub fn occurrences(db: &Database, file: SourceFile) -> &[Occ] {
+    file_occurrences(db, file)
+}
+
+#[salsa::tracked(returns(ref))]
+fn file_occurrences(db: &dyn Db, file: SourceFile) -> Vec<Occ> {
     let ast = &parse(db, file).file;
     let mut out = Vec::new();
     let mut push = |span: Span, name: &str, role: Role| {
@@ -313,6 +319,11 @@ pub fn written_net(db: &Database, id: DefId) -> Option<&PatternNet> {
     }
 }
 
+/// The net of a pattern, written or read from its PNML file.
+pub fn any_net(db: &Database, id: DefId) -> Option<&PatternNet> {
+    scope::pattern_net(db, id)?.ok()
+}
+
 /// The missions a program sees, with their file and item index.
 pub fn missions_with_items(db: &Database, root: SourceFile) -> Vec<(SourceFile, u32, &Mission)> {
     let mut out = Vec::new();
@@ -361,7 +372,7 @@ pub fn resolve(db: &Database, file: SourceFile, occ: &Occ) -> Option<Sym> {
         Role::BindingTransition { task } => {
             let t = task_at(db, file, *task)?;
             let pid = scope::scope(db, file).first(DefKind::Pattern, &t.pattern.as_ref()?.text)?;
-            let net = written_net(db, pid)?;
+            let net = any_net(db, pid)?;
             net.transitions.iter().any(|t| t.name.text == name).then(|| Sym::Node {
                 pattern: pid,
                 place: false,

@@ -28,7 +28,9 @@ pub fn definition_spans(a: &Analysis<'_>, sym: &Sym) -> Vec<(SourceFile, Span)> 
     match sym {
         Sym::Def(d) => vec![(d.file, d.name_span)],
         Sym::Node { pattern, place, name } => {
-            let Some(net) = written_net(a.db, *pattern) else { return vec![] };
+            let Some(net) = written_net(a.db, *pattern) else {
+                return pnml_node(a, *pattern, name).into_iter().collect();
+            };
             let spans: Vec<Span> = if *place {
                 net.places.iter().filter(|p| &p.name.text == name).map(|p| p.name.span).collect()
             } else {
@@ -54,7 +56,31 @@ pub fn definition_spans(a: &Analysis<'_>, sym: &Sym) -> Vec<(SourceFile, Span)> 
     }
 }
 
+/// Where a node of a PNML pattern is: its `id="..."` in the PNML file, or
+/// else the pattern's file name in the MCL file.
+fn pnml_node(a: &Analysis<'_>, pattern: mcl_compiler::scope::DefId, name: &str) -> Option<(SourceFile, Span)> {
+    let p = mcl_compiler::scope::pattern(a.db, pattern)?;
+    let mcl_syntax::ast::PatternBody::File { path, path_span } = &p.body else { return None };
+    let full = mcl_compiler::queries::resolve_relative(a.db, pattern.file, path);
+    let xml = a.file_at(&full);
+    let text = a.text(xml);
+    for quote in ['"', '\''] {
+        let needle = format!("id={quote}{name}{quote}");
+        if let Some(i) = text.find(&needle) {
+            let start = i + 4;
+            return Some((xml, Span::new(start, start + name.len())));
+        }
+    }
+    Some((pattern.file, *path_span))
+}
+
 pub fn goto_definition(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Vec<Location> {
+    // The path of an import opens the imported file.
+    for imp in mcl_compiler::queries::imports(a.db, file) {
+        if imp.path_span.contains(offset) && imp.target.text(a.db).is_some() {
+            return a.location(imp.target, Span::at(0)).into_iter().collect();
+        }
+    }
     let Some((_, sym)) = symbol_at(a, file, offset) else { return vec![] };
     definition_spans(a, &sym).into_iter().filter_map(|(f, s)| a.location(f, s)).collect()
 }
@@ -85,7 +111,7 @@ pub fn all_occurrences(a: &Analysis<'_>, sym: &Sym) -> Vec<(SourceFile, Occ)> {
                 continue;
             }
             if resolve(a.db, f, &occ).as_ref() == Some(sym) {
-                out.push((f, occ));
+                out.push((f, occ.clone()));
             }
         }
     }
@@ -166,6 +192,17 @@ fn renamable(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Result<(Occ, 
     if let Sym::Node { pattern, .. } = &sym {
         if pattern.in_stdlib {
             return Err(RenameError(format!("`{}` belongs to a pattern of the standard library", occ.name)));
+        }
+        if written_net(a.db, *pattern).is_none() {
+            return Err(RenameError(format!("`{}` is defined in a PNML file", occ.name)));
+        }
+    }
+    if let Sym::Param { index, .. } = &sym {
+        if *index != u32::MAX {
+            return Err(RenameError(format!(
+                "`{}` is a task parameter: the actions and patterns that use it name it too",
+                occ.name
+            )));
         }
     }
     Ok((occ, sym))

@@ -1,0 +1,2 @@
+-- `.mcl` files are MCL missions.
+vim.filetype.add({ extension = { mcl = 'mcl' } })

@@ -1,0 +1,112 @@
+-- MCL support for Neovim: the language server (`mcl lsp`) and the
+-- tree-sitter parser of editors/tree-sitter-mcl. See editors/nvim/README.md.
+--
+--   require('mcl').setup({
+--     cmd = { 'mcl', 'lsp' },          -- how to start the language server
+--     lsp = true,                      -- start it for every MCL buffer
+--     treesitter = true,               -- register the parser with nvim-treesitter
+--     grammar = nil,                   -- editors/tree-sitter-mcl (found from this file by default)
+--   })
+
+local M = {}
+
+local defaults = {
+  cmd = { 'mcl', 'lsp' },
+  lsp = true,
+  treesitter = true,
+  grammar = nil,
+  root_markers = { '.git' },
+}
+
+--- editors/tree-sitter-mcl, found from this file (editors/nvim/lua/mcl/init.lua).
+local function default_grammar()
+  local here = debug.getinfo(1, 'S').source:sub(2)
+  local editors = vim.fn.fnamemodify(here, ':p:h:h:h:h')
+  return editors .. '/tree-sitter-mcl'
+end
+
+local function root_dir(buf, markers)
+  local name = vim.api.nvim_buf_get_name(buf)
+  if vim.fs.root then
+    return vim.fs.root(buf, markers) or vim.fs.dirname(name)
+  end
+  local found = vim.fs.find(markers, { path = vim.fs.dirname(name), upward = true })[1]
+  return found and vim.fs.dirname(found) or vim.fs.dirname(name)
+end
+
+--- Starts (or reuses) the MCL language server for `buf`.
+function M.start_lsp(buf, opts)
+  opts = opts or M.options or defaults
+  if vim.fn.executable(opts.cmd[1]) ~= 1 then
+    vim.notify_once(
+      ('mcl: `%s` not found; install it with `cargo install --path .` in the MCL repository'):format(opts.cmd[1]),
+      vim.log.levels.WARN
+    )
+    return
+  end
+  return vim.lsp.start({
+    name = 'mcl',
+    cmd = opts.cmd,
+    root_dir = root_dir(buf, opts.root_markers),
+  }, { bufnr = buf })
+end
+
+--- Registers the parser with nvim-treesitter (both its `main` and `master` branches).
+function M.register_parser(grammar)
+  grammar = grammar or default_grammar()
+  local ok, parsers = pcall(require, 'nvim-treesitter.parsers')
+  if not ok then
+    return false
+  end
+  if type(parsers.get_parser_configs) == 'function' then
+    -- nvim-treesitter `master`: `:TSInstall mcl` compiles src/parser.c.
+    parsers.get_parser_configs().mcl = {
+      install_info = { url = grammar, files = { 'src/parser.c' }, generate_requires_npm = false, requires_generate_from_grammar = false },
+      filetype = 'mcl',
+    }
+  else
+    -- nvim-treesitter `main`: `:TSInstall mcl` after each `TSUpdate` event.
+    local function add()
+      require('nvim-treesitter.parsers').mcl = {
+        install_info = { path = grammar, generate = false, queries = 'queries' },
+      }
+    end
+    add()
+    vim.api.nvim_create_autocmd('User', { pattern = 'TSUpdate', callback = add })
+  end
+  if vim.treesitter.language and vim.treesitter.language.register then
+    vim.treesitter.language.register('mcl', 'mcl')
+  end
+  return true
+end
+
+function M.setup(opts)
+  M.options = vim.tbl_deep_extend('force', defaults, opts or {})
+  vim.filetype.add({ extension = { mcl = 'mcl' } })
+  if M.options.treesitter then
+    M.register_parser(M.options.grammar)
+  end
+  if M.options.treesitter then
+    -- Highlighting, folding and indentation from the queries, when the
+    -- parser is installed (`:TSInstall mcl`).
+    vim.api.nvim_create_autocmd('FileType', {
+      group = vim.api.nvim_create_augroup('mcl-treesitter', { clear = true }),
+      pattern = 'mcl',
+      callback = function(args)
+        pcall(vim.treesitter.start, args.buf, 'mcl')
+      end,
+    })
+  end
+  if M.options.lsp then
+    local group = vim.api.nvim_create_augroup('mcl-lsp', { clear = true })
+    vim.api.nvim_create_autocmd('FileType', {
+      group = group,
+      pattern = 'mcl',
+      callback = function(args)
+        M.start_lsp(args.buf)
+      end,
+    })
+  end
+end
+
+return M

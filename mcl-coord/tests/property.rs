@@ -1,0 +1,240 @@
+//! Property test: random pairs of small compiled missions with random
+//! constraints. Whenever the analysis says "free of deadlock", an
+//! exhaustive exploration of the centralized supervised net under the
+//! centralized MCL firing rule (`mcl_net::explore`) finds no dead marking
+//! but the end of both missions, the end stays reachable from every
+//! reachable marking, and every constraint holds in every reachable
+//! marking: Σ running ≤ β for a mutex, #starts(b) ≤ #ends(a) for an order,
+//! #starts(j) ≤ #arrivals(i) for every pair of a sync. When it reports a
+//! deadlock, its counterexample replays to a dead marking.
+
+use mcl_compiler::{Database, Db};
+use mcl_coord::source::load;
+use mcl_coord::verify::WitnessKind;
+use mcl_coord::{analyze, Activity, ConstraintKind, Mission, Verdict};
+use mcl_net::{explore, NetBuilder, Options, PlaceId, TransitionId};
+use proptest::prelude::*;
+
+/// A small deterministic generator (splitmix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+const TASKS: &[&str] = &["Surface()", "GotoTarget()", "Deploy()", "Void()", "Goto( p )", "SendData()"];
+
+fn call(r: &mut Rng, labels: &mut usize) -> String {
+    let t = TASKS[r.below(TASKS.len())];
+    *labels += 1;
+    format!("{t} : l{}", *labels)
+}
+
+fn stmt(r: &mut Rng, depth: usize, labels: &mut usize) -> String {
+    if depth == 0 || r.below(3) == 0 {
+        return call(r, labels);
+    }
+    match r.below(5) {
+        0 => format!("{} ; {}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+        1 => format!("parallel {{ {} }} and {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+        2 => format!("parallel {{ {} }} or {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+        3 => format!(
+            "if ( {} ) {{ {} }} else {{ {} }}",
+            call(r, labels),
+            stmt(r, depth - 1, labels),
+            stmt(r, depth - 1, labels)
+        ),
+        _ => format!("try {{ {} }} catch {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+    }
+}
+
+fn case(seed: u64) -> String {
+    let mut r = Rng(seed);
+    let (mut na, mut nb) = (0, 0);
+    let a = stmt(&mut r, 2, &mut na);
+    let b = stmt(&mut r, 2, &mut nb);
+    let mut cs = Vec::new();
+    for _ in 0..1 + r.below(3) {
+        let (x, y) = (1 + r.below(na), 1 + r.below(nb));
+        let c = match r.below(4) {
+            0 => format!("mutex {{ a:l{x}, b:l{y} }} = 1"),
+            1 => format!("order {{ a:l{x}, b:l{y} }}"),
+            2 => format!("order {{ b:l{y}, a:l{x} }}"),
+            _ => format!("sync {{ a:l{x}, b:l{y} }}"),
+        };
+        cs.push(c);
+    }
+    format!("mission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n {}\n}}\n", cs.join("\n "))
+}
+
+fn compile(text: &str, seed: u64) -> (Vec<Mission>, Vec<mcl_coord::Constraint>) {
+    let dir = std::env::temp_dir().join(format!("mcl-coord-prop-{}-{seed}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let vehicle = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/vehicle.mcl");
+    std::fs::copy(vehicle, dir.join("vehicle.mcl")).unwrap();
+    let path = dir.join("m.mcl");
+    std::fs::write(&path, format!("import \"vehicle.mcl\";\n{text}")).unwrap();
+    let db = Database::new();
+    let file = db.file(&path);
+    let out = load(&db, file).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    out
+}
+
+fn check(seed: u64) -> Result<(), TestCaseError> {
+    let text = case(seed);
+    let (ms, cs) = compile(&text, seed);
+    let r = analyze(&ms, &cs).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+    let net = &r.net;
+    let gid = |m: usize, local: &str| format!("{}/{local}", ms[m].name);
+    let places = |m: usize, ps: &[PlaceId]| -> Vec<PlaceId> {
+        ps.iter().map(|&p| net.place_by_id(&gid(m, &ms[m].net.place(p).unwrap().id)).unwrap()).collect()
+    };
+    let trans = |m: usize, ts: &[TransitionId]| -> Vec<TransitionId> {
+        ts.iter().map(|&t| net.transition_by_id(&gid(m, &ms[m].net.transition(t).unwrap().id)).unwrap()).collect()
+    };
+    let acts = |c: &mcl_coord::CallRef| -> (usize, Vec<&Activity>) {
+        let m = ms.iter().position(|x| x.name == c.mission).unwrap();
+        (m, ms[m].activities.iter().filter(|a| a.label == c.label).collect())
+    };
+    match &r.verdict {
+        Verdict::Free => {
+            // Observer places count firings (they only receive tokens, so
+            // they change nothing else).
+            let mut b: NetBuilder = net.to_builder();
+            let m0 = net.initial_marking();
+            let mut counter = |ts: Vec<TransitionId>, initial: u32, b: &mut NetBuilder| {
+                let p = b.add_place(mcl_net::Place::new(format!("obs{}", b.place_count())).with_tokens(initial));
+                for t in ts {
+                    b.add_output(t, p, 1);
+                }
+                p
+            };
+            let mut mutexes: Vec<(Vec<PlaceId>, u32)> = Vec::new();
+            let mut leq: Vec<(PlaceId, PlaceId, Option<Vec<PlaceId>>)> = Vec::new();
+            for c in &cs {
+                match c.kind {
+                    ConstraintKind::Mutex { bound } => {
+                        let mut ps = Vec::new();
+                        for r in &c.calls {
+                            let (m, a) = acts(r);
+                            for a in a {
+                                ps.extend(places(m, &a.running));
+                            }
+                        }
+                        mutexes.push((ps, bound));
+                    }
+                    ConstraintKind::Order => {
+                        let (ma, a0) = acts(&c.calls[0]);
+                        let (m1, a1) = acts(&c.calls[1]);
+                        let ends = counter(a0.iter().flat_map(|a| trans(ma, &a.ended)).collect(), 0, &mut b);
+                        let starts = counter(a1.iter().flat_map(|a| trans(m1, &a.started)).collect(), 0, &mut b);
+                        leq.push((starts, ends, None));
+                    }
+                    ConstraintKind::Sync => {
+                        for i in 0..c.calls.len() {
+                            for j in 0..c.calls.len() {
+                                if i == j {
+                                    continue;
+                                }
+                                let (mi, ai) = acts(&c.calls[i]);
+                                let (mj, aj) = acts(&c.calls[j]);
+                                // A call whose waiting place is marked at the
+                                // start has arrived once already.
+                                let before: u32 =
+                                    ai.iter().flat_map(|a| places(mi, &a.waiting)).map(|p| m0.get(p)).sum();
+                                let arr =
+                                    counter(ai.iter().flat_map(|a| trans(mi, &a.arrived)).collect(), before, &mut b);
+                                let st = counter(aj.iter().flat_map(|a| trans(mj, &a.started)).collect(), 0, &mut b);
+                                leq.push((st, arr, None));
+                            }
+                        }
+                    }
+                }
+            }
+            let observed = b.build().unwrap();
+            let ss = explore(&observed, &Options { record_edges: true, ..Options::default() });
+            prop_assert!(ss.complete(), "{text}");
+            let end = |s| {
+                ["a", "b"].iter().all(|m| {
+                    ["mission.ok", "mission.fail"]
+                        .iter()
+                        .any(|p| ss.tokens(s, observed.place_by_id(&format!("{m}/{p}")).unwrap()) == 1)
+                })
+            };
+            for d in ss.dead_states() {
+                prop_assert!(
+                    end(d),
+                    "analysis says free, but {} is dead after {:?}\n{text}",
+                    ss.marking(d).display(&observed),
+                    ss.path_to(d)
+                );
+            }
+            let co = ss.coreachable(end);
+            prop_assert!(co.iter().all(|&x| x), "some marking cannot reach the end\n{text}");
+            for s in ss.states() {
+                for (ps, bound) in &mutexes {
+                    let n: u32 = ps.iter().map(|&p| ss.tokens(s, p)).sum();
+                    prop_assert!(n <= *bound, "mutex violated\n{text}");
+                }
+                for (small, big, _) in &leq {
+                    prop_assert!(ss.tokens(s, *small) <= ss.tokens(s, *big), "order/sync violated\n{text}");
+                }
+            }
+        }
+        Verdict::Deadlock => {
+            prop_assert!(!r.problems.is_empty());
+            for p in &r.problems {
+                let mut m = net.initial_marking();
+                for id in &p.counterexample {
+                    let t = net.transition_by_id(id).unwrap();
+                    prop_assert!(
+                        mcl_net::semantics::fire(net, &mut m, t).is_ok(),
+                        "counterexample does not replay\n{text}"
+                    );
+                }
+                if p.kind == WitnessKind::Dead {
+                    prop_assert!(mcl_net::semantics::enabled(net, &m).is_empty(), "counterexample not dead\n{text}");
+                }
+                prop_assert!(!p.constraints.is_empty() || p.waiting.is_empty(), "{text}");
+            }
+        }
+        Verdict::Unknown { reason } => prop_assert!(false, "unknown: {reason}\n{text}"),
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn free_means_no_deadlock_and_constraints_hold(seed in any::<u64>()) {
+        check(seed)?;
+    }
+}
+
+/// A fixed batch, so that the same cases run every time as well
+/// (`MCL_COORD_SEEDS=N` runs N of them).
+#[test]
+fn fixed_seeds() {
+    let n: u64 = std::env::var("MCL_COORD_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(40);
+    let mut free = 0;
+    for seed in 0..n {
+        check(seed).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let (ms, cs) = compile(&case(seed), seed);
+        if analyze(&ms, &cs).unwrap().deadlock_free {
+            free += 1;
+        }
+    }
+    // Both verdicts occur in the batch.
+    assert!(free > n / 8 && free < n, "{free} of {n} free");
+}
