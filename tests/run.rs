@@ -559,13 +559,8 @@ fn kill_9_in_real_time_and_resume() {
     };
     assert_eq!(names(&tr), names(&reference));
     assert_eq!(outcome(&tr), "ok");
-    // Real time drifts a little from virtual time, but not much.
-    let times = |tr: &[Value]| -> Vec<f64> {
-        tr.iter().filter(|r| r["kind"] == "event").map(|r| r["t"].as_f64().unwrap()).collect()
-    };
-    for (a, b) in times(&tr).iter().zip(times(&reference)) {
-        assert!((a - b).abs() < 5.0, "event at {a} instead of {b}");
-    }
+    // Event times are not compared: real time on a shared machine drifts by
+    // an unbounded amount, and tests never assert timings.
 }
 
 /// Real time with the in-process mock plays the same mission as virtual time.

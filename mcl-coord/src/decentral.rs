@@ -229,8 +229,8 @@ pub fn minimize_communication(
         }
         // (6.33)
         let mut sum = Expression::from(0.0);
-        for i in 0..n {
-            sum += delta[k][i];
+        for v in &delta[k] {
+            sum += *v;
         }
         model = model.with(constraint!(sum >= 1.0));
         // (6.34)

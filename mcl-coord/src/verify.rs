@@ -29,6 +29,15 @@
 //!    marking with that image can follow, so this proves that no vehicle can
 //!    be blocked forever.
 //!
+//! The product is explored breadth-first with a partial-order reduction:
+//! when a vehicle that has not ended (and can end alone) has only silent,
+//! unguarded moves, those moves form a persistent set (no other vehicle nor
+//! supervisor place can disable them or be affected by them), so only they
+//! are expanded — provided they all lead to new states, which keeps a fully
+//! expanded state on every cycle. Dead states are preserved, and so is the
+//! reachability of the end: any path to the end must move that vehicle, and
+//! its first move commutes to the front.
+//!
 //! A dead or blocked image is turned back into a firing sequence of the real
 //! net (through the vehicles' graphs) and replayed with exact token counts;
 //! if the replay fails, the image came from the `>K` abstraction and the
@@ -338,6 +347,9 @@ fn tarjan(n: usize, succ: impl Fn(u32, &mut Vec<u32>), mut emit: impl FnMut(&[u3
     }
 }
 
+/// A signature: the current block, divergence, and the (label, block) pairs.
+type SigKey<'a> = (u32, bool, &'a [(u32, u32)]);
+
 fn reduce(lts: &Lts) -> Quotient {
     let n = lts.len();
     // Initial partition: end of mission and waiting gated transitions.
@@ -392,7 +404,7 @@ fn reduce(lts: &Lts) -> Quotient {
                 &mut emit,
             );
         }
-        let mut ids: FxHashMap<(u32, bool, &[(u32, u32)]), u32> = FxHashMap::default();
+        let mut ids: FxHashMap<SigKey<'_>, u32> = FxHashMap::default();
         let mut nb = vec![0u32; n];
         for s in 0..n {
             let (sig, d) = &sigs[scc_of[s] as usize];
@@ -631,7 +643,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     }
     // One label per distinct effect on the supervisor places.
     let mut effects: Vec<Effect> = vec![Effect::default()];
-    let mut effect_ids: FxHashMap<(Vec<(usize, u32)>, Vec<(usize, u32)>), u32> = FxHashMap::default();
+    let mut effect_ids: FxHashMap<Effect, u32> = FxHashMap::default();
     let effect_of: Vec<u32> = per_t
         .into_iter()
         .map(|e| {
@@ -639,7 +651,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
                 return 0;
             }
             let next = effects.len() as u32;
-            *effect_ids.entry((e.consume.clone(), e.produce.clone())).or_insert_with(|| {
+            *effect_ids.entry(e.clone()).or_insert_with(|| {
                 effects.push(e);
                 next
             })

@@ -112,7 +112,7 @@ fn check(seed: u64) -> Result<(), TestCaseError> {
             // they change nothing else).
             let mut b: NetBuilder = net.to_builder();
             let m0 = net.initial_marking();
-            let mut counter = |ts: Vec<TransitionId>, initial: u32, b: &mut NetBuilder| {
+            let counter = |ts: Vec<TransitionId>, initial: u32, b: &mut NetBuilder| {
                 let p = b.add_place(mcl_net::Place::new(format!("obs{}", b.place_count())).with_tokens(initial));
                 for t in ts {
                     b.add_output(t, p, 1);

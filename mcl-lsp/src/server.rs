@@ -51,8 +51,9 @@ struct Shared {
 
 impl Shared {
     fn enqueue(&self, edit: Edit) {
-        let seq = self.enqueued.fetch_add(1, Ordering::SeqCst) + 1;
+        // Numbered under the lock, so that the queue is in numbering order.
         let tx = self.edits.lock().unwrap_or_else(|e| e.into_inner());
+        let seq = self.enqueued.fetch_add(1, Ordering::SeqCst) + 1;
         let _ = tx.send((seq, edit));
     }
 }
@@ -472,11 +473,23 @@ fn analysis_loop(shared: Arc<Shared>, wake: mpsc::Receiver<()>, out: tmpsc::Unbo
         };
         let generation = snap.generation;
         let pull = shared.caps.pull_diagnostics.load(Ordering::SeqCst);
-        let result = salsa::Cancelled::catch(AssertUnwindSafe(|| {
+        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
             diagnostics_pass(&snap, &pending, &closed, pull, &shown, &out)
         }));
         drop(snap); // before locking the host again: an edit may be waiting for it
-        if let Ok(pass) = result {
+        let result = match result {
+            Ok(pass) => Some(pass),
+            Err(payload) if payload.downcast_ref::<salsa::Cancelled>().is_some() => None,
+            Err(_) => {
+                // A bug in a check: drop these changes rather than fail again on each wake.
+                eprintln!("mcl-lsp: computing diagnostics failed");
+                let mut s = shared.host.lock();
+                s.pending.retain(|(g, _)| *g > generation);
+                s.closed.retain(|(g, _)| *g > generation);
+                None
+            }
+        };
+        if let Some(pass) = result {
             let mut s = shared.host.lock();
             s.pending.retain(|(g, _)| *g > generation);
             s.closed.retain(|(g, _)| *g > generation);
@@ -594,10 +607,14 @@ fn host_loop(
         let mut last = first.0;
         let mut batch = vec![first.1];
         while let Ok((seq, e)) = rx.try_recv() {
-            last = seq;
+            last = last.max(seq);
             batch.push(e);
         }
-        shared.host.apply(batch);
+        // A bug while applying must not stop the server: later edits and
+        // every request wait on this thread.
+        if std::panic::catch_unwind(AssertUnwindSafe(|| shared.host.apply(batch))).is_err() {
+            eprintln!("mcl-lsp: applying an edit failed");
+        }
         let _ = applied.send(last);
         let _ = wake.send(());
     }

@@ -131,7 +131,11 @@ impl Executor {
             self.failed = Some(why.clone());
             return Err(why);
         }
-        let facts: Vec<Fact> = current.iter().cloned().collect();
+        // Facts of predicates the domain does not know (a script may make
+        // them for other purposes) cannot matter to the plan.
+        let known =
+            |f: &&Fact| self.domain.predicates.iter().any(|p| p.name == f.pred && p.params.len() == f.args.len());
+        let facts: Vec<Fact> = current.iter().filter(known).cloned().collect();
         match self.make_plan(&facts) {
             Ok(()) => Ok(&self.plan),
             Err(e) => {

@@ -6,7 +6,7 @@
 //! Domains and problems are written in PDDL (see docs/planning.md).
 //!
 //! Pipeline: [`pddl`] parses, [`ground`] grounds with type-aware pruning and
-//! relaxed reachability, [`search`] runs BFS, uniform-cost search or A* with
+//! relaxed reachability, [`search`] runs BFS, uniform-cost search, A* or greedy best-first with
 //! h_add / h_max ([`heuristic`]), [`plan`] turns the actions found into steps
 //! (MCL operator instance, facts expected before and after), [`validate`]
 //! replays any plan. [`world`] turns perceptions into facts with the seed's

@@ -267,57 +267,57 @@ fn copy(dst: &mut [u64], src: &[u64]) {
 struct Store {
     w: usize,
     words: Vec<u64>,
-    hashes: Vec<u64>,
-    parent: Vec<u32>,
-    via: Vec<u32>,
-    g: Vec<u64>,
-    h: Vec<u64>,
-    table: Vec<u32>,
+    nodes: Vec<Node>,
+    /// Slots: `(low 32 bits of the hash) << 32 | node`, or `FREE`. The hash
+    /// tag rejects most mismatches without touching the node.
+    table: Vec<u64>,
     mask: usize,
     /// 64 - log2(table size): slots are the high bits of a multiplicative mix
     /// (Zobrist hashes are linear, their low bits alone cluster).
     shift: u32,
 }
 
+/// A search node: the state's hash, its best cost so far, its heuristic
+/// value, and how it was reached.
+#[derive(Clone, Copy)]
+struct Node {
+    hash: u64,
+    g: u64,
+    h: u64,
+    parent: u32,
+    via: u32,
+}
+
 #[inline(always)]
 fn slot(hash: u64, shift: u32) -> usize {
-    (hash >> shift) as usize
+    (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize
 }
 
 const EMPTY: u32 = u32::MAX;
+const FREE: u64 = u64::MAX;
 
 impl Store {
     fn new(w: usize) -> Store {
-        Store {
-            w,
-            words: Vec::new(),
-            hashes: Vec::new(),
-            parent: Vec::new(),
-            via: Vec::new(),
-            g: Vec::new(),
-            h: Vec::new(),
-            table: vec![EMPTY; 1024],
-            mask: 1023,
-            shift: 64 - 10,
-        }
+        Store { w, words: Vec::new(), nodes: Vec::new(), table: vec![FREE; 1024], mask: 1023, shift: 64 - 10 }
     }
     fn len(&self) -> usize {
-        self.hashes.len()
+        self.nodes.len()
     }
     fn state(&self, id: u32) -> &[u64] {
         &self.words[id as usize * self.w..(id as usize + 1) * self.w]
     }
     fn grow(&mut self) {
         let n = self.table.len() * 2;
-        self.table = vec![EMPTY; n];
+        self.table = vec![FREE; n];
         self.mask = n - 1;
         self.shift -= 1;
         for id in 0..self.len() {
-            let mut i = slot(self.hashes[id], self.shift);
-            while self.table[i] != EMPTY {
+            let h = self.nodes[id].hash;
+            let mut i = slot(h, self.shift);
+            while self.table[i] != FREE {
                 i = (i + 1) & self.mask;
             }
-            self.table[i] = id as u32;
+            self.table[i] = (h << 32) | id as u64;
         }
     }
     /// The node of `s`, inserted if new: (id, inserted).
@@ -327,20 +327,18 @@ impl Store {
             self.grow();
         }
         let mut i = slot(hash, self.shift);
+        let tag = hash << 32;
         loop {
-            let id = self.table[i];
-            if id == EMPTY {
+            let e = self.table[i];
+            if e == FREE {
                 let nid = self.len() as u32;
-                self.table[i] = nid;
+                self.table[i] = tag | nid as u64;
                 self.words.extend_from_slice(s);
-                self.hashes.push(hash);
-                self.parent.push(parent);
-                self.via.push(via);
-                self.g.push(g);
-                self.h.push(0);
+                self.nodes.push(Node { hash, g, h: 0, parent, via });
                 return (nid, true);
             }
-            if self.hashes[id as usize] == hash && same(self.state(id), s) {
+            let id = e as u32;
+            if e & !0xFFFF_FFFF == tag && same(self.state(id), s) {
                 return (id, false);
             }
             i = (i + 1) & self.mask;
@@ -348,9 +346,9 @@ impl Store {
     }
     fn path(&self, mut id: u32) -> Vec<u32> {
         let mut out = Vec::new();
-        while self.parent[id as usize] != EMPTY {
-            out.push(self.via[id as usize]);
-            id = self.parent[id as usize];
+        while self.nodes[id as usize].parent != EMPTY {
+            out.push(self.nodes[id as usize].via);
+            id = self.nodes[id as usize].parent;
         }
         out.reverse();
         out
@@ -387,21 +385,6 @@ pub fn search_from(task: &Task, init: &[u32], alg: Algorithm, max_states: u64) -
         }
     };
     stats.states = store.len() as u64;
-    if std::env::var("MCL_PLAN_PROBES").is_ok() {
-        let mut tot = 0usize;
-        for (i, &id) in store.table.iter().enumerate() {
-            if id != EMPTY {
-                let s0 = slot(store.hashes[id as usize], store.shift);
-                tot += (i + store.table.len() - s0) & store.mask;
-            }
-        }
-        eprintln!(
-            "avg displacement {} over {} states, table {}",
-            tot as f64 / store.len() as f64,
-            store.len(),
-            store.table.len()
-        );
-    }
     Result { outcome, stats }
 }
 
@@ -418,7 +401,7 @@ fn bfs(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) ->
         let id = next as u32;
         next += 1;
         copy(&mut cur, store.state(id));
-        let (h, g) = (store.hashes[id as usize], store.g[id as usize]);
+        let (h, g) = (store.nodes[id as usize].hash, store.nodes[id as usize].g);
         stats.expanded += 1;
         let mut limit = false;
         sp.for_each_applicable(&cur, |a| {
@@ -470,14 +453,14 @@ fn best_first(
         stats.dead_ends += 1;
         return Outcome::Unsolvable;
     }
-    store.h[0] = h0;
+    store.nodes[0].h = h0;
     open.push(Reverse((h0, h0, 0)));
     let mut cur = vec![0u64; w];
     let mut child = vec![0u64; w];
     let mut closed: Vec<bool> = vec![false; 1];
     while let Some(Reverse((f, h, id))) = open.pop() {
-        let g = store.g[id as usize];
-        if f != key(g, h) || h != store.h[id as usize] || closed[id as usize] {
+        let g = store.nodes[id as usize].g;
+        if f != key(g, h) || h != store.nodes[id as usize].h || closed[id as usize] {
             continue; // stale entry
         }
         copy(&mut cur, store.state(id));
@@ -486,7 +469,7 @@ fn best_first(
         }
         closed[id as usize] = true;
         stats.expanded += 1;
-        let hash = store.hashes[id as usize];
+        let hash = store.nodes[id as usize].hash;
         let mut limit = false;
         sp.for_each_applicable(&cur, |a| {
             stats.generated += 1;
@@ -503,7 +486,7 @@ fn best_first(
                     }
                     None => 0,
                 };
-                store.h[c] = hv;
+                store.nodes[c].h = hv;
                 if hv == INF {
                     stats.dead_ends += 1;
                     closed[c] = true;
@@ -513,13 +496,13 @@ fn best_first(
                 if store.len() as u64 >= max_states {
                     limit = true;
                 }
-            } else if ng < store.g[c] && store.h[c] != INF && !greedy {
+            } else if ng < store.nodes[c].g && store.nodes[c].h != INF && !greedy {
                 // A cheaper path: update and (re)open.
-                store.g[c] = ng;
-                store.parent[c] = id;
-                store.via[c] = a;
+                store.nodes[c].g = ng;
+                store.nodes[c].parent = id;
+                store.nodes[c].via = a;
                 closed[c] = false;
-                open.push(Reverse((key(ng, store.h[c]), store.h[c], cid)));
+                open.push(Reverse((key(ng, store.nodes[c].h), store.nodes[c].h, cid)));
             }
         });
         if limit {

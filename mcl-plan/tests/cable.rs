@@ -396,3 +396,14 @@ fn executor_fails_when_no_plan_remains() {
     assert!(ex.replan(&facts).is_err());
     assert!(matches!(ex.next_step(&facts), Decision::Failed(_)));
 }
+
+#[test]
+fn replanning_ignores_facts_the_domain_does_not_know() {
+    let (d, p) = load();
+    let mut ex = Executor::new(d, p.clone(), Algorithm::Ucs).unwrap();
+    let mut facts: BTreeSet<Fact> = p.init.iter().cloned().collect();
+    facts.insert(Fact::new("batterylow", &["auv"]));
+    let plan = ex.replan(&facts).expect("plans");
+    assert_eq!(plan.steps.len(), 7);
+    assert_eq!(ex.next_step(&facts), Decision::Run(0));
+}

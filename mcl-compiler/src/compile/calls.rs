@@ -7,7 +7,7 @@
 //!
 //! | node | meaning |
 //! |---|---|
-//! | place `callN.begin`-side (`begin`) | the call is *waiting*: its parent started it, it has not taken the task yet (the seed's `P^wait` of the PW-transformation) |
+//! | `begin`: the place the parent marks to start the call | the call is *waiting*: its parent started it, it has not taken the task yet (the seed's `P^wait` of the PW-transformation) |
 //! | transition `callN.start` | the call *starts*: takes the task's lock, binds its arguments, starts the task |
 //! | place `callN.run` | the call *runs* (its task works for it) |
 //! | transitions `callN.ok` / `callN.fail` | the call *completes* with that outcome and gives the lock back |

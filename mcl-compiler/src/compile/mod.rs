@@ -52,6 +52,8 @@ impl std::fmt::Display for CompileError {
     }
 }
 
+impl std::error::Error for CompileError {}
+
 impl From<NetError> for CompileError {
     fn from(e: NetError) -> Self {
         CompileError::Net(e.to_string())
