@@ -2,7 +2,7 @@
 //! the MCL operators convention (FILE.mcl with domain.pddl and problem.pddl
 //! beside it), output formats, exit statuses and the plan validator.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn root() -> PathBuf {
@@ -27,7 +27,7 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn write(dir: &PathBuf, domain: &str, problem: &str) -> (String, String) {
+fn write(dir: &Path, domain: &str, problem: &str) -> (String, String) {
     let d = dir.join("domain.pddl");
     let p = dir.join("problem.pddl");
     std::fs::write(&d, domain).unwrap();
