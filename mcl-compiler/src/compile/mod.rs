@@ -73,7 +73,7 @@ pub fn compile_mission(
         db,
         scope: scope::scope(db, root),
         b: Builder::new(&name),
-        file: mission_file,
+        file_path: mission_file.path(db).display().to_string(),
         tasks: FxHashMap::default(),
         calls: 0,
         error: None,
@@ -120,7 +120,8 @@ struct Composer<'a> {
     db: &'a dyn Db,
     scope: &'a Scope,
     b: Builder,
-    file: SourceFile,
+    /// The mission's file, as shown in provenance (computed once).
+    file_path: String,
     tasks: FxHashMap<String, TaskNet>,
     calls: u32,
     error: Option<CompileError>,
@@ -135,11 +136,7 @@ impl Composer<'_> {
             call_site: None,
             structure: Some(structure.to_string()),
             path: Some(path.to_string()),
-            span: Some(SourceSpan {
-                file: self.file.path(self.db).display().to_string(),
-                start: span.start,
-                end: span.end,
-            }),
+            span: Some(SourceSpan { file: self.file_path.clone(), start: span.start, end: span.end }),
         }
     }
 
@@ -392,9 +389,8 @@ fn action_ref(a: &ActionDef) -> ActionRef {
 }
 
 /// A call argument or constant as JSON text: numbers, strings, lists; an
-/// identifier is a symbol given to the vehicle as a string, except the
-/// parameters of a parametrised mission, which stay references (`{"param": x}`)
-/// until the mission is instantiated.
+/// identifier (a symbol, or a parameter of a parametrised mission) is given
+/// to the vehicle as a string.
 pub fn value_json(v: &Value) -> String {
     fn go(v: &Value) -> serde_json::Value {
         match &v.kind {
