@@ -25,30 +25,64 @@ local function default_grammar()
   return editors .. '/tree-sitter-mcl'
 end
 
+local uv = vim.uv or vim.loop
+
+--- The nearest ancestor directory of `buf`'s file holding one of `markers`,
+--- else the file's own directory. Works from Neovim 0.7 (no `vim.fs` there).
 local function root_dir(buf, markers)
   local name = vim.api.nvim_buf_get_name(buf)
-  if vim.fs.root then
+  if vim.fs and vim.fs.root then
     return vim.fs.root(buf, markers) or vim.fs.dirname(name)
   end
-  local found = vim.fs.find(markers, { path = vim.fs.dirname(name), upward = true })[1]
-  return found and vim.fs.dirname(found) or vim.fs.dirname(name)
+  local start = vim.fn.fnamemodify(name, ':p:h')
+  local dir = start
+  while dir and dir ~= '' do
+    for _, marker in ipairs(markers) do
+      if uv.fs_stat(dir .. '/' .. marker) then
+        return dir
+      end
+    end
+    local parent = vim.fn.fnamemodify(dir, ':h')
+    if parent == dir then
+      break
+    end
+    dir = parent
+  end
+  return start
+end
+
+local function warn_once(msg)
+  if vim.notify_once then
+    vim.notify_once(msg, vim.log.levels.WARN)
+  else
+    vim.notify(msg, vim.log.levels.WARN)
+  end
 end
 
 --- Starts (or reuses) the MCL language server for `buf`.
 function M.start_lsp(buf, opts)
   opts = opts or M.options or defaults
   if vim.fn.executable(opts.cmd[1]) ~= 1 then
-    vim.notify_once(
-      ('mcl: `%s` not found; install it with `cargo install --path .` in the MCL repository'):format(opts.cmd[1]),
-      vim.log.levels.WARN
-    )
+    warn_once(('mcl: `%s` not found; install it with `cargo install --path .` in the MCL repository'):format(opts.cmd[1]))
     return
   end
-  return vim.lsp.start({
-    name = 'mcl',
-    cmd = opts.cmd,
-    root_dir = root_dir(buf, opts.root_markers),
-  }, { bufnr = buf })
+  local config = { name = 'mcl', cmd = opts.cmd, root_dir = root_dir(buf, opts.root_markers) }
+  if vim.lsp.start then
+    return vim.lsp.start(config, { bufnr = buf })
+  end
+  -- Neovim 0.7 (Debian 12's package): no `vim.lsp.start`; reuse the client
+  -- of the same root, or start one, and attach the buffer to it.
+  for _, client in pairs(vim.lsp.get_active_clients()) do
+    if client.name == 'mcl' and client.config.root_dir == config.root_dir and not client.is_stopped() then
+      vim.lsp.buf_attach_client(buf, client.id)
+      return client.id
+    end
+  end
+  local id = vim.lsp.start_client(config)
+  if id then
+    vim.lsp.buf_attach_client(buf, id)
+  end
+  return id
 end
 
 --- Registers the parser with nvim-treesitter (both its `main` and `master` branches).
@@ -80,9 +114,22 @@ function M.register_parser(grammar)
   return true
 end
 
+--- `*.mcl` files get the `mcl` filetype. Neovim 0.7 only uses the Lua
+--- filetype table when `do_filetype_lua` is set, so add an autocommand there.
+function M.detect_filetype()
+  vim.filetype.add({ extension = { mcl = 'mcl' } })
+  if vim.fn.has('nvim-0.8') == 0 then
+    vim.api.nvim_create_autocmd({ 'BufNewFile', 'BufRead' }, {
+      group = vim.api.nvim_create_augroup('mcl-filetype', { clear = true }),
+      pattern = '*.mcl',
+      command = 'setfiletype mcl',
+    })
+  end
+end
+
 function M.setup(opts)
   M.options = vim.tbl_deep_extend('force', defaults, opts or {})
-  vim.filetype.add({ extension = { mcl = 'mcl' } })
+  M.detect_filetype()
   if M.options.treesitter then
     M.register_parser(M.options.grammar)
   end
