@@ -67,6 +67,12 @@ impl Database {
         Self::default()
     }
 
+    /// A database that reports every salsa event (query executions, ...) to
+    /// `f`: for tests of incrementality and for profiling.
+    pub fn with_events(f: impl Fn(salsa::Event) + Send + Sync + 'static) -> Self {
+        Database { storage: salsa::Storage::new(Some(Box::new(f))), files: Default::default() }
+    }
+
     /// Sets the text of a file, as an editor does for an open document
     /// (creating the input if needed). Returns the input.
     pub fn set_text(&mut self, path: &Path, text: impl Into<Arc<str>>) -> SourceFile {

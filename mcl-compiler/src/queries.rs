@@ -1,20 +1,136 @@
-//! Tracked queries over source files: parsing, line indexes, imports.
+//! Tracked queries over source files: items, parsing, line indexes, imports.
+//!
+//! A file is parsed item by item: [`file_items`] cuts its text into top-level
+//! items (cheap: a lexer pass), and [`parse_item`] parses one item's text,
+//! with spans relative to the item's start. An item is keyed by its text
+//! alone ([`ItemText`]), so an edit inside one mission reparses that mission
+//! only, and moving an item (text inserted before it) reparses nothing.
+//! [`parse`] assembles the whole file with absolute spans for the consumers
+//! that want a file (compilation, navigation, formatting).
 
 use crate::codes;
 use crate::db::{normalize, Db, SourceFile};
 use crate::diagnostics::FileDiagnostic;
 use mcl_syntax::ast::Item;
-use mcl_syntax::{Diagnostic, LineIndex, Parse, Span};
+use mcl_syntax::lexer::Kw;
+use mcl_syntax::{Diagnostic, LineIndex, Parse, Shift, Span};
 use std::path::{Path, PathBuf};
 
-/// The syntax tree of a file (an empty tree for a file that cannot be read).
-/// Kept for the most recently used files only.
+/// The text of one top-level item, and the keyword of the item after it (the
+/// parser reports what follows an unfinished item). Equal texts are one key.
+#[salsa::interned(debug)]
+pub struct ItemText<'db> {
+    #[returns(ref)]
+    pub text: String,
+    pub next: Option<(Kw, u32)>,
+}
+
+/// One part of a file as cut by [`file_items`]: its text and where it starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, salsa::SalsaValue)]
+pub struct Chunk<'db> {
+    pub start: u32,
+    pub text: ItemText<'db>,
+}
+
+/// The parts of a file: the prelude (what comes before the first item),
+/// then one part per top-level item (`mcl_syntax::split_items`).
+#[salsa::tracked(returns(ref))]
+pub fn file_items<'db>(db: &'db dyn Db, file: SourceFile) -> Vec<Chunk<'db>> {
+    let text = file.text(db).as_deref().unwrap_or("");
+    mcl_syntax::split_items(text)
+        .into_iter()
+        .map(|b| Chunk { start: b.start as u32, text: ItemText::new(db, text[b.start..b.end].to_string(), b.next) })
+        .collect()
+}
+
+/// The syntax tree of one item (spans relative to the item's start). Kept
+/// for the most recently used items only.
+#[salsa::tracked(returns(ref), lru = 4096)]
+pub fn parse_item<'db>(db: &'db dyn Db, item: ItemText<'db>) -> Parse {
+    mcl_syntax::parse_item(item.text(db), *item.next(db))
+}
+
+/// Part `index` of a file, by position.
+#[salsa::interned(debug)]
+pub struct ChunkKey<'db> {
+    pub file: SourceFile,
+    pub index: u32,
+}
+
+/// The text of part `index` of `file`. Queries that reach a definition by
+/// its position (file, part) read this: it stays equal (and salsa keeps
+/// their results) when another part changes.
+#[salsa::tracked]
+pub fn chunk_text<'db>(db: &'db dyn Db, key: ChunkKey<'db>) -> Option<ItemText<'db>> {
+    file_items(db, *key.file(db)).get(*key.index(db) as usize).map(|c| c.text)
+}
+
+/// The item of part `index` of `file`, with spans relative to the part's
+/// start (`None` for the prelude or a part that is not a valid item).
+pub fn local_item(db: &dyn Db, file: SourceFile, index: u32) -> Option<&Item> {
+    let text = (*chunk_text(db, ChunkKey::new(db, file, index)))?;
+    parse_item(db, text).file.items.first()
+}
+
+/// Where part `index` of `file` starts (0 if there is no such part).
+pub fn item_start(db: &dyn Db, file: SourceFile, index: u32) -> u32 {
+    file_items(db, file).get(index as usize).map_or(0, |c| c.start)
+}
+
+/// A whole file's parse, assembled from its items, with absolute spans.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WholeFile {
+    pub parse: Parse,
+    /// For each part of [`file_items`], the index of its item in `parse.file.items`.
+    pub item_of_part: Vec<Option<u32>>,
+}
+
+/// The whole file's tree; see [`parse`]. Kept for the most recently used files only.
 #[salsa::tracked(returns(ref), lru = 256)]
-pub fn parse(db: &dyn Db, file: SourceFile) -> Parse {
-    match file.text(db) {
-        Some(text) => mcl_syntax::parse(text),
-        None => Parse { file: Default::default(), comments: Vec::new(), errors: Vec::new() },
+pub fn whole_file(db: &dyn Db, file: SourceFile) -> WholeFile {
+    let mut out = WholeFile {
+        parse: Parse { file: Default::default(), comments: Vec::new(), errors: Vec::new() },
+        item_of_part: Vec::new(),
+    };
+    for c in file_items(db, file) {
+        let p = parse_item(db, c.text);
+        out.item_of_part.push((!p.file.items.is_empty()).then_some(out.parse.file.items.len() as u32));
+        for mut item in p.file.items.iter().cloned() {
+            item.shift(c.start);
+            out.parse.file.items.push(item);
+        }
+        for mut x in p.comments.iter().copied() {
+            x.shift(c.start);
+            out.parse.comments.push(x);
+        }
     }
+    out.parse.errors = syntax_errors(db, file).clone();
+    out
+}
+
+/// The part of [`file_items`] that holds item `item` of [`parse`]'s tree.
+pub fn part_of_item(db: &dyn Db, file: SourceFile, item: u32) -> Option<u32> {
+    whole_file(db, file).item_of_part.iter().position(|x| *x == Some(item)).map(|p| p as u32)
+}
+
+/// The syntax tree of a file with absolute spans (an empty tree for a file
+/// that cannot be read): the same as `mcl_syntax::parse` of its text.
+pub fn parse(db: &dyn Db, file: SourceFile) -> &Parse {
+    &whole_file(db, file).parse
+}
+
+/// The lexical and syntax errors of a file (absolute spans), in source order.
+#[salsa::tracked(returns(ref))]
+pub fn syntax_errors(db: &dyn Db, file: SourceFile) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for c in file_items(db, file) {
+        for mut d in parse_item(db, c.text).errors.iter().cloned() {
+            d.shift(c.start);
+            out.push(d);
+        }
+    }
+    out.sort_by_key(|d| (d.span.start, d.span.end));
+    out
 }
 
 /// Line/column conversion for a file.
@@ -43,24 +159,17 @@ pub fn resolve_relative(db: &dyn Db, file: SourceFile, written: &str) -> PathBuf
 /// The imports of one file, in source order.
 #[salsa::tracked(returns(ref))]
 pub fn imports(db: &dyn Db, file: SourceFile) -> Vec<ResolvedImport> {
-    parse(db, file)
-        .file
-        .items
-        .iter()
-        .filter_map(|item| match item {
-            Item::Import(i) => {
-                let path = resolve_relative(db, file, &i.path);
-                Some(ResolvedImport {
-                    target: db.file(&path),
-                    written: i.path.clone(),
-                    path,
-                    path_span: i.path_span,
-                    span: i.span,
-                })
-            }
-            _ => None,
-        })
-        .collect()
+    let mut out = Vec::new();
+    for c in file_items(db, file) {
+        if let Some(Item::Import(i)) = parse_item(db, c.text).file.items.first() {
+            let path = resolve_relative(db, file, &i.path);
+            let (mut path_span, mut span) = (i.path_span, i.span);
+            path_span.shift(c.start);
+            span.shift(c.start);
+            out.push(ResolvedImport { target: db.file(&path), written: i.path.clone(), path, path_span, span });
+        }
+    }
+    out
 }
 
 /// A program: a root file and every file it imports, transitively.

@@ -1,9 +1,9 @@
 //! Name resolution: the definitions visible in a program.
 
 use crate::db::{Db, SourceFile};
-use crate::queries::{parse, program};
+use crate::queries::{file_items, item_start, local_item, parse_item, program, whole_file};
 use mcl_syntax::ast::*;
-use mcl_syntax::Span;
+use mcl_syntax::{Shift, Span};
 use rustc_hash::FxHashMap;
 
 /// What a name defines.
@@ -28,8 +28,13 @@ impl DefKind {
     }
 }
 
-/// Where a definition is: its file, the index of its item in that file and
-/// its index inside the item (for blocks that hold several definitions).
+/// Where a definition is: its file, the index of its part in that file
+/// (`queries::file_items`: 0 is the prelude, then one part per item) and its
+/// index inside the item (for blocks that hold several definitions).
+///
+/// `name_span` is absolute in [`scope`], and relative to the item's start in
+/// [`local_scope`] (`local` tells which); the accessors ([`task`], ...) give
+/// the node with spans of the same kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct DefId {
     pub kind: DefKind,
@@ -39,6 +44,8 @@ pub struct DefId {
     pub name_span: Span,
     /// Defined by the standard library (programs may override it).
     pub in_stdlib: bool,
+    /// `name_span` and the accessors' nodes are relative to the item's start.
+    pub local: bool,
 }
 
 /// Every top-level definition of a program, by kind and name, in program
@@ -65,82 +72,134 @@ impl Scope {
     }
 }
 
-/// The scope of the program rooted at `root`.
+/// The scope of the program rooted at `root`, with absolute spans (for
+/// navigation and compilation).
 #[salsa::tracked(returns(ref))]
 pub fn scope(db: &dyn Db, root: SourceFile) -> Scope {
+    let mut out = local_scope(db, root).clone();
+    for ids in out.defs.values_mut() {
+        for id in ids {
+            id.name_span.shift(item_start(db, id.file, id.item));
+            id.local = false;
+        }
+    }
+    out
+}
+
+/// The scope of the program rooted at `root`, with spans relative to their
+/// items: it stays equal while no definition changes (an edit inside a
+/// mission body, text moved), so the checks that read it are reused.
+#[salsa::tracked(returns(ref))]
+pub fn local_scope(db: &dyn Db, root: SourceFile) -> Scope {
     let mut scope = Scope::default();
     for &file in &program(db, root).files {
-        for_each_def(db, file, |id, name| scope.defs.entry((id.kind, name.to_string())).or_default().push(id));
+        for (id, name) in file_defs(db, file) {
+            scope.defs.entry((id.kind, name.clone())).or_default().push(*id);
+        }
     }
     scope
 }
 
-/// Calls `f` for every top-level definition of one file.
-pub fn for_each_def(db: &dyn Db, file: SourceFile, mut f: impl FnMut(DefId, &str)) {
-    let ast = &parse(db, file).file;
+/// The definitions of one file, with spans relative to their items.
+#[salsa::tracked(returns(ref))]
+pub fn file_defs(db: &dyn Db, file: SourceFile) -> Vec<(DefId, String)> {
     let in_stdlib = file == db.stdlib();
-    for (i, item) in ast.items.iter().enumerate() {
-        let mk = |kind, index: usize, n: &Name| {
-            (DefId { kind, file, item: i as u32, index: index as u32, name_span: n.span, in_stdlib }, n.text.clone())
+    let mut out = Vec::new();
+    for (i, c) in file_items(db, file).iter().enumerate() {
+        let Some(item) = parse_item(db, c.text).file.items.first() else { continue };
+        let mut emit = |kind, index: usize, n: &Name| {
+            out.push((
+                DefId { kind, file, item: i as u32, index: index as u32, name_span: n.span, in_stdlib, local: true },
+                n.text.clone(),
+            ))
         };
-        let mut emit = |(id, name): (DefId, String)| f(id, &name);
         match item {
-            Item::Actions(b) => b.actions.iter().enumerate().for_each(|(j, a)| emit(mk(DefKind::Action, j, &a.name))),
-            Item::Events(b) => b.events.iter().enumerate().for_each(|(j, e)| emit(mk(DefKind::Event, j, e))),
-            Item::Patterns(b) => {
-                b.patterns.iter().enumerate().for_each(|(j, p)| emit(mk(DefKind::Pattern, j, &p.name)))
-            }
-            Item::Tasks(b) => b.tasks.iter().enumerate().for_each(|(j, t)| emit(mk(DefKind::Task, j, &t.name))),
+            Item::Actions(b) => b.actions.iter().enumerate().for_each(|(j, a)| emit(DefKind::Action, j, &a.name)),
+            Item::Events(b) => b.events.iter().enumerate().for_each(|(j, e)| emit(DefKind::Event, j, e)),
+            Item::Patterns(b) => b.patterns.iter().enumerate().for_each(|(j, p)| emit(DefKind::Pattern, j, &p.name)),
+            Item::Tasks(b) => b.tasks.iter().enumerate().for_each(|(j, t)| emit(DefKind::Task, j, &t.name)),
             Item::Mission(m) => {
                 if let Some(n) = &m.name {
-                    emit(mk(DefKind::Mission, 0, n));
+                    emit(DefKind::Mission, 0, n);
                 }
             }
             Item::Import(_) | Item::Constraints(_) => {}
         }
     }
+    out
+}
+
+/// Calls `f` for every top-level definition of one file (absolute spans).
+pub fn for_each_def(db: &dyn Db, file: SourceFile, mut f: impl FnMut(DefId, &str)) {
+    for (id, name) in file_defs(db, file) {
+        let mut id = *id;
+        id.name_span.shift(item_start(db, file, id.item));
+        id.local = false;
+        f(id, name);
+    }
+}
+
+/// The item a definition is in, with spans of the definition's kind.
+fn item_of(db: &dyn Db, id: DefId) -> Option<&Item> {
+    if id.local {
+        return local_item(db, id.file, id.item);
+    }
+    let w = whole_file(db, id.file);
+    let i = (*w.item_of_part.get(id.item as usize)?)?;
+    w.parse.file.items.get(i as usize)
 }
 
 /// Typed access to the syntax node of a definition.
 pub fn action(db: &dyn Db, id: DefId) -> Option<&ActionDef> {
-    match parse(db, id.file).file.items.get(id.item as usize)? {
+    match item_of(db, id)? {
         Item::Actions(b) => b.actions.get(id.index as usize),
         _ => None,
     }
 }
 
 pub fn pattern(db: &dyn Db, id: DefId) -> Option<&Pattern> {
-    match parse(db, id.file).file.items.get(id.item as usize)? {
+    match item_of(db, id)? {
         Item::Patterns(b) => b.patterns.get(id.index as usize),
         _ => None,
     }
 }
 
 pub fn task(db: &dyn Db, id: DefId) -> Option<&TaskDef> {
-    match parse(db, id.file).file.items.get(id.item as usize)? {
+    match item_of(db, id)? {
         Item::Tasks(b) => b.tasks.get(id.index as usize),
         _ => None,
     }
 }
 
 pub fn mission(db: &dyn Db, id: DefId) -> Option<&Mission> {
-    match parse(db, id.file).file.items.get(id.item as usize)? {
+    match item_of(db, id)? {
         Item::Mission(m) => Some(m),
         _ => None,
     }
 }
 
-/// Every mission of a program (named or not), with its file.
+/// Every mission of a program (named or not), with its file; spans are
+/// relative to each mission's start (the checks compare names and labels).
 pub fn missions(db: &dyn Db, root: SourceFile) -> Vec<(SourceFile, &Mission)> {
     let mut out = Vec::new();
     for &file in &program(db, root).files {
-        for item in &parse(db, file).file.items {
-            if let Item::Mission(m) = item {
+        for &part in mission_parts(db, file) {
+            if let Some(Item::Mission(m)) = local_item(db, file, part) {
                 out.push((file, m));
             }
         }
     }
     out
+}
+
+/// The parts of a file that are missions (equal across edits inside them).
+#[salsa::tracked(returns(ref))]
+pub fn mission_parts(db: &dyn Db, file: SourceFile) -> Vec<u32> {
+    let items = file_items(db, file).iter().enumerate();
+    items
+        .filter(|(_, c)| matches!(parse_item(db, c.text).file.items.first(), Some(Item::Mission(_))))
+        .map(|(i, _)| i as u32)
+        .collect()
 }
 
 /// The net of a pattern: written in MCL, or read from its PNML file. `Err`

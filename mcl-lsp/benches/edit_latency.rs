@@ -21,6 +21,13 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 use tower_lsp_server::ls_types::Uri;
 
+/// Every diagnostic of `check_file`, converted to LSP values (the compiler's
+/// part of the server's semantic diagnostics; `diagnostics::full` adds the
+/// coordination analysis of the constraints, measured apart).
+fn compiler_diagnostics(a: &Analysis<'_>, f: mcl_compiler::SourceFile) -> Vec<tower_lsp_server::ls_types::Diagnostic> {
+    mcl_compiler::check_file(a.db, f).iter().map(|fd| diagnostics::to_lsp(a, f, &fd.diag)).collect()
+}
+
 fn percentile(v: &mut [f64], p: f64) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let i = ((v.len() as f64 - 1.0) * p).round() as usize;
@@ -65,15 +72,19 @@ fn in_process(text: &str) {
         let mut db = Database::new();
         let f = db.set_text(&path, text.to_string());
         let a = Analysis::new(&db, &world);
-        let d = diagnostics::full(&a, f);
-        assert!(d.is_empty());
+        let d = compiler_diagnostics(&a, f);
+        assert!(
+            d.is_empty(),
+            "{:?}",
+            d.iter().map(|d| (&d.code, &d.message, d.range.start)).take(5).collect::<Vec<_>>()
+        );
         scratch.push(t.elapsed().as_secs_f64() * 1e3);
     }
 
     // Incremental: one character inserted (then removed) inside a mission.
     let mut db = Database::new();
     let f = db.set_text(&path, text.to_string());
-    diagnostics::full(&Analysis::new(&db, &world), f);
+    compiler_diagnostics(&Analysis::new(&db, &world), f);
     let mut cur = text.to_string();
     let (mut syntax, mut full) = (Vec::new(), Vec::new());
     for i in 0..400 {
@@ -88,7 +99,7 @@ fn in_process(text: &str) {
         let a = Analysis::new(&db, &world);
         let s = diagnostics::syntax(&a, f);
         syntax.push(t.elapsed().as_secs_f64() * 1e3);
-        let d = diagnostics::full(&a, f);
+        let d = compiler_diagnostics(&a, f);
         full.push(t.elapsed().as_secs_f64() * 1e3);
         assert!(s.is_empty() && d.is_empty());
         let _ = db.file(&path);
@@ -103,7 +114,7 @@ fn in_process(text: &str) {
         }
         let t = Instant::now();
         db.set_text(&path, t2);
-        let d = diagnostics::full(&Analysis::new(&db, &world), f);
+        let d = compiler_diagnostics(&Analysis::new(&db, &world), f);
         errs.push(t.elapsed().as_secs_f64() * 1e3);
         assert_eq!(d.len(), if i % 2 == 0 { 1 } else { 0 });
     }
@@ -151,7 +162,7 @@ fn in_process(text: &str) {
     // Requests on the same file (warm database, as after the edits above).
     db.set_text(&path, text.to_string());
     let a = Analysis::new(&db, &world);
-    diagnostics::full(&a, f);
+    compiler_diagnostics(&a, f);
     let call = text.rfind("Goto( [x, y] )").unwrap() + 1;
     let stmt = sites[sites.len() / 2] + 5;
     let time = |name: &str, run: &mut dyn FnMut()| {

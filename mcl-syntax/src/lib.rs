@@ -11,9 +11,11 @@ pub mod format;
 pub mod gen;
 pub mod lexer;
 pub mod parser;
+pub mod shift;
 pub mod span;
 pub mod visit;
 
 pub use diag::{Diagnostic, Label, Severity};
-pub use parser::{parse, Parse};
+pub use parser::{parse, parse_item, split_items, ItemBounds, Parse};
+pub use shift::{parse_by_items, Shift};
 pub use span::{LineCol, LineIndex, Span};

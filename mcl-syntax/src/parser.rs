@@ -28,12 +28,81 @@ pub struct Parse {
 
 /// Parses a whole file. Never panics and never gives up.
 pub fn parse(src: &str) -> Parse {
+    parse_with(src, None)
+}
+
+/// The bounds of one top-level item of a file, as found by [`split_items`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ItemBounds {
+    /// Byte offset of the item's first token (0 for the prelude).
+    pub start: usize,
+    /// Byte offset of the next item's first token, or the file's length.
+    pub end: usize,
+    /// The keyword that starts the next item and its length as written
+    /// (`None` for the last item): [`parse_item`] needs it to report what
+    /// follows the item exactly as [`parse`] does.
+    pub next: Option<(Kw, u32)>,
+}
+
+/// Splits a file into its top-level items: the prelude (whatever comes
+/// before the first item: trivia, or text that is no item), then one part per
+/// item, from its keyword to the next item's keyword. Item boundaries are the
+/// ones of [`parse`]: a top-level keyword at depth 0, or one that closes the
+/// open blocks (delimiter balancing). Parsing every part with [`parse_item`]
+/// and shifting the results by `start` gives what [`parse`] gives (tested on
+/// the corpus and on random and mutated programs).
+pub fn split_items(src: &str) -> Vec<ItemBounds> {
+    let lexed = lex(src);
+    let tokens = &lexed.tokens;
+    let mut out = vec![ItemBounds { start: 0, end: src.len(), next: None }];
+    let mut stack: Vec<Token<'_>> = Vec::new();
+    for (i, &(tok, span)) in tokens.iter().enumerate() {
+        if closer_of(tok).is_some() {
+            stack.push(tok);
+        } else if is_closer(tok) {
+            if let Some(pos) = stack.iter().rposition(|o| closer_of(*o) == Some(tok)) {
+                stack.truncate(pos);
+            }
+        } else if let Token::Kw(k) = tok {
+            let boundary =
+                if stack.is_empty() { k.starts_item() } else { starts_item_here(tok, tokens.get(i + 1).map(|t| t.0)) };
+            if boundary {
+                stack.clear();
+                let last = out.last_mut().expect("prelude");
+                last.end = span.start as usize;
+                last.next = Some((k, span.len() as u32));
+                out.push(ItemBounds { start: span.start as usize, end: src.len(), next: None });
+            }
+        }
+    }
+    out
+}
+
+/// Parses one part of a file as cut by [`split_items`] (`src` is the part's
+/// text, `next` its `next`), with spans relative to the part's start.
+pub fn parse_item(src: &str, next: Option<(Kw, u32)>) -> Parse {
+    parse_with(src, next)
+}
+
+fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
     let lexed = lex(src);
     let mut errors = lexed.errors;
-    let tokens = balance(lexed.tokens, src.len(), &mut errors);
-    let eoi = SimpleSpan::from(src.len()..src.len());
-    let input: Vec<(Token<'_>, SimpleSpan)> = tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
-    let (file, parse_errors) = file_parser().parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
+    let why = if next.is_some() { "before the next item" } else { "at the end of the file" };
+    let tokens = balance(lexed.tokens, src.len(), &mut errors, why);
+    let len = src.len();
+    let mut input: Vec<(Token<'_>, SimpleSpan)> =
+        tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
+    // The next item's keyword follows, as it does in the whole file, so that
+    // an error at the item's end says what comes next.
+    let mut end = len;
+    if let Some((k, klen)) = next {
+        end = len + klen as usize;
+        input.push((Token::Kw(k), SimpleSpan::from(len..end)));
+    }
+    let eoi = SimpleSpan::from(end..end);
+    let limit = next.map(|_| len);
+    let (file, parse_errors) =
+        item_parser(limit).parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
     let file = file.unwrap_or_default();
     lint_spellings(&file, &mut errors);
@@ -71,7 +140,12 @@ fn starts_item_here(tok: Token<'_>, next: Option<Token<'_>>) -> bool {
     }
 }
 
-fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diagnostic>) -> Vec<(Token<'s>, Span)> {
+fn balance<'s>(
+    tokens: Vec<(Token<'s>, Span)>,
+    len: usize,
+    errors: &mut Vec<Diagnostic>,
+    at_end: &str,
+) -> Vec<(Token<'s>, Span)> {
     let mut out = Vec::with_capacity(tokens.len() + 4);
     let mut stack: Vec<(Token<'s>, Span)> = Vec::new();
     let unclosed = |open: (Token<'_>, Span), at: Span, why: &str| {
@@ -115,7 +189,7 @@ fn balance<'s>(tokens: Vec<(Token<'s>, Span)>, len: usize, errors: &mut Vec<Diag
         }
     }
     while let Some(open) = stack.pop() {
-        errors.push(unclosed(open, Span::at(len), "at the end of the file"));
+        errors.push(unclosed(open, Span::at(len), at_end));
         out.push((closer_of(open.0).expect("opener"), Span::at(len)));
     }
     out
@@ -444,7 +518,9 @@ where
     })
 }
 
-fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
+/// The grammar of a file; with `Some(limit)`, of one item followed by the
+/// keyword of the next one (at `limit`), which is not parsed.
+fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
     // import "path";
     let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
     let import = kw(Kw::Import)
@@ -769,12 +845,21 @@ fn file_parser<'t, 's: 't>() -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t
             let _ = e.span();
         })
         .to(None);
-    item.map(Some)
-        .recover_with(via_parser(skip_item))
+    let before_limit = any()
+        .try_map(move |_, span: SimpleSpan| match limit {
+            Some(l) if span.start >= l => Err(Rich::custom(span, "")),
+            _ => Ok(()),
+        })
+        .rewind();
+    let items = before_limit
+        .ignore_then(item.map(Some).recover_with(via_parser(skip_item)))
         .repeated()
         .collect::<Vec<Option<Item>>>()
-        .map(|v| SourceFile { items: v.into_iter().flatten().collect() })
-        .then_ignore(end())
+        .map(|v| SourceFile { items: v.into_iter().flatten().collect() });
+    match limit {
+        None => items.then_ignore(end()).boxed(),
+        Some(_) => items.then_ignore(any()).then_ignore(end()).boxed(),
+    }
 }
 
 // ---------------------------------------------------------------------------

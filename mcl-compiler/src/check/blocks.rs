@@ -27,7 +27,7 @@ pub struct TaskKey {
 /// (`None` when the task cannot be built, e.g. its pattern is undefined).
 #[salsa::tracked(returns(ref))]
 pub fn task_verdict(db: &dyn Db, key: TaskKey<'_>) -> Option<verify::Verdict> {
-    let scope = scope::scope(db, *key.root(db));
+    let scope = scope::local_scope(db, *key.root(db));
     let mut b = Builder::new(key.name(db));
     let (_, _) = add_task_net(db, scope, &mut b, key.name(db), "").ok()??;
     let net = b.net.build().ok()?;
@@ -50,7 +50,12 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                 continue;
             }
             // A task already reported as wrong would only fail again here.
-            if cx.out.iter().any(|d| d.is_error() && d.span.start >= t.span.start && d.span.end <= t.span.end) {
+            if cx
+                .out
+                .iter()
+                .chain(cx.syntax_errors)
+                .any(|d| d.is_error() && d.span.start >= t.span.start && d.span.end <= t.span.end)
+            {
                 continue;
             }
             let key = TaskKey::new(cx.db, cx.file, t.name.text.clone());
@@ -65,14 +70,9 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                     "abort" => "does not handle abort correctly",
                     _ => "is too large to verify",
                 };
-                let mut d =
-                    Diagnostic::error(codes::BLOCK_PROPERTY, format!("task `{}` {what}", t.name.text), t.name.span)
-                        .with_label(t.name.span, v.message.clone())
-                        .with_label_in(
-                            cx.other_file(pid),
-                            pattern.name.span,
-                            format!("pattern `{}`", pattern.name.text),
-                        );
+                let d = Diagnostic::error(codes::BLOCK_PROPERTY, format!("task `{}` {what}", t.name.text), t.name.span)
+                    .with_label(t.name.span, v.message.clone());
+                let mut d = cx.def_label(d, pid, pattern.name.span, format!("pattern `{}`", pattern.name.text));
                 if !v.trace.is_empty() {
                     d = d.with_note(format!("counterexample: {}", v.trace.join(" → ")));
                 }

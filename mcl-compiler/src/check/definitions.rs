@@ -2,13 +2,12 @@
 
 use super::Cx;
 use crate::codes;
-use crate::scope::for_each_def;
+use crate::scope::file_defs;
 use mcl_syntax::Diagnostic;
 
 pub(crate) fn check(cx: &mut Cx<'_>) {
-    let mut found = Vec::new();
-    for_each_def(cx.db, cx.file, |id, name| found.push((id, name.to_string())));
-    for (id, name) in found {
+    for (id, name) in file_defs(cx.db, cx.file) {
+        let id = *id;
         // Definitions of the standard library may be overridden.
         let defs: Vec<_> = cx.scope.get(id.kind, &name).iter().filter(|d| !d.in_stdlib).copied().collect();
         let Some(first) = defs.first().copied() else {
@@ -23,10 +22,10 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             format!("the {kind} `{name}` is defined more than once"),
             id.name_span,
         )
-        .with_label(id.name_span, format!("`{name}` redefined here"))
-        .with_label_in(cx.other_file(first), first.name_span, format!("first definition of `{name}`"))
-        .with_help(format!("rename one of the two {kind}s, or remove one"));
-        cx.out.push(d);
+        .with_label(id.name_span, format!("`{name}` redefined here"));
+        cx.at_def(id);
+        let d = cx.def_label(d, first, first.name_span, format!("first definition of `{name}`"));
+        cx.out.push(d.with_help(format!("rename one of the two {kind}s, or remove one")));
     }
 }
 
@@ -61,20 +60,15 @@ pub(crate) fn check_imported_clashes(cx: &mut Cx<'_>) {
             continue;
         }
         let k = kind.as_str();
-        cx.out.push(
-            Diagnostic::error(
-                codes::DUPLICATE_DEFINITION,
-                format!("the {k} `{name}` is defined by two imported files"),
-                imp.path_span,
-            )
-            .with_label(imp.path_span, format!("this import brings a second `{name}`"))
-            .with_label_in(cx.other_file(**first), first.name_span, format!("`{name}` defined here"))
-            .with_label_in(
-                cx.other_file(**second),
-                second.name_span,
-                format!("and again here, imported through `{}`", imp.written),
-            )
-            .with_help(format!("rename one of the two {k}s, or move it to a file both import")),
-        );
+        let d = Diagnostic::error(
+            codes::DUPLICATE_DEFINITION,
+            format!("the {k} `{name}` is defined by two imported files"),
+            imp.path_span,
+        )
+        .with_label(imp.path_span, format!("this import brings a second `{name}`"));
+        let d = cx.def_label(d, **first, first.name_span, format!("`{name}` defined here"));
+        let d =
+            cx.def_label(d, **second, second.name_span, format!("and again here, imported through `{}`", imp.written));
+        cx.out.push(d.with_help(format!("rename one of the two {k}s, or move it to a file both import")));
     }
 }

@@ -80,8 +80,8 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
         return;
     };
     // A syntax error inside the parentheses already explains what is wrong.
-    let broken_args = crate::queries::parse(cx.db, cx.file)
-        .errors
+    let broken_args = cx
+        .syntax_errors
         .iter()
         .any(|e| e.is_error() && e.span.start >= c.args_span.start && e.span.start <= c.args_span.end);
     if task.params.len() != c.args.len() && !broken_args {
@@ -89,7 +89,7 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
         let header = if header.is_empty() { String::new() } else { format!(" {header} ") };
         let n = task.params.len();
         let plural = if n == 1 { "" } else { "s" };
-        let mut d = Diagnostic::error(
+        let d = Diagnostic::error(
             codes::ARITY,
             format!(
                 "task `{}` takes {n} argument{plural} but {} {} given",
@@ -99,12 +99,8 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
             ),
             c.args_span,
         )
-        .with_label(c.args_span, format!("expected {n} argument{plural}"))
-        .with_label_in(
-            cx.other_file(id),
-            task.name.span,
-            format!("`{}({header})` is declared here", task.name.text),
-        );
+        .with_label(c.args_span, format!("expected {n} argument{plural}"));
+        let mut d = cx.def_label(d, id, task.name.span, format!("`{}({header})` is declared here", task.name.text));
         if n == 1 && c.args.len() > 1 {
             d = d.with_help(
                 "a composite value (a way-point, a path) is one argument: write it as a list, e.g. `[24, 12]`",

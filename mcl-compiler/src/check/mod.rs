@@ -12,26 +12,25 @@ mod unused;
 
 use crate::db::{Db, SourceFile};
 use crate::diagnostics::FileDiagnostic;
-use crate::queries::{parse, program};
-use crate::scope::{scope, DefId, Scope};
-use mcl_syntax::{Diagnostic, Severity};
+use crate::queries::{file_items, item_start, parse_item, program, syntax_errors, ItemText};
+use crate::scope::{local_scope, DefId, Scope};
+use mcl_syntax::{Diagnostic, Severity, Shift, Span};
 
 /// Every diagnostic located in `file`: syntax, imports, names, tasks,
 /// patterns, missions, constraints and unused definitions; sorted by position.
+///
+/// It only assembles: the checks of each item ([`check_item`]) and of the
+/// file's definitions ([`check_definitions`]) have spans relative to items
+/// and are reused across edits that do not concern them.
 #[salsa::tracked(returns(ref))]
 pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
-    let mut cx = Cx { db, file, scope: scope(db, file), out: Vec::new() };
-    cx.out.extend(parse(db, file).errors.iter().cloned());
     let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
-    definitions::check(&mut cx);
-    definitions::check_imported_clashes(&mut cx);
-    patterns::check(&mut cx);
-    tasks::check(&mut cx);
-    missions::check(&mut cx);
-    constraints::check(&mut cx);
-    unused::check(&mut cx);
-    blocks::check(&mut cx);
-    diags.extend(cx.out.into_iter().map(|diag| FileDiagnostic { file, diag }));
+    diags.extend(syntax_errors(db, file).iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
+    for c in file_items(db, file) {
+        let local = check_item(db, ItemCheckKey::new(db, file, c.text));
+        local.place(db, file, c.start, &mut diags);
+    }
+    check_definitions(db, file).place(db, file, 0, &mut diags);
     diags.sort_by(|a, b| {
         (a.diag.span.start, a.diag.span.end, a.diag.code).cmp(&(b.diag.span.start, b.diag.span.end, b.diag.code))
     });
@@ -39,27 +38,156 @@ pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     diags
 }
 
+/// The checks of one item of `root`, keyed by the item's text.
+#[salsa::interned(debug)]
+pub struct ItemCheckKey<'db> {
+    pub root: SourceFile,
+    pub item: ItemText<'db>,
+}
+
+/// The diagnostics of one item (patterns, tasks, missions, constraints,
+/// building blocks, unused mission parameters), with spans relative to the
+/// item's start; they depend on the item's text and on the definitions of
+/// the program ([`local_scope`]), not on where the item is.
+#[salsa::tracked(returns(ref))]
+pub fn check_item<'db>(db: &'db dyn Db, key: ItemCheckKey<'db>) -> LocalDiagnostics {
+    let root = *key.root(db);
+    let parsed = parse_item(db, *key.item(db));
+    let mut cx = Cx::new(db, root, &parsed.file, &parsed.errors);
+    patterns::check(&mut cx);
+    tasks::check(&mut cx);
+    missions::check(&mut cx);
+    // Constraints read every mission: only their own item pays for it.
+    if matches!(parsed.file.items.first(), Some(mcl_syntax::ast::Item::Constraints(_))) {
+        constraints::check(&mut cx);
+    }
+    unused::check_params(&mut cx);
+    blocks::check(&mut cx);
+    cx.finish()
+}
+
+/// The checks of a file's definitions as a whole: duplicates, clashes
+/// between imported files, unused definitions.
+#[salsa::tracked(returns(ref))]
+pub fn check_definitions(db: &dyn Db, root: SourceFile) -> LocalDiagnostics {
+    static EMPTY: mcl_syntax::ast::SourceFile = mcl_syntax::ast::SourceFile { items: Vec::new() };
+    let mut cx = Cx::new(db, root, &EMPTY, &[]);
+    definitions::check(&mut cx);
+    definitions::check_imported_clashes(&mut cx);
+    unused::check_definitions(&mut cx);
+    cx.finish()
+}
+
 /// True when any diagnostic is an error.
 pub fn has_errors(diags: &[FileDiagnostic]) -> bool {
     diags.iter().any(|d| d.diag.severity == Severity::Error)
 }
 
-/// The context shared by the checks of one file.
+/// Where a span of a [`LocalDiagnostics`] is: relative to the start of item
+/// `item` of `file` (the main span when `label` is `None`, else that label).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Anchor {
+    pub diag: u32,
+    pub label: Option<u32>,
+    pub file: SourceFile,
+    pub item: u32,
+}
+
+/// Diagnostics whose spans are relative: to the start of the item they were
+/// computed for, or to the item an [`Anchor`] names.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
+pub struct LocalDiagnostics {
+    pub diags: Vec<Diagnostic>,
+    pub anchors: Vec<Anchor>,
+}
+
+impl LocalDiagnostics {
+    /// Makes the spans absolute (`own` is the start of the item they were
+    /// computed for) and adds the diagnostics to `out`.
+    pub fn place(&self, db: &dyn Db, root: SourceFile, own: u32, out: &mut Vec<FileDiagnostic>) {
+        for (i, d) in self.diags.iter().enumerate() {
+            let mut d = d.clone();
+            let anchor = |label: Option<u32>| self.anchors.iter().find(|a| a.diag == i as u32 && a.label == label);
+            let main = anchor(None).map_or(own, |a| item_start(db, a.file, a.item));
+            d.span.shift(main);
+            for (j, l) in d.labels.iter_mut().enumerate() {
+                match anchor(Some(j as u32)) {
+                    Some(a) => {
+                        l.span.shift(item_start(db, a.file, a.item));
+                        if a.file != root {
+                            l.file = Some(a.file.path(db).display().to_string());
+                        }
+                    }
+                    None if l.file.is_none() => l.span.shift(main),
+                    None => {}
+                }
+            }
+            out.push(FileDiagnostic { file: root, diag: d });
+        }
+    }
+}
+
+/// The context shared by the checks of one item (or of a file's definitions).
 pub(crate) struct Cx<'a> {
     pub db: &'a dyn Db,
+    /// The root of the program, the file being checked.
     pub file: SourceFile,
+    /// The program's definitions, spans relative to their items.
     pub scope: &'a Scope,
+    ast: &'a mcl_syntax::ast::SourceFile,
+    /// The syntax errors of the item.
+    pub syntax_errors: &'a [Diagnostic],
     pub out: Vec<Diagnostic>,
+    anchors: Vec<Anchor>,
 }
 
 impl<'a> Cx<'a> {
-    pub fn ast(&self) -> &'a mcl_syntax::ast::SourceFile {
-        &parse(self.db, self.file).file
+    fn new(
+        db: &'a dyn Db,
+        file: SourceFile,
+        ast: &'a mcl_syntax::ast::SourceFile,
+        syntax_errors: &'a [Diagnostic],
+    ) -> Self {
+        Cx { db, file, scope: local_scope(db, file), ast, syntax_errors, out: Vec::new(), anchors: Vec::new() }
     }
 
-    /// The path to show for a definition in another file (`None` if in this one).
-    pub fn other_file(&self, id: DefId) -> Option<String> {
-        (id.file != self.file).then(|| id.file.path(self.db).display().to_string())
+    fn finish(self) -> LocalDiagnostics {
+        LocalDiagnostics { diags: self.out, anchors: self.anchors }
+    }
+
+    /// The item being checked, as a file of one item (spans relative to it).
+    pub fn ast(&self) -> &'a mcl_syntax::ast::SourceFile {
+        self.ast
+    }
+
+    /// Adds a label at `span` inside definition `id`'s item (a span of a
+    /// node read through `id`). The diagnostic must be the next one pushed.
+    pub fn def_label(&mut self, d: Diagnostic, id: DefId, span: Span, message: impl Into<String>) -> Diagnostic {
+        let label = d.labels.len() as u32;
+        self.anchors.push(Anchor { diag: self.out.len() as u32, label: Some(label), file: id.file, item: id.item });
+        d.with_label(span, message)
+    }
+
+    #[allow(dead_code)]
+    /// Adds a label at an absolute `span` of `file` (a span read from
+    /// `queries::parse`). The diagnostic must be the next one pushed.
+    pub fn absolute_label(
+        &mut self,
+        d: Diagnostic,
+        file: SourceFile,
+        span: Span,
+        message: impl Into<String>,
+    ) -> Diagnostic {
+        // Part 0 (the prelude) starts at 0: its offsets are absolute.
+        let label = d.labels.len() as u32;
+        self.anchors.push(Anchor { diag: self.out.len() as u32, label: Some(label), file, item: 0 });
+        d.with_label(span, message)
+    }
+
+    /// Puts the main span (and the labels without an anchor) of the next
+    /// diagnostic pushed inside definition `id`'s item.
+    pub fn at_def(&mut self, id: DefId) {
+        self.anchors.push(Anchor { diag: self.out.len() as u32, label: None, file: id.file, item: id.item });
     }
 
     /// Adds "did you mean" help for `name` among `candidates`.

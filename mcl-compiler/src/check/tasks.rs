@@ -33,7 +33,9 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
         }
     }
     // Pattern.
-    let mut pattern_file = None;
+    // Where the pattern's transitions are (its item; a PNML pattern's nodes
+    // have empty spans, shown at the start of the file that declares it).
+    let mut pattern_at = None;
     let net = match &t.pattern {
         None => {
             cx.out.push(
@@ -58,13 +60,14 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                 cx.out.push(d);
                 None
             }
-            Some(id) => {
-                pattern_file = cx.other_file(id);
-                match (scope::pattern(cx.db, id), scope::pattern_net(cx.db, id)) {
-                    (Some(p), Some(Ok(net))) => Some((p, net)),
-                    _ => None,
+            Some(id) => match (scope::pattern(cx.db, id), scope::pattern_net(cx.db, id)) {
+                (Some(p), Some(Ok(net))) => {
+                    let in_mcl = matches!(p.body, PatternBody::Net(_));
+                    pattern_at = Some(if in_mcl { id } else { scope::DefId { item: 0, ..id } });
+                    Some((p, net))
                 }
-            }
+                _ => None,
+            },
         },
     };
     let transitions: FxHashMap<&str, &TransitionDef> =
@@ -120,27 +123,21 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                     for v in &a.params {
                         if let ValueKind::Ident(pn) = &v.kind {
                             if !params.contains_key(pn.text.as_str()) {
-                                cx.out.push(
-                                    Diagnostic::error(
-                                        codes::ACTION_PARAM_NOT_IN_HEADER,
-                                        format!(
-                                            "action `{}` needs parameter `{}`, which task `{}` does not declare",
-                                            a.name.text, pn.text, t.name.text
-                                        ),
-                                        b.target.span,
-                                    )
-                                    .with_label_in(
-                                        cx.other_file(id),
-                                        pn.span,
-                                        format!("`{}` used by the action here", pn.text),
-                                    )
-                                    .with_help(format!(
-                                        "add `{}` to the header: `{}( {} )`",
-                                        pn.text,
-                                        t.name.text,
-                                        header_with(t, &pn.text)
-                                    )),
+                                let d = Diagnostic::error(
+                                    codes::ACTION_PARAM_NOT_IN_HEADER,
+                                    format!(
+                                        "action `{}` needs parameter `{}`, which task `{}` does not declare",
+                                        a.name.text, pn.text, t.name.text
+                                    ),
+                                    b.target.span,
                                 );
+                                let d = cx.def_label(d, id, pn.span, format!("`{}` used by the action here", pn.text));
+                                cx.out.push(d.with_help(format!(
+                                    "add `{}` to the header: `{}( {} )`",
+                                    pn.text,
+                                    t.name.text,
+                                    header_with(t, &pn.text)
+                                )));
                             }
                         }
                     }
@@ -165,18 +162,19 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                         continue;
                     }
                     Some(def) if b.kind == BindingKind::Event && def.delay.is_some() => {
-                        cx.out.push(
-                            Diagnostic::error(
-                                codes::TIMED_AND_EVENT,
-                                format!(
-                                    "`{}` is a timed transition and cannot also wait for event `{}`",
-                                    tr.text, b.target.text
-                                ),
-                                tr.span,
-                            )
-                            .with_label_in(pattern_file.clone(), def.name.span, "declared with a delay here")
-                            .with_help("bind the event to another transition, or remove the delay"),
+                        let d = Diagnostic::error(
+                            codes::TIMED_AND_EVENT,
+                            format!(
+                                "`{}` is a timed transition and cannot also wait for event `{}`",
+                                tr.text, b.target.text
+                            ),
+                            tr.span,
                         );
+                        let d = match pattern_at {
+                            Some(pid) => cx.def_label(d, pid, def.name.span, "declared with a delay here"),
+                            None => d,
+                        };
+                        cx.out.push(d.with_help("bind the event to another transition, or remove the delay"));
                     }
                     Some(_) => {}
                 }

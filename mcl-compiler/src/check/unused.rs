@@ -2,43 +2,72 @@
 
 use super::Cx;
 use crate::codes;
-use crate::queries::{parse, program};
-use crate::scope::{for_each_def, missions, DefKind};
+use crate::db::{Db, SourceFile};
+use crate::queries::{file_items, parse_item, program, ItemText};
+use crate::scope::{file_defs, DefKind};
 use mcl_syntax::ast::*;
 use mcl_syntax::visit::{calls, walk_block};
 use mcl_syntax::Diagnostic;
 use rustc_hash::FxHashSet;
 
-pub(crate) fn check(cx: &mut Cx<'_>) {
-    let prog = program(cx.db, cx.file);
-    let mut used: FxHashSet<(DefKind, &str)> = FxHashSet::default();
-    for &f in &prog.files {
-        for item in &parse(cx.db, f).file.items {
-            if let Item::Tasks(b) = item {
-                for t in &b.tasks {
-                    if let Some(p) = &t.pattern {
-                        used.insert((DefKind::Pattern, &p.text));
-                    }
-                    for bd in &t.bindings {
-                        let k = if bd.kind == BindingKind::Action { DefKind::Action } else { DefKind::Event };
-                        used.insert((k, &bd.target.text));
-                    }
+/// The names one item uses (patterns, actions and events of tasks, tasks
+/// called by a mission), sorted, and whether it is a mission.
+#[salsa::tracked(returns(ref))]
+pub fn item_uses<'db>(db: &'db dyn Db, item: ItemText<'db>) -> (bool, Vec<(DefKind, String)>) {
+    let mut used = Vec::new();
+    let mut is_mission = false;
+    match parse_item(db, item).file.items.first() {
+        Some(Item::Tasks(b)) => {
+            for t in &b.tasks {
+                if let Some(p) = &t.pattern {
+                    used.push((DefKind::Pattern, p.text.clone()));
+                }
+                for bd in &t.bindings {
+                    let k = if bd.kind == BindingKind::Action { DefKind::Action } else { DefKind::Event };
+                    used.push((k, bd.target.text.clone()));
                 }
             }
         }
-    }
-    let all_missions = missions(cx.db, cx.file);
-    for (_, m) in &all_missions {
-        for c in calls(&m.body) {
-            used.insert((DefKind::Task, &c.name.text));
+        Some(Item::Mission(m)) => {
+            is_mission = true;
+            used.extend(calls(&m.body).into_iter().map(|c| (DefKind::Task, c.name.text.clone())));
         }
+        _ => {}
+    }
+    used.sort();
+    used.dedup();
+    (is_mission, used)
+}
+
+/// The names a file uses, and whether it has a mission: stays equal across
+/// edits that change neither (so the unused check is not run again).
+#[salsa::tracked(returns(ref))]
+pub fn file_uses(db: &dyn Db, file: SourceFile) -> (bool, Vec<(DefKind, String)>) {
+    let mut has_missions = false;
+    let mut used = FxHashSet::default();
+    for c in file_items(db, file) {
+        let (m, u) = item_uses(db, c.text);
+        has_missions |= *m;
+        used.extend(u.iter());
+    }
+    let mut used: Vec<(DefKind, String)> = used.into_iter().cloned().collect();
+    used.sort();
+    (has_missions, used)
+}
+
+/// Unused definitions of the file.
+pub(crate) fn check_definitions(cx: &mut Cx<'_>) {
+    let prog = program(cx.db, cx.file);
+    let mut used: FxHashSet<(DefKind, &str)> = FxHashSet::default();
+    let mut has_missions = false;
+    for &f in &prog.files {
+        let (m, u) = file_uses(cx.db, f);
+        has_missions |= *m;
+        used.extend(u.iter().map(|(k, n)| (*k, n.as_str())));
     }
     // Tasks are only reported when the program has missions: a vehicle file
     // on its own declares tasks for other files to call.
-    let has_missions = !all_missions.is_empty();
-    let mut found = Vec::new();
-    for_each_def(cx.db, cx.file, |id, name| found.push((id, name.to_string())));
-    for (id, name) in found {
+    for (id, name) in file_defs(cx.db, cx.file) {
         if id.kind == DefKind::Mission || name.starts_with('_') || (id.kind == DefKind::Task && !has_missions) {
             continue;
         }
@@ -47,6 +76,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                 DefKind::Task => "no mission calls it",
                 _ => "no task uses it",
             };
+            cx.at_def(*id);
             cx.out.push(
                 Diagnostic::warning(codes::UNUSED, format!("unused {} `{name}`", id.kind.as_str()), id.name_span)
                     .with_label(id.name_span, by)
@@ -54,7 +84,10 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             );
         }
     }
-    // Mission parameters.
+}
+
+/// Unused parameters of the mission being checked.
+pub(crate) fn check_params(cx: &mut Cx<'_>) {
     for item in &cx.ast().items {
         let Item::Mission(m) = item else { continue };
         let mut used_params: FxHashSet<&str> = FxHashSet::default();

@@ -292,7 +292,17 @@ pub fn occurrence_at(occs: &[Occ], offset: usize) -> Option<&Occ> {
 pub fn pattern_def(db: &Database, file: SourceFile, (item, index): (u32, u32)) -> Option<DefId> {
     let Item::Patterns(b) = parse(db, file).file.items.get(item as usize)? else { return None };
     let p = b.patterns.get(index as usize)?;
-    Some(DefId { kind: DefKind::Pattern, file, item, index, name_span: p.name.span, in_stdlib: file == db.stdlib() })
+    // A `DefId` names the item by its part of the file (`file_items`).
+    let part = mcl_compiler::queries::part_of_item(db, file, item)?;
+    Some(DefId {
+        kind: DefKind::Pattern,
+        file,
+        item: part,
+        index,
+        name_span: p.name.span,
+        in_stdlib: file == db.stdlib(),
+        local: false,
+    })
 }
 
 /// The task definition at `(item, index)` of `file`.
