@@ -61,7 +61,7 @@ mission : asc {
 }
 
 constraints {
-    order { auv:go, asc:wait }
+    mutex { auv:go, asc:wait } = 1
 }
 "#;
 
@@ -724,5 +724,52 @@ fn random_edits_and_malformed_requests_never_kill_the_server() {
     assert_eq!(lsp.diagnostics("mission.mcl", Some(version + 1))["diagnostics"], json!([]));
     let hover = lsp.request("textDocument/hover", lsp.at("mission.mcl", pos(MISSION, "Goto( [24", 1)));
     assert!(hover["contents"]["value"].as_str().unwrap().contains("Goto( way-point )"));
+    assert_eq!(lsp.shutdown(), 0);
+}
+
+/// Figure 6.9a of the seed: two orders that wait for each other.
+const ORDER_CYCLE: &str = r#"import "vehicle.mcl";
+
+mission : v1 {
+    Goto( [1, 1] ) : p2 ;
+    Void()
+}
+
+mission : v2 {
+    Depth( 5, "achieve" ) : p5 ;
+    Void()
+}
+
+constraints {
+    order { v1:p2, v2:p5 }
+    order { v2:p5, v1:p2 }
+}
+"#;
+
+#[test]
+fn deadlocking_constraints_are_published_and_cleared_when_fixed() {
+    let root = workspace("deadlock", &[("vehicle.mcl", VEHICLE), ("mission.mcl", ORDER_CYCLE)]);
+    let mut lsp = Lsp::start(&root);
+    lsp.initialize(client_caps());
+    lsp.open("mission.mcl", ORDER_CYCLE);
+    let d = lsp.diagnostics("mission.mcl", Some(1));
+    let diags = d["diagnostics"].as_array().unwrap();
+    assert_eq!(diags.len(), 1, "{d}");
+    let e = &diags[0];
+    assert_eq!(e["code"], "E0406", "{e}");
+    assert_eq!(e["severity"], 1, "an error: {e}");
+    assert_eq!(e["range"]["start"], pos(ORDER_CYCLE, "order { v1:p2", 0), "{e}");
+    let message = e["message"].as_str().unwrap();
+    assert!(message.contains("note: counterexample:") && message.contains("help: "), "{message}");
+    // The other order is related information.
+    let related = e["relatedInformation"].as_array().unwrap();
+    assert!(
+        related.iter().any(|r| r["location"]["range"]["start"] == pos(ORDER_CYCLE, "order { v2:p5", 0)
+            && r["message"].as_str().unwrap().contains("holds `v1:p2`")),
+        "{e}"
+    );
+    // Remove the second order: the diagnostic goes away.
+    lsp.change("mission.mcl", 2, json!([{"text": ORDER_CYCLE.replace("    order { v2:p5, v1:p2 }\n", "")}]));
+    assert_eq!(lsp.diagnostics("mission.mcl", Some(2))["diagnostics"], json!([]));
     assert_eq!(lsp.shutdown(), 0);
 }

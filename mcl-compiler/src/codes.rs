@@ -40,6 +40,14 @@ pub const UNKNOWN_LABEL: &str = "E0402";
 pub const AMBIGUOUS_LABEL: &str = "E0403";
 pub const CONSTRAINT_BOUND: &str = "E0404";
 pub const CONSTRAINT_ARITY: &str = "E0405";
+/// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
+pub const DEADLOCKING_CONSTRAINTS: &str = "E0406";
+/// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
+pub const COORDINATION_INCONCLUSIVE: &str = "W0407";
+
+/// Codes that `check_file` never produces: the coordination analysis of
+/// `mcl-coord` reports them (its tests check their explanations).
+pub const COORDINATION: &[&str] = &[DEADLOCKING_CONSTRAINTS, COORDINATION_INCONCLUSIVE];
 
 // Imports.
 pub const IMPORT_NOT_FOUND: &str = "E0501";
@@ -103,6 +111,8 @@ registry! {
     "E0403" => "ambiguous label in a constraint",
     "E0404" => "misplaced or missing bound",
     "E0405" => "wrong number of calls in a constraint",
+    "E0406" => "constraints that deadlock",
+    "W0407" => "coordination analysis inconclusive",
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
     "E0601" => "building block that breaks the block properties",

@@ -6,6 +6,10 @@
 //! drawn at random between labelled calls of different vehicles: orders go
 //! from an earlier step to a later one, syncs join calls of the same step,
 //! mutexes any two calls (β = 1).
+//!
+//! `teams`: the same vehicles in pairs (8 vehicles = 4 teams), every
+//! constraint a mutex between the two vehicles of one team (free of
+//! deadlock; the analysis verifies each team apart).
 
 use std::path::PathBuf;
 
@@ -66,13 +70,34 @@ pub fn program(vehicles: usize, constraints: usize, seed: u64) -> String {
     text
 }
 
+/// Vehicles in pairs; `constraints` mutexes, each within one pair.
+pub fn teams_program(vehicles: usize, constraints: usize, seed: u64) -> String {
+    let mut r = Rng(seed);
+    let text = program(vehicles, 0, seed);
+    let mut text = text.trim_end().trim_end_matches('}').trim_end().trim_end_matches("constraints {").to_string();
+    text.push_str("constraints {\n");
+    for _ in 0..constraints {
+        let team = r.below(vehicles / 2);
+        let (a, b) = (2 * team, 2 * team + 1);
+        let side = |r: &mut Rng| if r.below(2) == 0 { "a" } else { "b" };
+        let (k, l) = (r.below(STEPS), r.below(STEPS));
+        text.push_str(&format!("  mutex {{ v{a}:s{k}_{}, v{b}:s{l}_{} }} = 1\n", side(&mut r), side(&mut r)));
+    }
+    text.push_str("}\n");
+    text
+}
+
 pub fn load(vehicles: usize, constraints: usize) -> (Vec<Mission>, Vec<Constraint>) {
+    load_text(vehicles, constraints, &program(vehicles, constraints, 7 + vehicles as u64 * 100 + constraints as u64))
+}
+
+pub fn load_text(vehicles: usize, constraints: usize, text: &str) -> (Vec<Mission>, Vec<Constraint>) {
     let dir = std::env::temp_dir().join(format!("mcl-coord-bench-{vehicles}-{constraints}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let vehicle = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/vehicle.mcl");
     std::fs::copy(vehicle, dir.join("vehicle.mcl")).unwrap();
     let path = dir.join("m.mcl");
-    std::fs::write(&path, program(vehicles, constraints, 7 + vehicles as u64 * 100 + constraints as u64)).unwrap();
+    std::fs::write(&path, text).unwrap();
     let db = Database::new();
     let file = db.file(&path);
     let out = mcl_coord::source::load(&db, file).expect("benchmark program compiles");
@@ -83,9 +108,13 @@ pub fn load(vehicles: usize, constraints: usize) -> (Vec<Mission>, Vec<Constrain
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("coord");
     g.sample_size(10);
-    for &(v, k) in &[(2, 10), (2, 50), (4, 10), (4, 50), (8, 10), (8, 50)] {
-        let (ms, cs) = load(v, k);
-        g.bench_with_input(BenchmarkId::new("synthesis", format!("{v}v-{k}c")), &(), |b, _| {
+    let random = [(2, 10), (2, 50), (4, 10), (4, 50), (8, 10), (8, 30), (8, 50)];
+    let teams = [(8, 10), (8, 50)];
+    let cases = random.iter().map(|&(v, k)| ("", v, k)).chain(teams.iter().map(|&(v, k)| ("teams-", v, k)));
+    for (family, v, k) in cases {
+        let (ms, cs) =
+            if family.is_empty() { load(v, k) } else { load_text(v, k, &teams_program(v, k, 11 + k as u64)) };
+        g.bench_with_input(BenchmarkId::new("synthesis", format!("{family}{v}v-{k}c")), &(), |b, _| {
             b.iter(|| {
                 let plant = centralize(&ms).unwrap();
                 mcl_coord::supervisor::synthesize(&plant, &cs).unwrap()
@@ -94,18 +123,24 @@ fn bench(c: &mut Criterion) {
         let opts = AnalyzeOptions::default();
         let r = analyze_with(&ms, &cs, &opts).unwrap();
         eprintln!(
-            "{v} vehicles, {k} constraints: {:?}, {} supervisors ({} added), vehicle classes {:?}, product {} states",
+            "{family}{v} vehicles, {k} constraints: {:?}, {} supervisors ({} added), vehicle classes {:?}, product {} states",
             r.verdict,
             r.supervisors.len(),
             r.added,
             r.stats.vehicle_classes,
             r.stats.product_states
         );
-        g.bench_with_input(BenchmarkId::new("analysis", format!("{v}v-{k}c")), &(), |b, _| {
+        g.bench_with_input(BenchmarkId::new("analysis", format!("{family}{v}v-{k}c")), &(), |b, _| {
             b.iter(|| analyze_with(&ms, &cs, &opts).unwrap())
         });
+        // What `mcl check` runs: the same without the structural report
+        // (invariants and siphons of the final net).
+        let check = AnalyzeOptions { structure: false, ..AnalyzeOptions::default() };
+        g.bench_with_input(BenchmarkId::new("check", format!("{family}{v}v-{k}c")), &(), |b, _| {
+            b.iter(|| analyze_with(&ms, &cs, &check).unwrap())
+        });
         let sups = r.supervisors.clone();
-        g.bench_with_input(BenchmarkId::new("decentralize", format!("{v}v-{k}c")), &(), |b, _| {
+        g.bench_with_input(BenchmarkId::new("decentralize", format!("{family}{v}v-{k}c")), &(), |b, _| {
             b.iter(|| mcl_coord::decentralize(&ms, &sups).unwrap())
         });
     }

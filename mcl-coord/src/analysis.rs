@@ -4,7 +4,8 @@
 //!
 //! 1. Synthesize the supervisors of every constraint ([`crate::supervisor`]).
 //! 2. Verify the supervised net. If it is free of deadlock, stop.
-//! 3. For every dead marking found, take the minimal siphons of the wrapped
+//! 3. For every dead marking found (or a group of vehicles dead while the
+//!    others may move), take the minimal siphons of the wrapped
 //!    net (Extract 6.1, step 2) that are empty in it and contain an empty
 //!    supervisor place: they are uncontrolled (they did empty). Synthesize the
 //!    supervisor that keeps such a siphon marked (step 4); if it is valid
@@ -88,6 +89,9 @@ pub struct Problem {
     /// Calls held by a supervisor in that marking (`mission:label`, or the
     /// transition id when it is not the start of a labelled call).
     pub waiting: Vec<String>,
+    /// For each entry of `waiting`, the start transition held (`mission/id`)
+    /// and the indices of the constraints whose supervisors hold it.
+    pub held_by: Vec<(String, Vec<usize>)>,
     /// An empty siphon of that marking that contains supervisor places.
     pub siphon: Option<Vec<String>>,
     /// Why no supervisor can keep that siphon marked (Extract 6.1, step 5).
@@ -160,7 +164,9 @@ pub fn analyze_with(
                 for w in &ws {
                     let mut siphon = None;
                     let mut refusal = None;
-                    if w.kind == WitnessKind::Dead {
+                    // A blocked witness may hold a dead group of vehicles
+                    // (verify.rs): its empty siphons are candidates too.
+                    {
                         let empty = empty_places(&w.marking);
                         let req: Vec<PlaceId> = empty.iter().copied().filter(|p| p.index() >= np).collect();
                         let (sets, _) = minimal_siphons_within(&wnet, &empty, &req, 2_000, 16);
@@ -255,6 +261,16 @@ fn problem(
                 .unwrap_or_else(|| net.transition(*t).map_or_else(String::new, |x| x.id.clone()))
         })
         .collect();
+    let held_by: Vec<(String, Vec<usize>)> = w
+        .held
+        .iter()
+        .map(|(t, ss)| {
+            let mut ks: Vec<usize> = ss.iter().flat_map(|&s| sups[s].origin.constraints()).collect();
+            ks.sort_unstable();
+            ks.dedup();
+            (net.transition(*t).map_or_else(String::new, |x| x.id.clone()), ks)
+        })
+        .collect();
     let marking: Vec<String> =
         w.marking.support().map(|(p, n)| if n == 1 { pid(net, p) } else { format!("{}*{n}", pid(net, p)) }).collect();
     let what = match w.kind {
@@ -289,6 +305,7 @@ fn problem(
         counterexample: w.path.iter().map(|&t| net.transition(t).map_or_else(String::new, |x| x.id.clone())).collect(),
         marking,
         waiting,
+        held_by,
         siphon,
         refusal,
         message,

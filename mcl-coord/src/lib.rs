@@ -15,7 +15,10 @@
 //! 3. proves the supervised net free of deadlock, or finds the deadlocks with
 //!    a counterexample, adding supervisors for uncontrolled siphons where
 //!    possible (seed Extract 6.1: [`analyze`], [`structure`], [`verify`]);
-//! 4. splits it into one net per vehicle with the least communication, from
+//! 4. reports deadlocking constraints as compiler diagnostics (E0406, and
+//!    W0407 when the analysis cannot conclude), as a salsa query
+//!    ([`check::coordination_diagnostics`]);
+//! 5. splits it into one net per vehicle with the least communication, from
 //!    an integer program (seed Extracts 6.2-6.4: [`decentral`],
 //!    [`decentralize`]).
 //!
@@ -39,9 +42,11 @@
 
 pub mod analysis;
 pub mod central;
+pub mod check;
 pub mod compact;
 pub mod decentral;
 pub mod error;
+pub mod interrupt;
 pub mod model;
 pub mod source;
 pub mod structure;
@@ -50,6 +55,7 @@ pub mod verify;
 
 pub use analysis::{analyze, analyze_with, AnalyzeOptions, Problem, Report, Verdict};
 pub use central::{centralize, Part, Plant};
+pub use check::coordination_diagnostics;
 pub use decentral::{decentralize, VehicleNet};
 pub use error::CoordError;
 pub use model::{Activity, CallRef, Constraint, ConstraintKind, Mission};

@@ -46,6 +46,12 @@
 //! The per-vehicle rule allows every interleaving that the centralized player
 //! (one rule for all vehicles) allows, and more: a deadlock-free verdict
 //! holds for both.
+//!
+//! Scaling (docs/coordination.md, "Scaling"): vehicles that no supervisor
+//! links are verified as separate groups (exact: they share no place), and
+//! when a group's product of class counts is large, seeded random walks look
+//! for a dead state first; only a walk whose end replays on the real net is
+//! reported.
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
 use rustc_hash::FxHashMap;
@@ -66,6 +72,12 @@ pub struct VerifyOptions {
     pub counter_cap: u32,
     /// Largest K tried before giving up on a spurious counterexample.
     pub max_counter_cap: u32,
+    /// Above this many combinations of the vehicles' reduced states (the
+    /// product of their class counts), random walks look for a deadlock
+    /// before the exhaustive product.
+    pub hunt_threshold: u64,
+    /// Largest total number of random-walk steps.
+    pub hunt_steps: usize,
 }
 
 impl Default for VerifyOptions {
@@ -75,6 +87,8 @@ impl Default for VerifyOptions {
             max_product_states: 4_000_000,
             counter_cap: 1,
             max_counter_cap: 32,
+            hunt_threshold: 1_000_000,
+            hunt_steps: 200_000,
         }
     }
 }
@@ -205,6 +219,9 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
     let mut next = 0usize;
     let mut en: Vec<u32> = Vec::new();
     while next < index.len() {
+        if next % 4096 == 0 {
+            crate::interrupt::poll();
+        }
         let cur: Vec<u8> = lts.marks[next * np..(next + 1) * np].to_vec();
         lts.fin.push(m.final_places.iter().any(|p| cur[p.index()] > 0));
         en.clear();
@@ -456,7 +473,7 @@ struct Effect {
 }
 
 struct Product<'a> {
-    quots: &'a [Quotient],
+    quots: &'a [&'a Quotient],
     can_end: &'a [bool],
     effects: &'a [Effect],
     cap: u32,
@@ -577,6 +594,9 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
     let mut i = 0usize;
     let mut succ = Vec::new();
     while i < index.len() {
+        if i % 4096 == 0 {
+            crate::interrupt::poll();
+        }
         let st = g.state(i as u32).to_vec();
         succ.clear();
         // Partial-order reduction: the moves of one vehicle only, when they
@@ -684,21 +704,154 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     // Which vehicles can end when nothing holds them.
     let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
 
+    // Vehicles that no supervisor links are independent: each group of
+    // linked vehicles is verified alone (docs/coordination.md).
+    let groups = groups(plant, sups);
+    stats.exact = true;
+    let mut witnesses = Vec::new();
+    let mut unknown: Option<String> = None;
+    for (vs, ss) in &groups {
+        let g = Group {
+            vehicles: vs,
+            sups: ss,
+            ltss: vs.iter().map(|&v| &ltss[v]).collect(),
+            quots: vs.iter().map(|&v| &quots[v]).collect(),
+            can_end: vs.iter().map(|&v| can_end[v]).collect(),
+            whole: groups.len() == 1,
+        };
+        match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
+            GroupOutcome::Verified => {}
+            GroupOutcome::Problems(ws) => witnesses.extend(ws),
+            GroupOutcome::Unknown(r) => {
+                unknown.get_or_insert(r);
+            }
+        }
+    }
+    if !witnesses.is_empty() {
+        return Outcome::Problems(witnesses, stats);
+    }
+    match unknown {
+        Some(r) => Outcome::Unknown(r, stats),
+        None => Outcome::Verified(stats),
+    }
+}
+
+/// The groups of vehicles that supervisors link (connected components of
+/// the graph vehicle — supervisor), with their supervisors, in order.
+fn groups(plant: &Plant, sups: &[Supervisor]) -> Vec<(Vec<usize>, Vec<usize>)> {
+    let nv = plant.parts.len();
+    let mut parent: Vec<usize> = (0..nv).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let owner = |t: TransitionId| plant.parts.iter().position(|p| p.owns_transition(t));
+    let mut sup_vehicle = Vec::with_capacity(sups.len());
+    for s in sups {
+        let vs: Vec<usize> = s.consumed_by.iter().chain(&s.produced_by).filter_map(|&(t, _)| owner(t)).collect();
+        for w in vs.windows(2) {
+            let (a, b) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
+            parent[a] = b;
+        }
+        sup_vehicle.push(vs.first().copied());
+    }
+    let mut out: Vec<(usize, Vec<usize>, Vec<usize>)> = Vec::new(); // (root, vehicles, sups)
+    for v in 0..nv {
+        let r = root(&mut parent, v);
+        match out.iter_mut().find(|(x, ..)| *x == r) {
+            Some(g) => g.1.push(v),
+            None => out.push((r, vec![v], Vec::new())),
+        }
+    }
+    for (k, v) in sup_vehicle.into_iter().enumerate() {
+        // A supervisor no transition touches is constant: any group may keep it.
+        let r = root(&mut parent, v.unwrap_or(0));
+        if let Some(g) = out.iter_mut().find(|(x, ..)| *x == r) {
+            g.2.push(k);
+        }
+    }
+    out.into_iter().map(|(_, vs, ss)| (vs, ss)).collect()
+}
+
+/// One group of linked vehicles: indices into the missions and supervisors.
+struct Group<'a> {
+    vehicles: &'a [usize],
+    sups: &'a [usize],
+    ltss: Vec<&'a Lts>,
+    quots: Vec<&'a Quotient>,
+    can_end: Vec<bool>,
+    /// The group holds every vehicle.
+    whole: bool,
+}
+
+enum GroupOutcome {
+    Verified,
+    Problems(Vec<Witness>),
+    Unknown(String),
+}
+
+fn verify_group(
+    grp: &Group<'_>,
+    plant: &Plant,
+    effects_all: &[Effect],
+    sups_all: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+    stats: &mut VerifyStats,
+) -> GroupOutcome {
+    let sups: Vec<&Supervisor> = grp.sups.iter().map(|&k| &sups_all[k]).collect();
+    // Supervisor indices local to the group.
+    let mut local = vec![usize::MAX; sups_all.len()];
+    for (i, &k) in grp.sups.iter().enumerate() {
+        local[k] = i;
+    }
+    let effects: Vec<Effect> = effects_all
+        .iter()
+        .map(|e| Effect {
+            consume: e.consume.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
+            produce: e.produce.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
+        })
+        .collect();
+    let quots = &grp.quots;
+    let nv = grp.vehicles.len();
+    let can_end = &grp.can_end;
+    let group_ts: Vec<TransitionId> =
+        grp.vehicles.iter().flat_map(|&v| plant.parts[v].transitions.clone().map(TransitionId)).collect();
+    let replay = Replay { snet, nsups: sups_all.len(), group_ts: if grp.whole { None } else { Some(&group_ts) } };
     let max_w = sups.iter().flat_map(|s| s.consumed_by.iter().map(|&(_, w)| w)).max().unwrap_or(1);
     let max_init = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).max().unwrap_or(0);
     let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
-    loop {
-        stats.counter_cap = cap;
-        let prod = Product { quots: &quots, can_end: &can_end, effects: &effects, cap, nv: missions.len() };
+    let init_of = |cap: u32| -> Vec<u32> {
         let mut init: Vec<u32> = quots.iter().map(|q| q.block[0]).collect();
         init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
-        let g = explore_product(&prod, init, opts.max_product_states);
-        stats.product_states = g.states.len() / g.width.max(1);
-        stats.exact = !g.over;
-        if !g.complete {
-            return Outcome::Unknown(format!("the product has more than {} states", opts.max_product_states), stats);
+        init
+    };
+    // A large product: look for a deadlock by random walks first.
+    let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
+    if nv > 1 && estimate > opts.hunt_threshold as f64 {
+        let prod = Product { quots, can_end, effects: &effects, cap, nv };
+        if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps) {
+            stats.counter_cap = stats.counter_cap.max(cap);
+            return GroupOutcome::Problems(vec![w]);
         }
-        let nv = missions.len();
+    }
+    loop {
+        let prod = Product { quots, can_end, effects: &effects, cap, nv };
+        let g = explore_product(&prod, init_of(cap), opts.max_product_states);
+        let states = g.states.len() / g.width.max(1);
+        stats.counter_cap = stats.counter_cap.max(cap);
+        if !g.complete {
+            stats.product_states += states;
+            stats.exact &= !g.over;
+            return GroupOutcome::Unknown(format!(
+                "the product of {} has more than {} states",
+                names(plant, grp.vehicles),
+                opts.max_product_states
+            ));
+        }
         let is_end = |st: &[u32]| (0..nv).all(|v| quots[v].fin[st[v] as usize]);
         let is_target = |st: &[u32]| (0..nv).all(|v| !can_end[v] || quots[v].fin[st[v] as usize]);
         let n = g.pess_succ.len();
@@ -728,8 +881,13 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
         }
         let dead: Vec<u32> = g.dead.iter().copied().filter(|&s| !is_end(g.state(s))).collect();
         let blocked: Vec<u32> = (0..n as u32).filter(|&s| !co[s as usize] && !is_dead[s as usize]).collect();
+        let settle = |stats: &mut VerifyStats| {
+            stats.product_states += states;
+            stats.exact &= !g.over;
+        };
         if dead.is_empty() && blocked.is_empty() {
-            return Outcome::Verified(stats);
+            settle(stats);
+            return GroupOutcome::Verified;
         }
         // Counterexamples: every dead state (up to a few), and the first
         // blocked state that holds some call (else the first blocked one).
@@ -748,7 +906,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
             }
         }
         for (s, kind) in picks {
-            match concretize(&g, s, &ltss, &quots, snet, sups, kind) {
+            match concretize(&g, s, &grp.ltss, quots, &replay, kind) {
                 Some(w) => witnesses.push(w),
                 None => spurious = true,
             }
@@ -758,10 +916,10 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            return Outcome::Unknown(
-                format!("counterexamples found with supervisor places counted up to {cap} tokens do not replay"),
-                stats,
-            );
+            settle(stats);
+            return GroupOutcome::Unknown(format!(
+                "counterexamples found with supervisor places counted up to {cap} tokens do not replay"
+            ));
         }
         // A blocked image reached through `>K` counts may be an artefact of
         // the abstraction: only an exact product proves it.
@@ -770,16 +928,86 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            return Outcome::Unknown(
-                format!(
-                    "no deadlock, but whether every mission can always end is not decided: supervisor places \
-                     exceed {cap} tokens"
-                ),
-                stats,
-            );
+            settle(stats);
+            return GroupOutcome::Unknown(format!(
+                "no deadlock, but whether every mission can always end is not decided: supervisor places \
+                 exceed {cap} tokens"
+            ));
         }
-        return Outcome::Problems(witnesses, stats);
+        settle(stats);
+        return GroupOutcome::Problems(witnesses);
     }
+}
+
+fn names(plant: &Plant, vs: &[usize]) -> String {
+    let n: Vec<String> = vs.iter().map(|&v| format!("`{}`", plant.parts[v].name)).collect();
+    if n.len() == plant.parts.len() {
+        format!("the {} vehicles", n.len())
+    } else {
+        format!("the vehicles {}", n.join(", "))
+    }
+}
+
+/// Random walks through the product, looking for a dead state that replays
+/// on the real net (a deadlock found this way is real; finding none proves
+/// nothing). Seeded: the same input gives the same walks.
+fn hunt(p: &Product<'_>, init: Vec<u32>, ltss: &[&Lts], replay: &Replay<'_>, budget: usize) -> Option<Witness> {
+    let mut rng: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = move |n: usize| {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng % n as u64) as usize
+    };
+    let depth: usize = 64 + 8 * p.quots.iter().map(|q| q.n).sum::<usize>();
+    let mut used = 0usize;
+    let mut succ = Vec::new();
+    let mut over = false;
+    let mut tried = 0;
+    while used < budget {
+        let mut g = ProductGraph {
+            width: init.len(),
+            states: init.clone(),
+            parent: vec![(u32::MAX, 0, 0)],
+            dead: Vec::new(),
+            pess_succ: Vec::new(),
+            over: false,
+            complete: true,
+        };
+        let mut cur = init.clone();
+        crate::interrupt::poll();
+        for step in 0..depth {
+            used += 1;
+            succ.clear();
+            p.successors(&cur, 0..p.nv, &mut succ, &mut over);
+            if succ.is_empty() {
+                let is_end = (0..p.nv).all(|v| p.quots[v].fin[cur[v] as usize]);
+                if !is_end {
+                    tried += 1;
+                    if let Some(w) = concretize(&g, step as u32, ltss, p.quots, replay, WitnessKind::Dead) {
+                        return Some(w);
+                    }
+                    if tried > 64 {
+                        return None;
+                    }
+                }
+                break;
+            }
+            let (x, v, label, _) = succ.swap_remove(next(succ.len()));
+            g.states.extend_from_slice(&x);
+            g.parent.push((step as u32, v as u32, label));
+            cur = x;
+        }
+    }
+    None
+}
+
+/// What a replay of a counterexample needs: the supervised net, its number
+/// of supervisor places, and the transitions of the group (`None`: all).
+struct Replay<'a> {
+    snet: &'a Net,
+    nsups: usize,
+    group_ts: Option<&'a [TransitionId]>,
 }
 
 fn can_end_alone(l: &Lts) -> bool {
@@ -823,12 +1051,12 @@ fn can_end_alone(l: &Lts) -> bool {
 fn concretize(
     g: &ProductGraph,
     target: u32,
-    ltss: &[Lts],
-    quots: &[Quotient],
-    snet: &Net,
-    sups: &[Supervisor],
+    ltss: &[&Lts],
+    quots: &[&Quotient],
+    replay: &Replay<'_>,
     kind: WitnessKind,
 ) -> Option<Witness> {
+    let snet = replay.snet;
     // Abstract steps, from the initial state.
     let mut steps: Vec<(usize, u32, u32)> = Vec::new(); // (vehicle, label, target class)
     let mut cur = target;
@@ -909,10 +1137,29 @@ fn concretize(
         }
     }
     let enabled = mcl_net::semantics::enabled(snet, &m);
-    if kind == WitnessKind::Dead && !enabled.is_empty() {
-        return None;
+    let mut kind = kind;
+    match replay.group_ts {
+        None => {
+            if kind == WitnessKind::Dead && !enabled.is_empty() {
+                return None;
+            }
+        }
+        Some(ts) => {
+            // The group is dead when none of its transitions has its
+            // input places marked (no other vehicle touches them); the
+            // whole net is dead only if the other vehicles are too.
+            if kind == WitnessKind::Dead {
+                let live = ts.iter().any(|&t| snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w));
+                if live {
+                    return None;
+                }
+                if !enabled.is_empty() {
+                    kind = WitnessKind::Blocked;
+                }
+            }
+        }
     }
-    let np_plant = snet.place_count() - sups.len();
+    let np_plant = snet.place_count() - replay.nsups;
     let mut held = Vec::new();
     for t in snet.transition_ids() {
         let pre = snet.pre(t);

@@ -7,11 +7,20 @@
 //! marking: Σ running ≤ β for a mutex, #starts(b) ≤ #ends(a) for an order,
 //! #starts(j) ≤ #arrivals(i) for every pair of a sync. When it reports a
 //! deadlock, its counterexample replays to a dead marking.
+//!
+//! The same holds for the scaling parts of the analysis
+//! (docs/coordination.md): with a third mission that no constraint links
+//! (verified as its own group), and with the random-walk deadlock search
+//! forced on (`hunt_threshold: 0`), whose deadlocks must replay too. A
+//! deadlock found in one group while another vehicle can still move is a
+//! blocked marking of the whole net: it replays, and that group's missions
+//! are stuck in it.
 
 use mcl_compiler::{Database, Db};
 use mcl_coord::source::load;
+use mcl_coord::verify::VerifyOptions;
 use mcl_coord::verify::WitnessKind;
-use mcl_coord::{analyze, Activity, ConstraintKind, Mission, Verdict};
+use mcl_coord::{analyze, analyze_with, Activity, AnalyzeOptions, ConstraintKind, Mission, Verdict};
 use mcl_net::{explore, NetBuilder, Options, PlaceId, TransitionId};
 use proptest::prelude::*;
 
@@ -76,6 +85,21 @@ fn case(seed: u64) -> String {
     format!("mission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n {}\n}}\n", cs.join("\n "))
 }
 
+/// [`case`] plus a third mission `c` of one or two calls, unconstrained.
+fn case3(seed: u64) -> String {
+    let mut r = Rng(seed ^ 0xC0FF_EE00);
+    let c = if r.below(2) == 0 { "Surface() : c1".to_string() } else { "Void() : c1 ; Deploy() : c2".to_string() };
+    format!("{}mission : c {{ {c} }}\n", case(seed))
+}
+
+/// The options of the random-walk variant: walks first, whatever the size.
+fn hunting() -> AnalyzeOptions {
+    AnalyzeOptions {
+        verify: VerifyOptions { hunt_threshold: 0, ..VerifyOptions::default() },
+        ..AnalyzeOptions::default()
+    }
+}
+
 fn compile(text: &str, seed: u64) -> (Vec<Mission>, Vec<mcl_coord::Constraint>) {
     let dir = std::env::temp_dir().join(format!("mcl-coord-prop-{}-{seed}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -91,9 +115,12 @@ fn compile(text: &str, seed: u64) -> (Vec<Mission>, Vec<mcl_coord::Constraint>) 
 }
 
 fn check(seed: u64) -> Result<(), TestCaseError> {
-    let text = case(seed);
+    check_text(case(seed), seed, &AnalyzeOptions::default())
+}
+
+fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), TestCaseError> {
     let (ms, cs) = compile(&text, seed);
-    let r = analyze(&ms, &cs).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+    let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
     let net = &r.net;
     let gid = |m: usize, local: &str| format!("{}/{local}", ms[m].name);
     let places = |m: usize, ps: &[PlaceId]| -> Vec<PlaceId> {
@@ -165,7 +192,7 @@ fn check(seed: u64) -> Result<(), TestCaseError> {
             let ss = explore(&observed, &Options { record_edges: true, ..Options::default() });
             prop_assert!(ss.complete(), "{text}");
             let end = |s| {
-                ["a", "b"].iter().all(|m| {
+                ms.iter().map(|m| m.name.as_str()).all(|m| {
                     ["mission.ok", "mission.fail"]
                         .iter()
                         .any(|p| ss.tokens(s, observed.place_by_id(&format!("{m}/{p}")).unwrap()) == 1)
@@ -204,6 +231,14 @@ fn check(seed: u64) -> Result<(), TestCaseError> {
                 }
                 if p.kind == WitnessKind::Dead {
                     prop_assert!(mcl_net::semantics::enabled(net, &m).is_empty(), "counterexample not dead\n{text}");
+                } else if !mcl_net::semantics::enabled(net, &m).is_empty() {
+                    // Blocked: some mission has not ended.
+                    let ended = |name: &str| {
+                        ["mission.ok", "mission.fail"]
+                            .iter()
+                            .any(|p| m.get(net.place_by_id(&format!("{name}/{p}")).unwrap()) == 1)
+                    };
+                    prop_assert!(ms.iter().any(|x| !ended(&x.name)), "blocked but every mission ended\n{text}");
                 }
                 prop_assert!(!p.constraints.is_empty() || p.waiting.is_empty(), "{text}");
             }
@@ -219,6 +254,30 @@ proptest! {
     #[test]
     fn free_means_no_deadlock_and_constraints_hold(seed in any::<u64>()) {
         check(seed)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// A third, unconstrained mission: two groups verified separately.
+    #[test]
+    fn free_means_no_deadlock_with_an_independent_third_mission(seed in any::<u64>()) {
+        check_text(case3(seed), seed, &AnalyzeOptions::default())?;
+    }
+
+    /// Random walks first: every deadlock they report is real.
+    #[test]
+    fn deadlocks_found_by_random_walks_replay(seed in any::<u64>()) {
+        check_text(case(seed), seed, &hunting())?;
+    }
+}
+
+#[test]
+fn fixed_seeds_with_groups_and_walks() {
+    for seed in 0..12 {
+        check_text(case3(seed), seed, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        check_text(case3(seed), seed, &hunting()).unwrap_or_else(|e| panic!("seed {seed} (walks): {e}"));
     }
 }
 

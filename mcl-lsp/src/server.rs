@@ -566,10 +566,25 @@ fn diagnostics_pass(
             }
         }
     }
+    // Then the compiler's checks of every affected file, and last the
+    // coordination analyses, which can take seconds: a stage waits for none
+    // of the slower ones, and an edit cancels them part-way.
+    let mut semantic = Vec::with_capacity(affected.len());
     for &f in &affected {
-        let all = analysis::diagnostics::full(&a, f);
+        let diags = analysis::diagnostics::semantic(&a, f);
         if let Some(uri) = a.uri(f) {
-            send(uri, a.world.version_of(a.path(f)), 1, all);
+            send(uri, a.world.version_of(a.path(f)), 1, diags.clone());
+        }
+        semantic.push(diags);
+    }
+    for (&f, mut diags) in affected.iter().zip(semantic) {
+        let coordination = analysis::diagnostics::coordination(&a, f);
+        if coordination.is_empty() {
+            continue;
+        }
+        diags.extend(coordination);
+        if let Some(uri) = a.uri(f) {
+            send(uri, a.world.version_of(a.path(f)), 2, diags);
         }
     }
     Pass { refresh: false, shown: now_shown }

@@ -1,4 +1,5 @@
-//! `mcl check`: diagnostics for files and everything they import.
+//! `mcl check`: diagnostics for files and everything they import, and the
+//! coordination analysis of every file with constraints (`mcl_coord::check`).
 
 use crate::{ColorChoice, Format};
 use mcl_compiler::diagnostics::{render_human, to_json};
@@ -38,6 +39,9 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
     let mut diags: Vec<FileDiagnostic> = Vec::new();
     for &f in &to_check {
         diags.extend(check_file(&db, f).iter().cloned());
+        // Deadlock analysis of the file's missions under its constraints
+        // (E0406, W0407); nothing while the program has errors.
+        diags.extend(mcl_coord::coordination_diagnostics(&db, f).iter().cloned());
     }
     let errors = diags.iter().filter(|d| d.diag.severity == Severity::Error).count();
     let warnings = diags.iter().filter(|d| d.diag.severity == Severity::Warning).count();

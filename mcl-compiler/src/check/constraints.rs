@@ -1,12 +1,14 @@
 //! Constraint checks (seed 6.4): every `mission:label` names a labelled call
-//! of a mission of the program; arities and bounds.
+//! of a mission of the program (E0401-E0403; naming an unlabelled call by
+//! its task points at the call), arities and bounds (E0404, E0405). Whether
+//! the constraints deadlock is `mcl_coord::check` (E0406, W0407).
 
 use super::Cx;
 use crate::codes;
 use crate::scope::missions;
 use mcl_syntax::ast::*;
 use mcl_syntax::visit::calls;
-use mcl_syntax::Diagnostic;
+use mcl_syntax::{Diagnostic, Span};
 
 pub(crate) fn check(cx: &mut Cx<'_>) {
     let all = missions(cx.db, cx.file);
@@ -62,7 +64,7 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
     for r in &c.refs {
         match &r.mission {
             Some(mname) => {
-                let Some((_, m)) = all.iter().find(|(_, m)| m.name.as_ref().is_some_and(|n| n.text == mname.text))
+                let Some((mfile, m)) = all.iter().find(|(_, m)| m.name.as_ref().is_some_and(|n| n.text == mname.text))
                 else {
                     let names = all.iter().filter_map(|(_, m)| m.name.as_ref().map(|n| n.text.as_str()));
                     let d = Diagnostic::error(
@@ -86,11 +88,23 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                         r.label.span,
                     )
                     .with_label(r.label.span, "unknown label");
-                    let d = cx.suggest(d, &r.label.text, labels.iter().copied());
-                    let d = if d.help.is_none() {
-                        d.with_help(format!("label a call with `Task( ... ) : {}`", r.label.text))
-                    } else {
-                        d
+                    let d = match unlabelled_call(cx, *mfile, m, &r.label.text) {
+                        Some((task, span)) => {
+                            let label = r.label.text.to_ascii_lowercase();
+                            cx.absolute_label(d, *mfile, span, format!("this `{task}` call has no label")).with_help(
+                                format!(
+                                "label the call to constrain it: `{task}( ... ) : {label}`, then name `{label}` here"
+                            ),
+                            )
+                        }
+                        None => {
+                            let d = cx.suggest(d, &r.label.text, labels.iter().copied());
+                            if d.help.is_none() {
+                                d.with_help(format!("label a call with `Task( ... ) : {}`", r.label.text))
+                            } else {
+                                d
+                            }
+                        }
                     };
                     cx.out.push(d);
                 }
@@ -131,4 +145,20 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
             }
         }
     }
+}
+
+/// A constraint that names a call by its task instead of a label
+/// (`auv:Surface` for an unlabelled `Surface()` call): the task's name and
+/// the absolute span of the first unlabelled call of that task in the
+/// mission.
+fn unlabelled_call(cx: &Cx<'_>, mfile: crate::db::SourceFile, m: &Mission, name: &str) -> Option<(String, Span)> {
+    // The mission as parsed with its whole file (absolute spans).
+    let name_of = |x: &Mission| x.name.as_ref().map(|n| n.text.clone());
+    let parsed = crate::queries::parse(cx.db, mfile);
+    let m = parsed.file.items.iter().find_map(|i| match i {
+        Item::Mission(x) if name_of(x) == name_of(m) => Some(x),
+        _ => None,
+    })?;
+    let call = calls(&m.body).into_iter().find(|c| c.label.is_none() && c.name.text.eq_ignore_ascii_case(name))?;
+    Some((call.name.text.clone(), call.span))
 }

@@ -2,7 +2,7 @@
 //! information for labels, including labels in other files).
 
 use super::Analysis;
-use mcl_compiler::queries::parse;
+use mcl_compiler::queries::syntax_errors;
 use mcl_compiler::{check_file, codes, SourceFile};
 use mcl_syntax::Severity;
 use tower_lsp_server::ls_types::{
@@ -52,10 +52,25 @@ pub fn to_lsp(a: &Analysis<'_>, file: SourceFile, d: &mcl_syntax::Diagnostic) ->
 
 /// The syntax errors of a file (available as soon as it is parsed).
 pub fn syntax(a: &Analysis<'_>, file: SourceFile) -> Vec<Diagnostic> {
-    parse(a.db, file).errors.iter().map(|d| to_lsp(a, file, d)).collect()
+    syntax_errors(a.db, file).iter().map(|d| to_lsp(a, file, d)).collect()
 }
 
-/// Every diagnostic of a file, with the file as the root of its program.
+/// Every diagnostic of a file, with the file as the root of its program,
+/// including the coordination analysis of its constraints (E0406, W0407).
 pub fn full(a: &Analysis<'_>, file: SourceFile) -> Vec<Diagnostic> {
+    let mut all = semantic(a, file);
+    all.extend(coordination(a, file));
+    all
+}
+
+/// The compiler's diagnostics of a file (syntax, names, blocks, missions):
+/// fast, published before the coordination analysis.
+pub fn semantic(a: &Analysis<'_>, file: SourceFile) -> Vec<Diagnostic> {
     check_file(a.db, file).iter().map(|fd| to_lsp(a, file, &fd.diag)).collect()
+}
+
+/// The coordination analysis of a file's constraints (E0406, W0407): an
+/// exploration that can take seconds, interrupted by the next edit.
+pub fn coordination(a: &Analysis<'_>, file: SourceFile) -> Vec<Diagnostic> {
+    mcl_coord::coordination_diagnostics(a.db, file).iter().map(|fd| to_lsp(a, file, &fd.diag)).collect()
 }
