@@ -153,6 +153,65 @@ impl Executor {
         }
     }
 
+    /// The last step reported, if it ended in fail.
+    pub fn last_failed(&self) -> Option<usize> {
+        match self.last {
+            Some((i, false)) => Some(i),
+            _ => None,
+        }
+    }
+
+    /// The step expected next (after the last one that ended in ok).
+    pub fn next_index(&self) -> usize {
+        self.next
+    }
+
+    /// Whether the facts still fit the plan while step `running` runs
+    /// (checked whenever perceptions change the facts): the goal holds, or
+    /// some step from `running` on has its needs (policy `Regression`; the
+    /// running step's effects may already be observed), or the facts are
+    /// those predicted before or after the running step (policy `Strict`).
+    pub fn expects(&self, current: &BTreeSet<Fact>, running: usize) -> bool {
+        if self.goal_holds(current) {
+            return true;
+        }
+        match self.policy {
+            Policy::Regression => (running..self.plan.steps.len()).any(|i| {
+                let st = &self.plan.steps[i];
+                st.needs.iter().all(|f| current.contains(f)) && !st.needs_false.iter().any(|f| current.contains(f))
+            }),
+            Policy::Strict => {
+                let Some(st) = self.plan.steps.get(running) else { return false };
+                let preds: BTreeSet<&str> = st.before.iter().chain(&st.after).map(|f| f.pred.as_str()).collect();
+                let actual: BTreeSet<&Fact> = current.iter().filter(|f| preds.contains(f.pred.as_str())).collect();
+                actual == st.before.iter().collect() || actual == st.after.iter().collect()
+            }
+        }
+    }
+
+    /// How the facts differ from what step `i` of the plan expects (the goal
+    /// when `i` is past the last step): the facts it needs that are missing,
+    /// and the facts that hold although it needs them false or the plan
+    /// predicted neither before nor after the step.
+    pub fn divergence(&self, current: &BTreeSet<Fact>, i: usize) -> (Vec<Fact>, Vec<Fact>) {
+        let Some(st) = self.plan.steps.get(i) else {
+            let missing = self.plan.goal.iter().filter(|f| !current.contains(f)).cloned().collect();
+            let extra = self.plan.goal_false.iter().filter(|f| current.contains(f)).cloned().collect();
+            return (missing, extra);
+        };
+        let missing = st.needs.iter().filter(|f| !current.contains(f)).cloned().collect();
+        // Fluent facts (of predicates some action changes) predicted neither before nor after the step.
+        let fluent: BTreeSet<&str> =
+            self.domain.actions.iter().flat_map(|a| a.add.iter().chain(&a.del)).map(|a| a.pred.as_str()).collect();
+        let known: BTreeSet<&Fact> = st.before.iter().chain(&st.after).collect();
+        let extra = current
+            .iter()
+            .filter(|f| st.needs_false.contains(f) || (fluent.contains(f.pred.as_str()) && !known.contains(f)))
+            .cloned()
+            .collect();
+        (missing, extra)
+    }
+
     fn goal_holds(&self, current: &BTreeSet<Fact>) -> bool {
         self.problem.goal.iter().all(|(g, pos)| current.contains(g) == *pos)
     }

@@ -11,7 +11,8 @@
 //! (MCL operator instance, facts expected before and after), [`validate`]
 //! replays any plan. [`world`] turns perceptions into facts with the seed's
 //! fact-provider scripts and [`executor`] decides, step after step, whether
-//! to run, skip ahead or re-plan. [`gen`] writes classic benchmark problems.
+//! to run, skip ahead or re-plan; [`run`] executes plans on the player
+//! against the mock vehicle (compiling each operator instance). [`gen`] writes classic benchmark problems.
 
 pub mod executor;
 pub mod gen;
@@ -20,6 +21,7 @@ pub mod heuristic;
 pub mod mcl;
 pub mod pddl;
 pub mod plan;
+pub mod run;
 pub mod search;
 pub mod sexpr;
 pub mod validate;

@@ -344,6 +344,35 @@ impl Store {
             i = (i + 1) & self.mask;
         }
     }
+    /// [`Store::insert`] for states of `W` words (`W = 0`: any length).
+    #[inline(always)]
+    fn insert_w<const W: usize>(&mut self, s: &[u64], hash: u64, parent: u32, via: u32, g: u64) -> (u32, bool) {
+        if W == 0 {
+            return self.insert(s, hash, parent, via, g);
+        }
+        let s = &s[..W];
+        if (self.len() + 1) * 2 > self.table.len() {
+            self.grow();
+        }
+        let mut i = slot(hash, self.shift);
+        let tag = hash << 32;
+        loop {
+            let e = self.table[i];
+            if e == FREE {
+                let nid = self.len() as u32;
+                self.table[i] = tag | nid as u64;
+                self.words.extend_from_slice(s);
+                self.nodes.push(Node { hash, g, h: 0, parent, via });
+                return (nid, true);
+            }
+            let id = e as usize & 0xFFFF_FFFF;
+            if e & !0xFFFF_FFFF == tag && same(&self.words[id * W..id * W + W], s) {
+                return (id as u32, false);
+            }
+            i = (i + 1) & self.mask;
+        }
+    }
+
     fn path(&self, mut id: u32) -> Vec<u32> {
         let mut out = Vec::new();
         while self.nodes[id as usize].parent != EMPTY {
@@ -389,30 +418,51 @@ pub fn search_from(task: &Task, init: &[u32], alg: Algorithm, max_states: u64) -
 }
 
 fn bfs(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) -> Outcome {
+    // States of one to four words get a copy of the loop where their length
+    // is a constant (unrolled comparisons, copies and effect loops).
+    match sp.w {
+        1 => bfs_w::<1>(sp, store, stats, max_states),
+        2 => bfs_w::<2>(sp, store, stats, max_states),
+        3 => bfs_w::<3>(sp, store, stats, max_states),
+        4 => bfs_w::<4>(sp, store, stats, max_states),
+        _ => bfs_w::<0>(sp, store, stats, max_states),
+    }
+}
+
+/// Breadth-first search over states of `W` words (`W = 0`: any length).
+fn bfs_w<const W: usize>(sp: &Space<'_>, store: &mut Store, stats: &mut Stats, max_states: u64) -> Outcome {
     if sp.is_goal(store.state(0)) {
         return Outcome::Plan(Vec::new());
     }
-    let w = sp.w;
-    let mut cur = vec![0u64; w];
-    let mut child = vec![0u64; w];
+    let w = if W == 0 { sp.w } else { W };
+    debug_assert_eq!(w, sp.w);
+    let mut cur_buf = vec![0u64; w];
+    let mut child_buf = vec![0u64; w];
+    let cur = &mut cur_buf[..w];
+    let child = &mut child_buf[..w];
     let mut found = EMPTY;
     let mut next = 0usize;
     while next < store.len() {
         let id = next as u32;
         next += 1;
-        copy(&mut cur, store.state(id));
+        copy(cur, &store.words[id as usize * w..id as usize * w + w]);
         let (h, g) = (store.nodes[id as usize].hash, store.nodes[id as usize].g);
         stats.expanded += 1;
         let mut limit = false;
-        sp.for_each_applicable(&cur, |a| {
+        let cur: &[u64] = cur;
+        sp.for_each_applicable(cur, |a| {
             if found != EMPTY || limit {
                 return;
             }
             stats.generated += 1;
-            let ch = sp.apply(&cur, h, a, &mut child);
-            let (cid, new) = store.insert(&child, ch, id, a, g + sp.task.actions[a as usize].cost);
+            let ch = sp.apply(cur, h, a, child);
+            // An action that changes nothing leads back to the state itself.
+            if ch == h && same(child, cur) {
+                return;
+            }
+            let (cid, new) = store.insert_w::<W>(child, ch, id, a, g + sp.task.actions[a as usize].cost);
             if new {
-                if sp.is_goal(&child) {
+                if sp.is_goal(child) {
                     found = cid;
                 } else if store.len() as u64 >= max_states {
                     limit = true;

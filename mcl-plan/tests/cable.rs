@@ -159,7 +159,8 @@ fn the_seed_plan_is_the_only_optimal_plan() {
     }
 }
 
-/// Why the domain adds `surface` to GotoOp and `seafloor` to CableTrackingOp:
+/// Why the domain adds `surface` to GotoOp and `seafloor` (and `in
+/// inspection`) to CableTrackingOp:
 /// with Table 8.1's preconditions alone, several plans have the same cost
 /// whatever costs the operators get (moving at depth, surfacing before
 /// tracking), so no cost assignment makes the seed's plan the optimum.
@@ -168,9 +169,14 @@ fn table_8_1_alone_leaves_the_order_open() {
     let text = std::fs::read_to_string(dir().join("domain.pddl")).unwrap();
     let relaxed =
         text.replace("(and (in ?r ?a) (surface ?r) (position_ok ?r)", "(and (in ?r ?a) (position_ok ?r)").replace(
-            "(and (seafloor ?r) (position_ok ?r) (no_alarms ?r) (found ?o)",
+            "(and (seafloor ?r) (position_ok ?r) (no_alarms ?r) (in ?r inspection) (found ?o)",
             "(and (position_ok ?r) (no_alarms ?r) (found ?o)",
         );
+    assert_eq!(
+        relaxed.matches("(and (position_ok ?r) (no_alarms ?r) (found ?o)").count(),
+        1,
+        "the replacement applied"
+    );
     assert_ne!(relaxed, text);
     let d = mcl_plan::parse_domain("table-8-1.pddl", &relaxed).unwrap();
     let (_, p) = load();
@@ -187,8 +193,9 @@ fn table_8_1_alone_leaves_the_order_open() {
 fn the_operators_file_defines_every_mission_the_domain_runs() {
     let (d, _) = load();
     let ops = mcl_plan::mcl::load_operators(&dir().join("cable.mcl")).expect("cable.mcl parses");
-    assert_eq!(ops.len(), 7);
-    assert!(ops.iter().all(|o| o.plan_op));
+    // Seven operators, and the holding mission of `mcl plan --run --holding Holding`.
+    assert_eq!(ops.iter().filter(|o| o.plan_op).count(), 7);
+    assert_eq!(ops.iter().filter(|o| !o.plan_op).map(|o| o.name.as_str()).collect::<Vec<_>>(), ["Holding"]);
     let (errors, warnings) = mcl_plan::mcl::check_mapping(&d, &ops);
     assert!(errors.is_empty(), "{errors:?}");
     assert!(warnings.is_empty(), "{warnings:?}");
@@ -406,4 +413,26 @@ fn replanning_ignores_facts_the_domain_does_not_know() {
     let plan = ex.replan(&facts).expect("plans");
     assert_eq!(plan.steps.len(), 7);
     assert_eq!(ex.next_step(&facts), Decision::Run(0));
+}
+
+/// While a step runs, the facts may already show its effects (the plan still
+/// holds), but a fact the rest of the plan needs that disappears does not.
+#[test]
+fn expects_and_divergence_while_a_step_runs() {
+    let (d, p) = load();
+    let ex = Executor::new(d, p, Algorithm::Astar(Heuristic::Max)).unwrap();
+    let mut w = world();
+    // TakeFixOp (step 0) runs; nothing changed yet, then the fix arrives.
+    assert!(ex.expects(w.facts(), 0));
+    w.perceive("nav.quality", Percept::Num(0.9));
+    assert!(ex.expects(w.facts(), 0), "its own effect");
+    // An alarm: no step from 0 on has its needs any more.
+    w.perceive("auv.alarm", Percept::Num(1.0));
+    assert!(!ex.expects(w.facts(), 0));
+    let (missing, extra) = ex.divergence(w.facts(), 1);
+    assert_eq!(missing, [Fact::new("no_alarms", &["auv"])]);
+    assert_eq!(extra, [Fact::new("alarm", &["auv"])]);
+    // Past the last step, the divergence is measured against the goal.
+    let (missing, _) = ex.divergence(w.facts(), ex.plan().steps.len());
+    assert!(missing.contains(&Fact::new("mapped", &["cable"])), "{missing:?}");
 }

@@ -114,6 +114,8 @@ pub struct MockVehicle {
     last_seq: u64,
     initialised: bool,
     warnings: Vec<String>,
+    /// Times each event was sent (for perceptions scripted `after` an event).
+    sent: HashMap<String, u32>,
 }
 
 fn key(t: f64, id: u64) -> Key {
@@ -149,6 +151,7 @@ impl MockVehicle {
             last_seq: 0,
             initialised: false,
             warnings: Vec::new(),
+            sent: HashMap::new(),
         }
     }
 
@@ -176,7 +179,9 @@ impl MockVehicle {
             out.push((e.at, Inbound::Event { event: e.event.clone() }));
         }
         for p in &self.scenario.perceptions {
-            out.push((p.at, Inbound::Perception { name: p.name.clone(), value: p.value.clone() }));
+            if let Some(at) = p.at {
+                out.push((at, Inbound::Perception { name: p.name.clone(), value: p.value.clone() }));
+            }
         }
         out.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (t, m) in &out {
@@ -324,6 +329,25 @@ impl MockVehicle {
     }
 
     fn delivered(&mut self, k: Key, p: &Pending) {
+        // Perceptions scripted `after` this event.
+        if let Inbound::Event { event } = &p.msg {
+            let n = self.sent.entry(event.clone()).or_insert(0);
+            *n += 1;
+            let n = *n;
+            let t = f64::from_bits(k.0);
+            let due: Vec<(f64, Inbound)> = self
+                .scenario
+                .perceptions
+                .iter()
+                .filter(|s| s.after.as_deref() == Some(event.as_str()) && s.occurrence.is_none_or(|o| o == n))
+                .map(|s| {
+                    (t + s.delay.unwrap_or(0.0), Inbound::Perception { name: s.name.clone(), value: s.value.clone() })
+                })
+                .collect();
+            for (at, m) in due {
+                self.schedule(at, m, None);
+            }
+        }
         if let Some(task) = &p.task {
             if let Some(a) = self.active.get_mut(task) {
                 if a.pending == Some(k) {
@@ -411,6 +435,43 @@ event = "evAlarmOk"
         assert!(m.on_action(2.0, &action(5, "Goto", "enable", 4)).is_empty());
         assert_eq!(m.pop_due(100.0), Some((7.0, ev("evAlarmOk"))));
         assert_eq!(m.pop_due(100.0), None);
+    }
+
+    #[test]
+    fn perceptions_after_events() {
+        let mut m = mock(
+            r#"
+[tasks.Goto]
+delay = 10
+[[perceptions]]
+after = "evGotoOk"
+name = "moved"
+value = true
+[[perceptions]]
+after = "evGotoOk"
+occurrence = 2
+delay = 1.5
+name = "second"
+value = 2
+"#,
+        );
+        let p = |n: &str, v: serde_json::Value| Inbound::Perception { name: n.into(), value: v };
+        assert!(m.initial().is_empty());
+        m.on_action(0.0, &action(1, "Goto", "enable", 4));
+        assert_eq!(m.pop_due(10.0), Some((10.0, ev("evGotoOk"))));
+        assert_eq!(m.pop_due(10.0), Some((10.0, p("moved", serde_json::json!(true)))));
+        assert_eq!(m.pop_due(100.0), None);
+        m.on_action(10.0, &action(2, "Goto", "disable", 4));
+        m.on_action(10.0, &action(3, "Goto", "enable", 4));
+        assert_eq!(m.pop_due(20.0), Some((20.0, ev("evGotoOk"))));
+        assert_eq!(m.pop_due(20.0), Some((20.0, p("moved", serde_json::json!(true)))));
+        assert_eq!(m.pop_due(21.0), None);
+        assert_eq!(m.pop_due(21.5), Some((21.5, p("second", serde_json::json!(2)))));
+        // A cancelled answer is never sent, so nothing follows it.
+        m.on_action(20.0, &action(4, "Goto", "disable", 4));
+        m.on_action(20.0, &action(5, "Goto", "enable", 4));
+        m.on_action(25.0, &action(6, "Goto", "disable", 4));
+        assert_eq!(m.next_deadline(), None);
     }
 
     #[test]

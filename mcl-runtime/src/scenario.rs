@@ -26,6 +26,12 @@
 //! at = 10
 //! name = "battery"
 //! value = 0.8
+//!
+//! [[perceptions]]             # when the mock sends an event
+//! after = "eventSearchOk"     # every time, or only its `occurrence = n`-th time
+//! delay = 2.0                 # seconds after the event (default 0)
+//! name = "cable.detected"
+//! value = 1
 //! ```
 //!
 //! Unknown keys and malformed values are errors that point at their line
@@ -199,13 +205,24 @@ pub struct ScriptedEvent {
     pub event: String,
 }
 
-/// A perception sent at a fixed time.
+/// A perception sent at a fixed time (`at`), or `delay` seconds after the
+/// mock vehicle sends an event (`after`; every time, or only its
+/// `occurrence`-th time).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScriptedPerception {
-    /// Seconds from the start of the mission.
-    #[serde(deserialize_with = "non_negative")]
-    pub at: f64,
+    /// Seconds from the start of the mission (exclusive with `after`).
+    #[serde(default, deserialize_with = "non_negative_opt")]
+    pub at: Option<f64>,
+    /// Send it when the mock sends this event (a task's answer or a scripted event).
+    #[serde(default)]
+    pub after: Option<String>,
+    /// With `after`: only after the n-th time the event is sent (1 is the first); default every time.
+    #[serde(default, deserialize_with = "positive_opt")]
+    pub occurrence: Option<u32>,
+    /// With `after`: seconds between the event and the perception (default 0).
+    #[serde(default, deserialize_with = "non_negative_opt")]
+    pub delay: Option<f64>,
     /// Perception name.
     pub name: String,
     /// Its value (any TOML value).
@@ -219,6 +236,15 @@ fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     } else {
         Err(de::Error::custom(format!("expected a number of seconds ≥ 0, found {v}")))
     }
+}
+
+fn positive_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    let v = i64::deserialize(d)?;
+    u32::try_from(v)
+        .ok()
+        .filter(|&n| n >= 1)
+        .map(Some)
+        .ok_or_else(|| de::Error::custom(format!("expected 1 for the first time, 2 for the second..., found {v}")))
 }
 
 fn non_negative_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
@@ -280,6 +306,20 @@ impl Scenario {
                 }
             }
         }
+        for (i, p) in s.perceptions.iter().enumerate() {
+            let problem = match (p.at, &p.after) {
+                (Some(_), Some(_)) => Some("gives both `at` and `after`; keep one"),
+                (None, None) => Some("needs `at` (seconds) or `after` (an event name)"),
+                (Some(_), None) if p.occurrence.is_some() || p.delay.is_some() => {
+                    Some("`occurrence` and `delay` go with `after`, not with `at`")
+                }
+                _ => None,
+            };
+            if let Some(problem) = problem {
+                let (line, col) = nth_table(text, "[[perceptions]]", i);
+                return Err(format!("{origin}:{line}:{col}: perception `{}` {problem}", p.name));
+            }
+        }
         Ok(s)
     }
 
@@ -307,6 +347,11 @@ impl Scenario {
         }
         w
     }
+}
+
+/// The line and column (1-based) of the `n`-th (0-based) `header` line, (1, 1) if not found.
+fn nth_table(text: &str, header: &str, n: usize) -> (usize, usize) {
+    text.lines().enumerate().filter_map(|(i, l)| l.find(header).map(|c| (i + 1, c + 1))).nth(n).unwrap_or((1, 1))
 }
 
 /// The line and column (1-based) of `[path]` or of the last key of `path`
@@ -389,6 +434,34 @@ value = 0.8
         assert_eq!(s.tasks["Alarm"].label["al"].probabilities.unwrap().ok, 0.8);
         assert_eq!(s.events[0].at, 120.0);
         assert_eq!(s.perceptions[0].value, serde_json::json!(0.8));
+        assert_eq!(s.perceptions[0].at, Some(10.0));
+    }
+
+    #[test]
+    fn perceptions_after_events() {
+        let s = Scenario::from_toml(
+            "[[perceptions]]\nafter = \"evOk\"\noccurrence = 2\ndelay = 3\nname = \"x\"\nvalue = 1\n",
+            "s.toml",
+        )
+        .unwrap();
+        let p = &s.perceptions[0];
+        assert_eq!((p.at, p.after.as_deref(), p.occurrence, p.delay), (None, Some("evOk"), Some(2), Some(3.0)));
+        let e = Scenario::from_toml(
+            "[[events]]\nat = 1\nevent = \"e\"\n[[perceptions]]\nname = \"x\"\nvalue = 1\n",
+            "s.toml",
+        )
+        .unwrap_err();
+        assert!(e.starts_with("s.toml:4:1: perception `x` needs `at`"), "{e}");
+        let e = Scenario::from_toml(
+            "[[perceptions]]\nat = 1\nname = \"x\"\nvalue = 1\n[[perceptions]]\nat = 2\nafter = \"e\"\nname = \"y\"\nvalue = 1\n",
+            "s.toml",
+        )
+        .unwrap_err();
+        assert!(e.starts_with("s.toml:5:1: perception `y` gives both"), "{e}");
+        let e =
+            Scenario::from_toml("[[perceptions]]\nafter = \"e\"\noccurrence = 0\nname = \"y\"\nvalue = 1\n", "s.toml")
+                .unwrap_err();
+        assert!(e.starts_with("s.toml:3:"), "{e}");
     }
 
     #[test]

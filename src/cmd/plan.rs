@@ -52,6 +52,23 @@ pub struct Options {
     pub validate: Option<PathBuf>,
     pub max_states: u64,
     pub stats: bool,
+    /// `--run`: execute the plan.
+    pub execute: Option<Execute>,
+}
+
+/// Options of `mcl plan FILE.mcl --run`.
+pub struct Execute {
+    pub mock: bool,
+    pub scenario: Option<PathBuf>,
+    pub world: Option<PathBuf>,
+    pub virtual_time: bool,
+    pub speed: f64,
+    pub trace: Option<PathBuf>,
+    pub seed: Option<u64>,
+    pub holding: Option<String>,
+    pub time_limit: Option<f64>,
+    pub max_plans: u32,
+    pub quiet: bool,
 }
 
 fn print_errors(errors: &[mcl_plan::Error]) {
@@ -136,6 +153,17 @@ pub fn run(o: Options) -> u8 {
             return 2;
         }
     }
+    if let Some(x) = o.execute {
+        if o.validate.is_some() {
+            eprintln!("error: give either --run or --validate");
+            return 2;
+        }
+        let Some(ops) = operators else {
+            eprintln!("error: --run needs the mission operators: give FILE.mcl (or --operators FILE.mcl)");
+            return 2;
+        };
+        return execute(domain, problem, &ops, algorithm(o.search, o.heuristic), o.max_states, x);
+    }
     if let Some(plan_path) = &o.validate {
         let text = match std::fs::read_to_string(plan_path) {
             Ok(t) => t,
@@ -155,14 +183,7 @@ pub fn run(o: Options) -> u8 {
             }
         };
     }
-    let alg = match (o.search, o.heuristic) {
-        (SearchChoice::Bfs, _) => Algorithm::Bfs,
-        (SearchChoice::Ucs, _) => Algorithm::Ucs,
-        (SearchChoice::Astar, HeuristicChoice::Hadd) => Algorithm::Astar(Heuristic::Add),
-        (SearchChoice::Astar, HeuristicChoice::Hmax) => Algorithm::Astar(Heuristic::Max),
-        (SearchChoice::Gbfs, HeuristicChoice::Hadd) => Algorithm::Greedy(Heuristic::Add),
-        (SearchChoice::Gbfs, HeuristicChoice::Hmax) => Algorithm::Greedy(Heuristic::Max),
-    };
+    let alg = algorithm(o.search, o.heuristic);
     let sol = match mcl_plan::solve(&domain, &problem, alg, o.max_states) {
         Ok(s) => s,
         Err(e) => {
@@ -222,4 +243,160 @@ pub fn run(o: Options) -> u8 {
             3
         }
     }
+}
+
+fn algorithm(search: SearchChoice, heuristic: HeuristicChoice) -> Algorithm {
+    match (search, heuristic) {
+        (SearchChoice::Bfs, _) => Algorithm::Bfs,
+        (SearchChoice::Ucs, _) => Algorithm::Ucs,
+        (SearchChoice::Astar, HeuristicChoice::Hadd) => Algorithm::Astar(Heuristic::Add),
+        (SearchChoice::Astar, HeuristicChoice::Hmax) => Algorithm::Astar(Heuristic::Max),
+        (SearchChoice::Gbfs, HeuristicChoice::Hadd) => Algorithm::Greedy(Heuristic::Add),
+        (SearchChoice::Gbfs, HeuristicChoice::Hmax) => Algorithm::Greedy(Heuristic::Max),
+    }
+}
+
+/// Trace file and live log of `--run`.
+struct RunSink {
+    trace: Option<std::io::BufWriter<std::fs::File>>,
+    live: bool,
+    error: Option<String>,
+}
+
+impl mcl_plan::run::RecordSink for RunSink {
+    fn record(&mut self, record: serde_json::Value, live: Option<String>) {
+        if let Some(w) = &mut self.trace {
+            let r = serde_json::to_writer(&mut *w, &record)
+                .map_err(|e| e.to_string())
+                .and_then(|()| w.write_all(b"\n").map_err(|e| e.to_string()));
+            if let Err(e) = r {
+                self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        if let (true, Some(line)) = (self.live, live) {
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(out, "{line}");
+            let _ = out.flush();
+        }
+    }
+}
+
+/// `mcl plan FILE.mcl --run --mock`: plans, executes each step's MCL mission
+/// on the player against the mock vehicle, and re-plans on divergence.
+fn execute(
+    domain: mcl_plan::Domain,
+    problem: mcl_plan::Problem,
+    ops: &Path,
+    alg: Algorithm,
+    max_states: u64,
+    x: Execute,
+) -> u8 {
+    use mcl_plan::executor::Executor;
+    use mcl_runtime::scenario::Scenario;
+    if !x.mock {
+        eprintln!("error: --run needs --mock (plans run against the in-process mock vehicle; a vehicle's AAC is not supported yet)");
+        return 2;
+    }
+    if !(x.speed.is_finite() && x.speed > 0.0) {
+        eprintln!("error: --speed must be a positive number");
+        return 2;
+    }
+    if x.time_limit.is_some_and(|t| !(t.is_finite() && t >= 0.0)) {
+        eprintln!("error: --time-limit must be a number of seconds ≥ 0");
+        return 2;
+    }
+    let world_path = x.world.clone().unwrap_or_else(|| ops.parent().unwrap_or(Path::new(".")).join("world.xml"));
+    let xml = match std::fs::read_to_string(&world_path) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!(
+                "error: cannot read the fact-provider scripts `{}`: {e} (give --world W.xml)",
+                world_path.display()
+            );
+            return 2;
+        }
+    };
+    let scripts = match mcl_plan::world::parse_scripts(&world_path.display().to_string(), &xml) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    let world = match mcl_plan::world::WorldModeler::new(scripts, &domain, &problem) {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("error: {}: {e}", world_path.display());
+            return 2;
+        }
+    };
+    let scenario = match &x.scenario {
+        Some(p) => match Scenario::load(p) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
+            }
+        },
+        None => Scenario::default(),
+    };
+    let seed = x.seed.or(scenario.seed).unwrap_or(0);
+    let mut ex = match Executor::new(domain, problem, alg) {
+        Ok(ex) => ex,
+        Err(e) => {
+            eprintln!("no plan: {e}");
+            return 1;
+        }
+    };
+    ex.max_states = max_states;
+    let trace = match &x.trace {
+        Some(p) => {
+            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+                let _ = std::fs::create_dir_all(dir);
+            }
+            match std::fs::File::create(p) {
+                Ok(f) => Some(std::io::BufWriter::new(f)),
+                Err(e) => {
+                    eprintln!("error: cannot write trace `{}`: {e}", p.display());
+                    return 2;
+                }
+            }
+        }
+        None => None,
+    };
+    let mut sink = RunSink { trace, live: !x.quiet, error: None };
+    let opts = mcl_plan::run::RunOptions {
+        seed,
+        virtual_time: x.virtual_time,
+        speed: x.speed,
+        time_limit: x.time_limit,
+        holding: x.holding.clone(),
+        max_plans: x.max_plans.max(1),
+    };
+    let report = mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink);
+    if let Some(w) = &mut sink.trace {
+        if let Err(e) = w.flush() {
+            sink.error.get_or_insert(format!("cannot write the trace: {e}"));
+        }
+    }
+    let report = match report {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    if let Some(e) = sink.error {
+        eprintln!("error: {e}");
+        return 2;
+    }
+    eprintln!(
+        "planned mission: {} at t={:.3} s ({} plan(s), {} step(s)){}",
+        report.result.to_uppercase(),
+        report.t,
+        report.plans,
+        report.steps,
+        report.reason.as_ref().map(|r| format!(": {r}")).unwrap_or_default()
+    );
+    report.exit_code()
 }

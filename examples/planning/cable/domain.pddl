@@ -9,7 +9,10 @@
 ;   a position on the plane, and the vehicle cannot travel more than 50 m
 ;   without a GPS fix (8.5.2), so transits are made on the surface.
 ; - CableTrackingOp also needs `seafloor`: it keeps an altitude over the
-;   seabed (CableTrackingMCLop( altitude, params_NAC )).
+;   seabed (CableTrackingMCLop( altitude, params_NAC )); and `in inspection`,
+;   where the cable lies (else a re-plan may track it from another zone).
+; - CheckAlarmOp also adds `surface` (and deletes `seafloor`): its mission
+;   CheckAlarmMCLop surfaces before checking the vehicle.
 ; - Table 8.1's type "Object" is `target` (`object` is PDDL's root type);
 ;   "seabottom" (Table 8.2) is `seafloor` (Table 8.1); "alarms" / "no_alarm"
 ;   are `alarm` / `no_alarms`.
@@ -45,7 +48,7 @@
 
   (:action CableTrackingOp
     :parameters (?r - robot ?o - target)
-    :precondition (and (seafloor ?r) (position_ok ?r) (no_alarms ?r) (found ?o) (not_mapped ?o))
+    :precondition (and (seafloor ?r) (position_ok ?r) (no_alarms ?r) (in ?r inspection) (found ?o) (not_mapped ?o))
     :effect (and (mapped ?o) (not (not_mapped ?o)) (increase (total-cost) 300))
     :mcl (CableTrackingMCLop ?r.altitude ?o.params_nac))
 
@@ -70,5 +73,5 @@
   (:action CheckAlarmOp
     :parameters (?r - robot)
     :precondition (alarm ?r)
-    :effect (and (no_alarms ?r) (not (alarm ?r)) (increase (total-cost) 60))
+    :effect (and (no_alarms ?r) (not (alarm ?r)) (surface ?r) (not (seafloor ?r)) (increase (total-cost) 60))
     :mcl (CheckAlarmMCLop)))

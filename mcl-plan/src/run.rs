@@ -1,0 +1,751 @@
+//! Plan execution on the Petri net player (seed 7.5): the glue between the
+//! planner ([`Executor`]), the world modeler ([`WorldModeler`]), the MCL
+//! compiler and the runtime (player, mock vehicle).
+//!
+//! For each plan step the operator's MCL mission is instantiated with the
+//! step's arguments (`GotoMCLop( 45, 30 )`: the operator's body with each
+//! parameter replaced by its value, Extract 7.2), compiled with
+//! `mcl-compiler` and played by a [`Player`] against the vehicle — the
+//! in-process [`MockVehicle`] of a scenario. Perceptions go through the world
+//! modeler's scripts into facts. After each step, and whenever perceptions
+//! change the facts while a step runs, the facts are compared with what the
+//! plan expects ([`Executor::expects`], Definition 7.2.4); when they differ
+//! the running mission is aborted (its `mission.abort` place is marked, so
+//! its tasks are disabled by the nets), and a new plan is computed from the
+//! current facts while the holding mission (`--holding`) runs. Every player
+//! record and every planning record goes to the caller's sink as JSON
+//! (`kind`: `plan`, `replan`, `step`, `step_end`, `facts`, `holding`, then
+//! the final `outcome`), with a live-log line.
+//!
+//! One mock vehicle serves the whole run: its tables are the union of those
+//! of the operators file's missions (an instance has the call sites of its
+//! operator), call sites and sequence numbers are renumbered so that the
+//! missions played one after the other look like one stream of actions.
+
+use crate::executor::{Decision, Executor};
+use crate::ground::{McValue, MclInstance};
+use crate::pddl::Fact;
+use crate::world::{Percept, WorldModeler};
+use mcl_compiler::compile::compile_file;
+use mcl_compiler::diagnostics::render_human;
+use mcl_compiler::{check_file, Database, Db};
+use mcl_net::{Net, Place, SourceSpan, Transition, TransitionKind};
+use mcl_runtime::journal::Input;
+use mcl_runtime::link::{Action, Inbound};
+use mcl_runtime::mock::{tables_of, CallInfo, MockVehicle, TaskEvents};
+use mcl_runtime::player::{Outcome as PlayerOutcome, Output, Player, PlayerOptions};
+use mcl_runtime::scenario::Scenario;
+use mcl_runtime::trace::{live_line, round_time, SourceMap, Tracer};
+use mcl_syntax::ast::{Item, Value, ValueKind};
+use serde_json::{json, Value as Json};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The event that aborts a running operator mission (an event transition
+/// added to each net, marking `mission.abort`).
+pub const ABORT_EVENT: &str = "mclPlanAbort";
+
+/// Call sites of the i-th mission of the operators file are renumbered
+/// `i * CALL_SITE_STRIDE + c` for the mock vehicle.
+const CALL_SITE_STRIDE: u32 = 1_000_000;
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Seed of the players (each mission gets `seed + n`) and of the mock.
+    pub seed: u64,
+    /// Virtual time (instantaneous, deterministic) or real time.
+    pub virtual_time: bool,
+    /// Real time: speed-up factor.
+    pub speed: f64,
+    /// Stop when mission time passes this.
+    pub time_limit: Option<f64>,
+    /// Name of a mission of the operators file run while re-planning.
+    pub holding: Option<String>,
+    /// Give up after this many plans.
+    pub max_plans: u32,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions { seed: 0, virtual_time: true, speed: 1.0, time_limit: None, holding: None, max_plans: 100 }
+    }
+}
+
+/// How the run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// `ok` (the goal holds), `fail` (no plan, or re-planning given up),
+    /// `time_limit`.
+    pub result: String,
+    pub reason: Option<String>,
+    /// Plans computed (the first included).
+    pub plans: u32,
+    /// Steps started.
+    pub steps: u32,
+    /// Mission time at the end.
+    pub t: f64,
+}
+
+impl Report {
+    /// 0 goal reached, 1 failed, 3 time limit.
+    pub fn exit_code(&self) -> u8 {
+        match self.result.as_str() {
+            "ok" => 0,
+            "fail" => 1,
+            _ => 3,
+        }
+    }
+}
+
+/// Receives each trace record (JSON) with its live-log line.
+pub trait RecordSink {
+    fn record(&mut self, record: Json, live: Option<String>);
+}
+
+/// The MCL side: the operators file compiled once (for the mock's tables and
+/// the holding mission) and each operator instance compiled on demand.
+pub struct Missions {
+    db: Database,
+    ops_path: PathBuf,
+    ops_text: String,
+    /// Missions of the operators file, by name: (index, net).
+    compiled: HashMap<String, (usize, Net)>,
+    instances: HashMap<String, Arc<Net>>,
+    generated: usize,
+}
+
+fn literal(v: &McValue) -> String {
+    match v {
+        McValue::Num(n) => crate::pddl::fmt_num(*n),
+        McValue::Str(s) => format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\"")),
+        McValue::Sym(s) => s.clone(),
+    }
+}
+
+fn substitutions(v: &Value, params: &[String], args: &[McValue], out: &mut Vec<(usize, usize, String)>) {
+    match &v.kind {
+        ValueKind::Ident(n) => {
+            if let Some(i) = params.iter().position(|p| *p == n.text) {
+                out.push((v.span.start as usize, v.span.end as usize, literal(&args[i])));
+            }
+        }
+        ValueKind::List { items, .. } => {
+            for it in items {
+                substitutions(it, params, args, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Adds the abort hook: an event transition [`ABORT_EVENT`] that marks
+/// `mission.abort` once. `remap` rewrites source spans (from a generated
+/// instance file to the operators file).
+fn with_abort_hook(net: &Net, remap: Option<&dyn Fn(&mut SourceSpan)>) -> Result<Net, String> {
+    let Some(abort) = net.place_by_id("mission.abort") else {
+        return Err(format!("mission `{}` has no `mission.abort` place", net.name()));
+    };
+    let mut b = net.to_builder();
+    if let Some(remap) = remap {
+        for t in net.transition_ids() {
+            if let Some(span) = b.transition_mut(t).and_then(|tr| tr.provenance.span.as_mut()) {
+                remap(span);
+            }
+        }
+        for p in net.place_ids() {
+            if let Some(span) = b.place_mut(p).and_then(|pl| pl.provenance.span.as_mut()) {
+                remap(span);
+            }
+        }
+    }
+    let armed = b.add_place(Place::new("plan.abortable").with_tokens(1));
+    let t = b.add_transition(Transition::new("plan.abort").with_kind(TransitionKind::Event(ABORT_EVENT.into())));
+    b.add_input(armed, t, 1).add_output(t, abort, 1);
+    b.build().map_err(|e| format!("mission `{}`: {e}", net.name()))
+}
+
+impl Missions {
+    /// Compiles the operators file (it must have no errors).
+    pub fn load(ops_path: &Path) -> Result<Missions, String> {
+        let ops_text =
+            std::fs::read_to_string(ops_path).map_err(|e| format!("cannot read `{}`: {e}", ops_path.display()))?;
+        let db = Database::new();
+        let f = db.file(ops_path);
+        let nets = match compile_file(&db, f) {
+            Ok(ms) => ms,
+            Err(_) => {
+                let diags: Vec<_> = check_file(&db, f).iter().filter(|d| d.diag.is_error()).cloned().collect();
+                return Err(format!(
+                    "{}the mission operators in `{}` have errors",
+                    render_human(&db, &diags, false),
+                    ops_path.display()
+                ));
+            }
+        };
+        let compiled = nets.into_iter().enumerate().map(|(i, m)| (m.name, (i, m.net))).collect();
+        Ok(Missions {
+            db,
+            ops_path: ops_path.to_path_buf(),
+            ops_text,
+            compiled,
+            instances: HashMap::new(),
+            generated: 0,
+        })
+    }
+
+    /// The mock vehicle's tables: task events and call sites of every
+    /// mission of the operators file (call sites renumbered per mission).
+    pub fn mock_tables(&self) -> (HashMap<String, TaskEvents>, HashMap<u32, CallInfo>) {
+        let mut tasks = HashMap::new();
+        let mut calls = HashMap::new();
+        for (i, net) in self.compiled.values() {
+            let (t, c) = tables_of(net);
+            tasks.extend(t);
+            for (site, info) in c {
+                calls.insert(*i as u32 * CALL_SITE_STRIDE + site, info);
+            }
+        }
+        (tasks, calls)
+    }
+
+    /// Index of a mission of the operators file (for call-site renumbering).
+    fn index_of(&self, name: &str) -> u32 {
+        self.compiled.get(name).map_or(0, |(i, _)| *i as u32)
+    }
+
+    /// The holding mission `name` (a mission of the operators file without parameters).
+    pub fn holding(&self, name: &str) -> Result<Arc<Net>, String> {
+        let Some((_, net)) = self.compiled.get(name) else {
+            let mut names: Vec<&str> = self.compiled.keys().map(String::as_str).collect();
+            names.sort();
+            return Err(format!(
+                "holding mission `{name}`: `{}` defines no mission of that name (it defines: {})",
+                self.ops_path.display(),
+                names.join(", ")
+            ));
+        };
+        if net.properties().iter().any(|(k, _)| k == "mission_param") {
+            return Err(format!("holding mission `{name}` has parameters; give a mission without parameters"));
+        }
+        Ok(Arc::new(with_abort_hook(net, None)?))
+    }
+
+    /// The net of an operator instance: the operator's body with its
+    /// parameters replaced by the instance's arguments, compiled as a
+    /// mission of a file that imports the operators file.
+    pub fn instance(&mut self, call: &MclInstance) -> Result<Arc<Net>, String> {
+        let key = call.to_string();
+        if let Some(n) = self.instances.get(&key) {
+            return Ok(n.clone());
+        }
+        let parsed = mcl_syntax::parse(&self.ops_text);
+        let m = parsed
+            .file
+            .items
+            .iter()
+            .find_map(|it| match it {
+                Item::Mission(m) if m.name.as_ref().is_some_and(|n| n.text == call.mission) => Some(m),
+                _ => None,
+            })
+            .ok_or_else(|| {
+                format!("`{}` does not define the mission operator `{}`", self.ops_path.display(), call.mission)
+            })?;
+        let params: Vec<String> = m.params.iter().map(|p| p.text.clone()).collect();
+        if params.len() != call.args.len() {
+            return Err(format!(
+                "`{key}`: `{}` takes {} argument(s) ({})",
+                call.mission,
+                params.len(),
+                params.join(", ")
+            ));
+        }
+        let mut subst = Vec::new();
+        for c in mcl_syntax::visit::calls(&m.body) {
+            for a in &c.args {
+                substitutions(a, &params, &call.args, &mut subst);
+            }
+        }
+        let (start, end) = (m.body.span.start as usize, m.body.span.end as usize);
+        subst.sort_by_key(|s| s.0);
+        let mut body = self.ops_text[start..end].to_string();
+        for (s, e, text) in subst.iter().rev() {
+            body.replace_range(s - start..e - start, text);
+        }
+        let (body, wrap) = if body.trim_start().starts_with('{') { (body, 0) } else { (format!("{{\n{body}\n}}"), 2) };
+        self.generated += 1;
+        let dir = self.ops_path.parent().unwrap_or(Path::new("."));
+        let file_name = self.ops_path.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default();
+        let path = dir.join(format!(".plan-{}-{}.mcl", call.mission, self.generated));
+        let header = format!(
+            "// {key}: generated by mcl plan --run\nimport \"{file_name}\";\nmission {}Instance() ",
+            call.mission
+        );
+        let text = format!("{header}{body}\n");
+        let f = self.db.set_text(&path, text);
+        let generated = f.path(&self.db).display().to_string();
+        let ops_file = self.db.file(&self.ops_path).path(&self.db).display().to_string();
+        // A byte of the generated file back to the operators file.
+        let body_at = header.len() + wrap;
+        let back = |g: u32| -> u32 {
+            let Some(rel) = (g as usize).checked_sub(body_at) else { return start as u32 };
+            let mut delta: isize = 0;
+            for (s, e, text) in &subst {
+                let new_s = (s - start) as isize + delta;
+                if (rel as isize) < new_s {
+                    break;
+                }
+                if (rel as isize) < new_s + text.len() as isize {
+                    return *s as u32;
+                }
+                delta += text.len() as isize - (e - s) as isize;
+            }
+            ((start + rel) as isize - delta).clamp(start as isize, end as isize) as u32
+        };
+        let remap = |span: &mut SourceSpan| {
+            if span.file == generated {
+                span.file = ops_file.clone();
+                span.start = back(span.start);
+                span.end = back(span.end).max(span.start);
+            }
+        };
+        let nets = match compile_file(&self.db, f) {
+            Ok(ms) => ms,
+            Err(_) => {
+                let diags: Vec<_> = check_file(&self.db, f).iter().filter(|d| d.diag.is_error()).cloned().collect();
+                return Err(format!(
+                    "{}cannot compile the instance `{key}` of the mission operator `{}`",
+                    render_human(&self.db, &diags, false),
+                    call.mission
+                ));
+            }
+        };
+        let net = nets.into_iter().next().ok_or_else(|| format!("`{key}`: no mission compiled"))?.net;
+        let net = Arc::new(with_abort_hook(&net, Some(&remap))?);
+        self.instances.insert(key, net.clone());
+        Ok(net)
+    }
+}
+
+/// What a mission played on the player is for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Role {
+    Step(usize),
+    Holding,
+}
+
+struct Running {
+    player: Player,
+    tracer: Tracer,
+    role: Role,
+    /// Index of its operator in the operators file (call-site renumbering).
+    index: u32,
+}
+
+fn percept(v: &Json) -> Percept {
+    match v {
+        Json::Number(n) => n.as_f64().map_or(Percept::Text(n.to_string()), Percept::Num),
+        Json::Bool(b) => Percept::Num(if *b { 1.0 } else { 0.0 }),
+        Json::String(s) => Percept::parse(s),
+        other => Percept::Text(other.to_string()),
+    }
+}
+
+fn list(facts: &[Fact]) -> String {
+    facts.iter().map(|f| f.to_string()).collect::<Vec<_>>().join(" ")
+}
+
+fn strs(facts: &[Fact]) -> Vec<String> {
+    facts.iter().map(|f| f.to_string()).collect()
+}
+
+/// The run: executor, world, mock, the mission playing, the clock.
+struct Run<'a> {
+    ex: Executor,
+    world: WorldModeler,
+    missions: Missions,
+    mock: MockVehicle,
+    sink: &'a mut dyn RecordSink,
+    opts: RunOptions,
+    sources: SourceMap,
+    running: Option<Running>,
+    holding: Option<Arc<Net>>,
+    t: f64,
+    seq: u64,
+    players: u64,
+    steps: u32,
+    /// Why the running step was aborted.
+    aborted: Option<String>,
+    started: Instant,
+}
+
+impl Run<'_> {
+    fn emit(&mut self, kind: &str, fields: Json) {
+        let mut r = json!({ "t": round_time(self.t), "kind": kind });
+        if let (Some(o), Json::Object(f)) = (r.as_object_mut(), fields) {
+            o.extend(f);
+        }
+        let live = self.live(&r);
+        self.sink.record(r, live);
+    }
+
+    fn live(&self, r: &Json) -> Option<String> {
+        let s = |k: &str| r.get(k).and_then(Json::as_str).unwrap_or("").to_string();
+        let what = match s("kind").as_str() {
+            "plan" => {
+                let mut line = format!(
+                    "PLAN {} ({}): {} step(s), cost {}",
+                    r["plan"],
+                    s("reason"),
+                    r["steps"].as_array().map_or(0, Vec::len),
+                    r["cost"]
+                );
+                for (i, (a, c)) in r["steps"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .zip(r["calls"].as_array().into_iter().flatten())
+                    .enumerate()
+                {
+                    line.push_str(&format!(
+                        "\n             {}. {}  {}",
+                        i + 1,
+                        a.as_str().unwrap_or(""),
+                        c.as_str().unwrap_or("")
+                    ));
+                }
+                line
+            }
+            "replan" => format!("REPLAN: {}", s("reason")),
+            "step" => format!("step {} {}: {}", r["step"], s("action"), s("call")),
+            "step_end" => format!("step {} {}: {}", r["step"], s("action"), s("result").to_uppercase()),
+            "facts" => {
+                let f = |k: &str| {
+                    r[k].as_array().into_iter().flatten().filter_map(Json::as_str).collect::<Vec<_>>().join(" ")
+                };
+                format!("facts    +[{}] -[{}]", f("added"), f("deleted"))
+            }
+            "holding" => format!("holding  {} ({})", s("mission"), s("state")),
+            "outcome" => format!(
+                "PLANNED MISSION {}{}",
+                s("result").to_uppercase(),
+                r.get("reason").and_then(Json::as_str).map(|x| format!(": {x}")).unwrap_or_default()
+            ),
+            _ => return None,
+        };
+        Some(format!("[{:>10.3}] {what}", r["t"].as_f64().unwrap_or(0.0)))
+    }
+
+    fn emit_plan(&mut self, reason: &str) {
+        let p = self.ex.plan();
+        let fields = json!({
+            "plan": self.ex.replans + 1,
+            "reason": reason,
+            "steps": p.steps.iter().map(|s| s.action.clone()).collect::<Vec<_>>(),
+            "calls": p.steps.iter().map(|s| s.mcl.as_ref().map(|m| m.to_string())).collect::<Vec<_>>(),
+            "cost": p.cost,
+        });
+        self.emit("plan", fields);
+    }
+
+    /// Feeds one input to the running mission; records; forwards actions to the mock.
+    fn apply(&mut self, input: Input) {
+        let Some(run) = &mut self.running else { return };
+        let out = input.apply(&mut run.player);
+        let index = run.index;
+        let mut records = Vec::new();
+        for o in &out {
+            records.push(run.tracer.record(o));
+            if let Output::Send { action, .. } = o {
+                self.seq += 1;
+                let a = Action {
+                    seq: self.seq,
+                    call_site: action.call_site.map(|c| index * CALL_SITE_STRIDE + c),
+                    ..action.clone()
+                };
+                self.mock.on_action(self.t, &a);
+            }
+        }
+        for r in records {
+            let live = live_line(&r, false);
+            self.sink.record(serde_json::to_value(&r).unwrap_or_default(), live);
+        }
+        for w in self.mock.take_warnings() {
+            self.emit("warning", json!({ "message": w }));
+        }
+    }
+
+    /// Starts `net` on a new player.
+    fn start(&mut self, net: Arc<Net>, label: String, role: Role, index: u32) {
+        self.players += 1;
+        let player = Player::new(net.clone(), PlayerOptions::seeded(self.opts.seed.wrapping_add(self.players)));
+        let tracer = Tracer::new(&net, Some(label), &mut self.sources);
+        self.running = Some(Running { player, tracer, role, index });
+        self.apply(Input::Start(self.t));
+    }
+
+    /// Aborts the running mission through its abort hook.
+    fn abort_running(&mut self) {
+        if self.running.as_ref().is_some_and(|r| r.player.outcome().is_none()) {
+            self.apply(Input::Event(self.t, ABORT_EVENT.to_string()));
+        }
+    }
+
+    /// Takes a perception: world modeler, records, and the facts check.
+    fn perceive(&mut self, name: String, value: Json) {
+        match &mut self.running {
+            Some(_) => self.apply(Input::Perception(self.t, name.clone(), value.clone())),
+            None => self.emit("perception", json!({ "name": name, "value": value })),
+        }
+        let before = self.world.facts().clone();
+        self.world.perceive(&name, percept(&value));
+        let after = self.world.facts();
+        if &before == after {
+            return;
+        }
+        let added: Vec<Fact> = after.difference(&before).cloned().collect();
+        let deleted: Vec<Fact> = before.difference(after).cloned().collect();
+        self.emit("facts", json!({ "added": strs(&added), "deleted": strs(&deleted), "perception": name }));
+        // While a step runs: does the world still fit the plan?
+        let Some(Running { role: Role::Step(i), player, .. }) = &self.running else { return };
+        if player.outcome().is_some() || self.ex.expects(self.world.facts(), *i) {
+            return;
+        }
+        let i = *i;
+        let (missing, extra) = self.ex.divergence(self.world.facts(), i);
+        self.aborted = Some(format!(
+            "facts differ from the plan while step {} {} runs: missing [{}], unexpected [{}]; step aborted",
+            i + 1,
+            self.ex.step(i).action,
+            list(&missing),
+            list(&extra)
+        ));
+        self.abort_running();
+        self.end_step(false);
+    }
+
+    /// The running step (or holding mission) ended.
+    fn end_step(&mut self, ok: bool) {
+        let Some(run) = self.running.take() else { return };
+        if let Role::Step(i) = run.role {
+            let result = if self.aborted.is_some() {
+                "aborted"
+            } else if ok {
+                "ok"
+            } else {
+                run.player.outcome().map_or("fail", |o| o.as_str())
+            };
+            let action = self.ex.step(i).action.clone();
+            self.emit("step_end", json!({ "step": i + 1, "action": action, "result": result }));
+            self.ex.step_ended(i, ok);
+        }
+    }
+
+    /// Delivers what the mock sends at the current time (between steps).
+    fn settle(&mut self) {
+        while let Some((_, m)) = self.mock.pop_due(self.t) {
+            self.deliver(m);
+        }
+    }
+
+    fn deliver(&mut self, m: Inbound) {
+        match m {
+            Inbound::Event { event } => match &self.running {
+                Some(_) => self.apply(Input::Event(self.t, event)),
+                None => self.emit("unexpected_event", json!({ "event": event, "reason": "no mission is running" })),
+            },
+            Inbound::Perception { name, value } => self.perceive(name, value),
+            _ => {}
+        }
+    }
+
+    fn replan(&mut self, reason: String) -> Result<(), String> {
+        self.emit(
+            "replan",
+            json!({ "reason": reason, "facts": self.world.facts().iter().map(|f| f.to_string()).collect::<Vec<_>>() }),
+        );
+        if let Some(net) = self.holding.clone() {
+            let name = self.opts.holding.clone().unwrap_or_default();
+            let index = self.missions.index_of(&name);
+            self.emit("holding", json!({ "mission": name, "state": "started" }));
+            self.start(net, format!("holding:{name}"), Role::Holding, index);
+        }
+        let facts = self.world.facts().clone();
+        let r = if self.ex.replans + 1 >= self.opts.max_plans {
+            Err(format!("gave up after {} plans (--max-plans)", self.ex.replans + 1))
+        } else {
+            self.ex.replan(&facts).map(|_| ())
+        };
+        if let Some(name) = self.opts.holding.clone().filter(|_| self.running.is_some()) {
+            self.abort_running();
+            self.running = None;
+            self.emit("holding", json!({ "mission": name, "state": "stopped" }));
+        }
+        match r {
+            Ok(()) => {
+                self.emit_plan("re-plan");
+                Ok(())
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    fn wait_until(&self, t: f64) {
+        if self.opts.virtual_time {
+            return;
+        }
+        let target = self.started + Duration::from_secs_f64((t / self.opts.speed).max(0.0));
+        let now = Instant::now();
+        if target > now {
+            std::thread::sleep(target - now);
+        }
+    }
+
+    fn finish(&mut self, result: &str, reason: Option<String>) -> Report {
+        self.abort_running();
+        self.running = None;
+        let mut f = json!({ "result": result, "plans": self.ex.replans + 1, "steps": self.steps });
+        if let Some(r) = &reason {
+            f["reason"] = json!(r);
+        }
+        self.emit("outcome", f);
+        Report { result: result.to_string(), reason, plans: self.ex.replans + 1, steps: self.steps, t: self.t }
+    }
+
+    fn go(&mut self) -> Result<Report, String> {
+        self.mock.initial();
+        self.emit_plan("initial");
+        loop {
+            // Between missions: take what is due now, then decide.
+            if self.running.is_none() {
+                self.settle();
+                let facts = self.world.facts().clone();
+                match self.ex.next_step(&facts) {
+                    Decision::Done => return Ok(self.finish("ok", None)),
+                    Decision::Failed(why) => return Ok(self.finish("fail", Some(why))),
+                    Decision::Replan => {
+                        let reason = match self.aborted.take() {
+                            Some(r) => r,
+                            None => {
+                                let i = self.ex.next_index();
+                                let failed = self.ex.last_failed();
+                                match failed {
+                                    Some(j) => format!("step {} {} ended in fail", j + 1, self.ex.step(j).action),
+                                    None => {
+                                        let (missing, extra) = self.ex.divergence(&facts, i);
+                                        format!(
+                                            "facts differ from the plan before step {}: missing [{}], unexpected [{}]",
+                                            i + 1,
+                                            list(&missing),
+                                            list(&extra)
+                                        )
+                                    }
+                                }
+                            }
+                        };
+                        if let Err(e) = self.replan(reason) {
+                            return Ok(self.finish("fail", Some(e)));
+                        }
+                        continue;
+                    }
+                    Decision::Run(i) => {
+                        self.aborted = None;
+                        let st = self.ex.step(i).clone();
+                        let Some(call) = st.mcl.clone() else {
+                            return Ok(self.finish(
+                                "fail",
+                                Some(format!("step {} {} has no `:mcl` mission to run", i + 1, st.action)),
+                            ));
+                        };
+                        let net = self.missions.instance(&call)?;
+                        self.steps += 1;
+                        self.emit(
+                            "step",
+                            json!({ "step": i + 1, "of": self.ex.plan().steps.len(), "action": st.action, "call": call.to_string(),
+                                    "before": strs(&st.before), "after": strs(&st.after) }),
+                        );
+                        let index = self.missions.index_of(&call.mission);
+                        self.start(net, format!("step{}:{}", i + 1, call.mission), Role::Step(i), index);
+                    }
+                }
+            }
+            // A mission runs: it may have ended already.
+            if let Some(o) = self.running.as_ref().and_then(|r| r.player.outcome()) {
+                self.end_step(o == PlayerOutcome::Ok);
+                continue;
+            }
+            let tp = self.running.as_ref().and_then(|r| r.player.next_deadline());
+            let tm = self.mock.next_deadline();
+            let next = match (tp, tm) {
+                (None, None) => {
+                    let awaited = self.running.as_ref().map(|r| r.player.awaited_events()).unwrap_or_default();
+                    self.emit(
+                        "warning",
+                        json!({ "message": format!("the mission waits for {} and nothing more can happen: the step fails", awaited.join(", ")) }),
+                    );
+                    self.abort_running();
+                    self.end_step(false);
+                    continue;
+                }
+                (a, b) => a.unwrap_or(f64::INFINITY).min(b.unwrap_or(f64::INFINITY)),
+            };
+            if let Some(limit) = self.opts.time_limit {
+                if next > limit {
+                    self.t = limit;
+                    return Ok(self.finish("time_limit", Some(format!("the time limit of {limit} s passed"))));
+                }
+            }
+            self.wait_until(next);
+            self.t = self.t.max(next);
+            if tp.is_some_and(|a| a <= next) {
+                self.apply(Input::Timer(next));
+            } else if let Some((_, m)) = self.mock.pop_due(next) {
+                self.deliver(m);
+            }
+        }
+    }
+}
+
+/// Runs the planned mission: plans from the problem's initial state (the
+/// executor `ex` has the first plan), executes step after step against a
+/// mock vehicle answering by `scenario`, re-plans on divergence. Errors are
+/// bad input found while running (an operator instance that does not
+/// compile, a holding mission that does not exist).
+pub fn run_planned(
+    ex: Executor,
+    world: WorldModeler,
+    operators: &Path,
+    scenario: Scenario,
+    opts: RunOptions,
+    sink: &mut dyn RecordSink,
+) -> Result<Report, String> {
+    let missions = Missions::load(operators)?;
+    let holding = match &opts.holding {
+        Some(h) => Some(missions.holding(h)?),
+        None => None,
+    };
+    let (tasks, calls) = missions.mock_tables();
+    let mock = MockVehicle::new(tasks, calls, scenario, opts.seed);
+    let mut ex = ex;
+    ex.max_replans = u32::MAX; // RunOptions::max_plans bounds the plans
+    let mut run = Run {
+        ex,
+        world,
+        missions,
+        mock,
+        sink,
+        opts,
+        sources: SourceMap::new(),
+        running: None,
+        holding,
+        t: 0.0,
+        seq: 0,
+        players: 0,
+        steps: 0,
+        aborted: None,
+        started: Instant::now(),
+    };
+    run.go()
+}
