@@ -81,8 +81,10 @@ enum Command {
     },
     /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac).
     ///
-    /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. Exit status: 0 mission ok,
-    /// 1 mission fail, 2 usage, compile or I/O error, 3 mission stuck or time limit passed.
+    /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
+    /// a file with several missions runs every vehicle at once, coordinated by its constraints.
+    /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
+    /// 3 mission stuck or time limit passed.
     Run {
         /// The mission: an .mcl or .pnml file.
         file: PathBuf,
@@ -125,9 +127,16 @@ enum Command {
         /// Stop (exit status 3) when mission time passes SECONDS.
         #[arg(long, value_name = "SECONDS")]
         time_limit: Option<f64>,
-        /// The mission to run when the file defines several (default: the first).
+        /// Run only this mission of a file that defines several (default: all of them
+        /// coordinated with --mock, the first with --aac).
         #[arg(long, value_name = "NAME")]
         mission: Option<String>,
+        /// How coordinated vehicles exchange messages (several missions with --mock).
+        #[arg(long, value_enum, default_value = "in-process")]
+        transport: cmd::run::Transport,
+        /// Host the TCP transport's listeners bind to (one free port per vehicle).
+        #[arg(long, value_name = "HOST", default_value = "127.0.0.1")]
+        coord_host: String,
         /// No live log.
         #[arg(short, long)]
         quiet: bool,
@@ -187,7 +196,9 @@ enum Command {
     /// FILE.mcl names the mission operators, with domain.pddl and problem.pddl beside it unless
     /// --domain/--problem say otherwise. Prints the plan in the IPC format. Exit status: 0 with a
     /// plan (or a valid plan with --validate), 1 when the problem has no solution (or the plan is
-    /// invalid), 2 on bad input, 3 when --max-states is reached.
+    /// invalid), 2 on bad input, 3 when --max-states is reached. With --run --mock, executes the
+    /// plan as a dry run against the mock vehicle and re-plans when the world differs (exit status
+    /// 0 goal reached, 1 no plan or gave up, 2 bad input, 3 --time-limit).
     Plan {
         /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
         file: Option<PathBuf>,
@@ -218,6 +229,43 @@ enum Command {
         /// Print grounding and search statistics on standard error.
         #[arg(long)]
         stats: bool,
+        /// Execute the plan: run each step's MCL mission on the player, watch the world through
+        /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock).
+        #[arg(long)]
+        run: bool,
+        /// With --run: against the in-process mock vehicle (a dry run).
+        #[arg(long, requires = "run")]
+        mock: bool,
+        /// With --run: how the mock vehicle answers and which perceptions it sends (TOML, docs/scenarios.md).
+        #[arg(long, value_name = "S.toml", requires = "run")]
+        scenario: Option<PathBuf>,
+        /// With --run: fact-provider scripts (default: world.xml beside FILE.mcl).
+        #[arg(long, value_name = "W.xml", requires = "run")]
+        world: Option<PathBuf>,
+        /// With --run: virtual time (instantaneous and deterministic).
+        #[arg(long, requires = "run")]
+        virtual_time: bool,
+        /// With --run: mission time runs FACTOR times faster than real time.
+        #[arg(long, value_name = "FACTOR", default_value_t = 1.0, requires = "run")]
+        speed: f64,
+        /// With --run: write the trace (JSON lines: player records, plans, re-plans, steps, facts).
+        #[arg(long, value_name = "T.jsonl", requires = "run")]
+        trace: Option<PathBuf>,
+        /// With --run: seed of the players and of the mock vehicle (default: the scenario's, else 0).
+        #[arg(long, requires = "run")]
+        seed: Option<u64>,
+        /// With --run: mission of FILE.mcl (without parameters) the vehicle runs while re-planning.
+        #[arg(long, value_name = "MISSION", requires = "run")]
+        holding: Option<String>,
+        /// With --run: stop (exit status 3) when mission time passes SECONDS.
+        #[arg(long, value_name = "SECONDS", requires = "run")]
+        time_limit: Option<f64>,
+        /// With --run: give up after this many plans.
+        #[arg(long, value_name = "N", default_value_t = 100, requires = "run")]
+        max_plans: u32,
+        /// With --run: no live log.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Run the language server (LSP over standard input and output), for editors.
     Lsp {
@@ -265,20 +313,54 @@ fn main() -> ExitCode {
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),
-        Command::Plan { file, domain, problem, operators, search, heuristic, format, validate, max_states, stats } => {
-            cmd::plan::run(cmd::plan::Options {
-                file,
-                domain,
-                problem,
-                operators,
-                search,
-                heuristic,
-                format,
-                validate,
-                max_states,
-                stats,
-            })
-        }
+        Command::Plan {
+            file,
+            domain,
+            problem,
+            operators,
+            search,
+            heuristic,
+            format,
+            validate,
+            max_states,
+            stats,
+            run,
+            mock,
+            scenario,
+            world,
+            virtual_time,
+            speed,
+            trace,
+            seed,
+            holding,
+            time_limit,
+            max_plans,
+            quiet,
+        } => cmd::plan::run(cmd::plan::Options {
+            file,
+            domain,
+            problem,
+            operators,
+            search,
+            heuristic,
+            format,
+            validate,
+            max_states,
+            stats,
+            execute: run.then_some(cmd::plan::Execute {
+                mock,
+                scenario,
+                world,
+                virtual_time,
+                speed,
+                trace,
+                seed,
+                holding,
+                time_limit,
+                max_plans,
+                quiet,
+            }),
+        }),
         Command::Run {
             file,
             mock,
@@ -298,6 +380,8 @@ fn main() -> ExitCode {
             quiet,
             verbose,
             crash_after,
+            transport,
+            coord_host,
         } => cmd::run::run(cmd::run::Options {
             file,
             mock,
@@ -317,6 +401,8 @@ fn main() -> ExitCode {
             quiet,
             verbose,
             crash_after,
+            transport,
+            coord_host,
         }),
         Command::MockAac { net, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {

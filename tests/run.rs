@@ -414,9 +414,13 @@ fn usage_and_compile_errors_exit_2() {
 
 #[test]
 fn several_missions_and_compiled_nets() {
+    // Without --mission, every mission runs, coordinated (tests/coord_run.rs).
     let (code, tr, out) = run_virtual("examples/auv-asc.mcl", &[], "auv.jsonl");
     assert_eq!(code, 0);
-    assert!(stderr(&out).contains("running the first, `auv`"));
+    assert!(stderr(&out).contains("coordination: 2 missions"));
+    assert!(tr.iter().any(|r| r["mission"] == "auv") && tr.iter().any(|r| r["mission"] == "asc"));
+    let (code, tr, _) = run_virtual("examples/auv-asc.mcl", &["--mission", "auv"], "auv.jsonl");
+    assert_eq!(code, 0);
     assert!(tr.iter().all(|r| r["mission"] == "auv"));
     let (code, tr, _) = run_virtual("examples/auv-asc.mcl", &["--mission", "asc"], "asc.jsonl");
     assert_eq!(code, 0);

@@ -156,14 +156,15 @@ impl<'a> Session<'a> {
     }
 
     /// Records the end of a run that the player did not decide itself.
-    fn end_by_driver(&mut self, t: f64, result: &str, reason: String) {
+    pub fn end_by_driver(&mut self, t: f64, result: &str, reason: String) {
         let mut r = Record::new(t, "outcome");
         r.result = Some(result.to_string());
         r.reason = Some(reason);
         self.emit_record(r);
     }
 
-    fn warn(&mut self, t: f64, message: String) {
+    /// Records a warning.
+    pub fn warn(&mut self, t: f64, message: String) {
         let mut r = Record::new(t, "warning");
         r.message = Some(message);
         self.emit_record(r);
@@ -185,7 +186,7 @@ pub struct Limits {
     pub time_limit: Option<f64>,
 }
 
-fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
+pub(crate) fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
     match m {
         Inbound::Event { event } => Some(Input::Event(t, event)),
         Inbound::Perception { name, value } => Some(Input::Perception(t, name, value)),
@@ -193,7 +194,7 @@ fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
     }
 }
 
-fn feed_mock(s: &mut Session, mock: &mut MockVehicle, t: f64, out: &[Output]) {
+pub(crate) fn feed_mock(s: &mut Session, mock: &mut MockVehicle, t: f64, out: &[Output]) {
     for a in actions(out) {
         mock.on_action(t, a);
     }

@@ -8,10 +8,12 @@
 
 pub mod chronogram;
 pub mod clock;
+pub mod coord;
 pub mod driver;
 pub mod journal;
 pub mod link;
 pub mod mock;
+pub mod multi;
 pub mod player;
 pub mod protocol;
 pub mod scenario;

@@ -494,6 +494,52 @@ impl Player {
         out
     }
 
+    /// Events that arrived together at time `now` and must all be taken
+    /// before the net reacts (coordination messages from other vehicles,
+    /// `mcl_runtime::multi`: the firings of other vehicles that a supervisor
+    /// copy must learn at once). Each fires one enabled transition bound to
+    /// it, in order, in passes while some still can, with no other firing in
+    /// between; the net then settles once. Returns the outputs and the events
+    /// that enabled nothing (nothing is reported for them: the caller keeps
+    /// them for later).
+    pub fn on_events(&mut self, now: f64, events: Vec<String>) -> (Vec<Output>, Vec<String>) {
+        let mut out = Vec::new();
+        self.advance_to(now, &mut out);
+        if self.outcome.is_some() || !self.started {
+            return (out, events);
+        }
+        let t = self.now;
+        let net = self.net.clone();
+        let mut left = events;
+        let mut fired = false;
+        loop {
+            let mut next = Vec::new();
+            let before = left.len();
+            for event in left {
+                let waiting = net.event_transitions(&event);
+                let n = waiting.iter().filter(|&&c| self.tracker.is_enabled(c)).count();
+                if n == 0 {
+                    next.push(event);
+                    continue;
+                }
+                let k = uniform_index(&mut self.rng, n);
+                let tr = waiting.iter().copied().filter(|&c| self.tracker.is_enabled(c)).nth(k).expect("k < n");
+                let call_site = self.call_site_of(tr);
+                out.push(Output::Event { t, event, transition: tr, call_site });
+                self.fire(tr, &mut out);
+                fired = true;
+            }
+            left = next;
+            if left.is_empty() || left.len() == before {
+                break;
+            }
+        }
+        if fired {
+            self.stabilize(&mut out);
+        }
+        (out, left)
+    }
+
     /// A perception arrived at time `now` (recorded; it fires nothing).
     pub fn on_perception(&mut self, now: f64, name: &str, value: Value) -> Vec<Output> {
         let mut out = Vec::new();

@@ -8,12 +8,15 @@
 //! |---|---|
 //! | `action` | `seq`, `action`, `primitive`, `command`, `params`, `task`, `call_site`, `label`, `src` |
 //! | `event` | `event`, `task` (whose transition it fired), `transition`, `call_site`, `src` |
-//! | `fire` | `transition`, `task`, `call_site` |
+//! | `fire` | `transition`, `task`, `call_site`, `label` |
 //! | `unexpected_event` | `event`, `reason` |
 //! | `timer` | `transition`, `task`, `deadline` (a timer of a positive delay started) |
 //! | `perception` | `name`, `value` |
 //! | `warning` | `message` |
 //! | `outcome` | `result` (`ok`, `fail`, `stuck`, `time_limit`), `reason` |
+//! | `coord_send` | `to`, `transition` (own, just fired), `seq`: a coordination message sent |
+//! | `coord_receive` | `from`, `transition` (the sender's), `seq`, `event` (the event it becomes) |
+//! | `coord_summary` | `messages` (sent), `result` (of the whole run); no `mission`: the last record of a coordinated run |
 //!
 //! `src` is `file:line` of the call that sent the action or received the
 //! event (from the net's provenance; the line is computed from the source
@@ -37,7 +40,8 @@ pub struct Record {
     /// The mission's name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<String>,
-    /// `action`, `event`, `fire`, `unexpected_event`, `timer`, `perception`, `warning`, `outcome`.
+    /// `action`, `event`, `fire`, `unexpected_event`, `timer`, `perception`, `warning`, `outcome`,
+    /// `coord_send`, `coord_receive`, `coord_summary`.
     pub kind: String,
     /// Action sequence number.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,6 +94,15 @@ pub struct Record {
     /// `file:line` of the call.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub src: Option<String>,
+    /// Coordination: the mission a message is sent to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub to: Option<String>,
+    /// Coordination: the mission a message comes from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<String>,
+    /// Coordination: number of messages sent in the run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub messages: Option<u64>,
 }
 
 impl Record {
@@ -206,6 +219,7 @@ impl Tracer {
                 r.transition = Some(self.ids[transition.index()].clone());
                 r.task = self.tasks[transition.index()].clone();
                 r.call_site = *call_site;
+                r.label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
                 r
             }
             Output::Event { t, event, transition, call_site } => {
@@ -280,6 +294,23 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
             "MISSION {}{}",
             r.result.as_deref().unwrap_or("?").to_uppercase(),
             r.reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default()
+        ),
+        "coord_send" => format!(
+            "send     {} -> {}  (#{})",
+            r.transition.as_deref().unwrap_or("?"),
+            r.to.as_deref().unwrap_or("?"),
+            r.seq.unwrap_or_default()
+        ),
+        "coord_receive" => format!(
+            "receive  {}/{}  (#{})",
+            r.from.as_deref().unwrap_or("?"),
+            r.transition.as_deref().unwrap_or("?"),
+            r.seq.unwrap_or_default()
+        ),
+        "coord_summary" => format!(
+            "ALL MISSIONS {}: {} coordination messages sent",
+            r.result.as_deref().unwrap_or("?").to_uppercase(),
+            r.messages.unwrap_or_default()
         ),
         "fire" if verbose => format!("fire     {}", r.transition.as_deref().unwrap_or("?")),
         "timer" if verbose => format!(

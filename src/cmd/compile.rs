@@ -1,8 +1,13 @@
-//! `mcl compile`: missions to PNML (and Graphviz).
+//! `mcl compile`: missions to PNML (and Graphviz). With `--out-dir`, a file
+//! with several missions and constraints gives one PNML per vehicle: its
+//! mission with its part of the supervisors and the firings it sends and
+//! receives (`mcl_coord::decentralize`, docs/coordination.md).
 
 use mcl_compiler::compile::{compile_file, dot::to_dot, CompileError};
 use mcl_compiler::diagnostics::render_human;
-use mcl_compiler::{check_file, Database, Db};
+use mcl_compiler::{check_file, Database, Db, SourceFile};
+use mcl_coord::{AnalyzeOptions, VehicleNet, Verdict};
+use mcl_syntax::ast::Item;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -25,6 +30,68 @@ fn write(path: &Path, text: &str) -> Result<(), String> {
 /// `[A-Za-z0-9_-]` replaced by `_`.
 pub fn file_stem(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+}
+
+/// True when `file` has a non-empty `constraints { ... }` block.
+pub fn has_constraints(db: &Database, file: SourceFile) -> bool {
+    mcl_compiler::parse(db, file)
+        .file
+        .items
+        .iter()
+        .any(|i| matches!(i, Item::Constraints(b) if !b.constraints.is_empty()))
+}
+
+/// The per-vehicle nets of the missions of `file` (without errors) under
+/// its constraints: the supervisors (`mcl_coord::analyze`) split with the
+/// least communication (`mcl_coord::decentralize`). Constraints that
+/// deadlock are refused with the diagnostics of `mcl check` (E0406); an
+/// inconclusive analysis is a warning. On error, prints it and returns the
+/// exit status `code`.
+pub fn vehicle_nets(db: &Database, file: SourceFile, code: u8) -> Result<Vec<VehicleNet>, u8> {
+    let fail = |msg: String| {
+        eprintln!("error: {msg}");
+        code
+    };
+    let (missions, constraints) = mcl_coord::source::load(db, file).map_err(|e| fail(e.to_string()))?;
+    let supervisors = if constraints.is_empty() {
+        Vec::new()
+    } else {
+        let opts = AnalyzeOptions { structure: false, ..AnalyzeOptions::default() };
+        let report = mcl_coord::analyze_with(&missions, &constraints, &opts).map_err(|e| fail(e.to_string()))?;
+        match &report.verdict {
+            Verdict::Free => {}
+            Verdict::Deadlock => {
+                let diags = mcl_coord::coordination_diagnostics(db, file);
+                eprint!("{}", render_human(db, diags, std::io::stderr().is_terminal()));
+                let first = report.problems.first().map(|p| p.message.clone()).unwrap_or_default();
+                return Err(fail(format!(
+                    "`{}`: the constraints deadlock ({first}); no vehicle net was made",
+                    file.path(db).display()
+                )));
+            }
+            Verdict::Unknown { reason } => {
+                eprintln!("warning: the deadlock analysis was inconclusive ({reason}); the nets are not proven free of deadlock")
+            }
+        }
+        report.supervisors
+    };
+    mcl_coord::decentralize(&missions, &supervisors).map_err(|e| fail(e.to_string()))
+}
+
+/// Where a vehicle's net sends and what it receives, for humans:
+/// `2 supervisor places, sends 3 firings to asc, receives 2 from asc`.
+pub fn coordination_summary(v: &VehicleNet) -> String {
+    let sups = mcl_coord::decentral::supervisor_places(&v.net).len();
+    let mut parts = vec![format!("{sups} supervisor place{}", if sups == 1 { "" } else { "s" })];
+    let mut peers: Vec<&String> = v.send.iter().map(|(_, to)| to).chain(v.receive.iter().map(|(_, f)| f)).collect();
+    peers.sort();
+    peers.dedup();
+    for p in peers {
+        let sent = v.send.iter().filter(|(_, to)| to == p).count();
+        let got = v.receive.iter().filter(|(_, f)| f == p).count();
+        parts.push(format!("sends {sent} firing{} to {p}, receives {got} from {p}", if sent == 1 { "" } else { "s" }));
+    }
+    parts.join(", ")
 }
 
 pub fn run(o: Options<'_>) -> u8 {
@@ -54,6 +121,39 @@ pub fn run(o: Options<'_>) -> u8 {
     if missions.is_empty() {
         eprintln!("error: `{}` defines no mission", o.file.display());
         return 1;
+    }
+    if let (Some(dir), true) = (o.out_dir, missions.len() > 1 && has_constraints(&db, file)) {
+        let vehicles = match vehicle_nets(&db, file, 1) {
+            Ok(v) => v,
+            Err(code) => return code,
+        };
+        let result = (|| -> Result<(), String> {
+            for v in &vehicles {
+                let stem = file_stem(&v.mission);
+                let path = dir.join(format!("{stem}.pnml"));
+                write(&path, &mcl_net::write_pnml(&v.net).map_err(|e| e.to_string())?)?;
+                eprintln!(
+                    "wrote {} ({} places, {} transitions; {})",
+                    path.display(),
+                    v.net.place_count(),
+                    v.net.transition_count(),
+                    coordination_summary(v)
+                );
+                if o.dot.is_some() {
+                    let path = dir.join(format!("{stem}.dot"));
+                    write(&path, &to_dot(&v.net))?;
+                    eprintln!("wrote {}", path.display());
+                }
+            }
+            Ok(())
+        })();
+        return match result {
+            Ok(()) => 0,
+            Err(e) => {
+                eprintln!("error: {e}");
+                2
+            }
+        };
     }
     let result = (|| -> Result<(), String> {
         if let Some(dir) = o.out_dir {

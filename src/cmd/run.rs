@@ -3,6 +3,9 @@
 //!
 //! Exit status: 0 mission ok, 1 mission fail, 2 usage, compile or I/O error,
 //! 3 mission stuck or time limit passed.
+//!
+//! With `--mock` and no `--mission`, a file with several missions runs every
+//! vehicle at once, coordinated by its constraints ([`run_coordinated`]).
 
 use mcl_compiler::compile::{compile_file, CompileError};
 use mcl_compiler::diagnostics::render_human;
@@ -42,6 +45,20 @@ pub struct Options {
     pub quiet: bool,
     pub verbose: bool,
     pub crash_after: Option<u64>,
+    /// Coordination transport of a multi-vehicle run.
+    pub transport: Transport,
+    /// Host the TCP transport listens on.
+    pub coord_host: String,
+}
+
+/// How the vehicles of a coordinated run exchange messages.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Transport {
+    /// Channels inside the process.
+    #[default]
+    InProcess,
+    /// JSON lines over TCP (one listener per vehicle).
+    Tcp,
 }
 
 /// A loaded mission.
@@ -176,6 +193,10 @@ pub fn run(o: Options) -> u8 {
     }
     let several = missions.len() > 1;
     let names: Vec<String> = missions.iter().map(|m| m.name.clone()).collect();
+    let is_mcl = !o.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml"));
+    if several && o.mission.is_none() && o.mock && is_mcl {
+        return run_coordinated(&o, sets);
+    }
     let chosen = match &o.mission {
         Some(n) => match missions.into_iter().find(|m| &m.name == n) {
             Some(m) => m,
@@ -464,6 +485,203 @@ pub fn run(o: Options) -> u8 {
         count("action"),
         count("event"),
         count("unexpected_event"),
+    );
+    end.exit_code()
+}
+
+/// Records of a coordinated run: kept for the end of the run and the chronogram.
+fn count(records: &[Record], mission: &str, kind: &str) -> usize {
+    records.iter().filter(|r| r.kind == kind && r.mission.as_deref() == Some(mission)).count()
+}
+
+/// `mcl run --mock FILE` on a file with several missions: every vehicle at
+/// once, each with its own mock vehicle, exchanging the coordination
+/// messages of its vehicle net over `o.transport`
+/// (`mcl_runtime::multi`). The scenario applies to every vehicle, its
+/// `[missions.NAME]` tables to one.
+pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
+    if o.journal.is_some() || o.resume.is_some() {
+        return usage("--journal and --resume record one mission: pick one with --mission NAME");
+    }
+    let db = Database::new();
+    let file = db.file(&o.file);
+    let vehicles = match super::compile::vehicle_nets(&db, file, 2) {
+        Ok(v) => v,
+        Err(code) => return code,
+    };
+    let names: Vec<String> = vehicles.iter().map(|v| v.mission.clone()).collect();
+    if let Some(dup) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)).map(|(_, n)| n) {
+        return usage(&format!(
+            "`{}` has two missions named `{dup}`: name every mission (`mission : name {{ ... }}`) to run them together",
+            o.file.display()
+        ));
+    }
+    // Scenarios.
+    let text = match &o.scenario {
+        Some(p) => match std::fs::read_to_string(p) {
+            Ok(t) => Some((t, p.display().to_string())),
+            Err(e) => return usage(&format!("cannot read scenario `{}`: {e}", p.display())),
+        },
+        None => None,
+    };
+    let mut scenarios = Vec::new();
+    for n in &names {
+        match &text {
+            Some((t, origin)) => match mcl_runtime::multi::scenario_for(t, origin, n) {
+                Ok(s) => scenarios.push(s),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 2;
+                }
+            },
+            None => scenarios.push(Scenario::default()),
+        }
+    }
+    if let Some((t, _)) = &text {
+        for m in mcl_runtime::multi::scenario_missions(t) {
+            if !names.contains(&m) {
+                eprintln!("warning: scenario: there is no mission `{m}` (missions: {})", names.join(", "));
+            }
+        }
+    }
+    // Tasks and labels of every vehicle: a task of the scenario is checked
+    // against all of them (one scenario serves every vehicle).
+    let mut called: Vec<String> = Vec::new();
+    let mut labels: Vec<(String, String)> = Vec::new();
+    for v in &vehicles {
+        for t in v.net.transitions() {
+            if let Some(b) = &t.binding {
+                called.push(b.task.clone());
+                if let Some(l) = &b.label {
+                    labels.push((b.task.clone(), l.clone()));
+                }
+            }
+        }
+    }
+    called.sort();
+    called.dedup();
+    let mut warned = std::collections::BTreeSet::new();
+    for s in &scenarios {
+        for w in s.check_against(&called, &labels) {
+            if warned.insert(w.clone()) {
+                eprintln!("warning: {w}");
+            }
+        }
+    }
+
+    let trace = match &o.trace {
+        Some(p) => match TraceWriter::create(p) {
+            Ok(w) => Some(w),
+            Err(e) => return usage(&format!("cannot write trace `{}`: {e}", p.display())),
+        },
+        None => None,
+    };
+    let sink = Arc::new(std::sync::Mutex::new(RunSink {
+        trace,
+        live: !o.quiet,
+        verbose: o.verbose,
+        quiet_replay: false,
+        records: Vec::new(),
+        error: None,
+    }));
+    let mut sources = SourceMap::new();
+    let mut parts = Vec::new();
+    for (v, scenario) in vehicles.into_iter().zip(scenarios) {
+        let seed = o.seed.or(scenario.seed).unwrap_or(0);
+        let mut symbols: BTreeMap<String, Value> = scenario.symbols.clone();
+        symbols.extend(sets.iter().cloned());
+        let net = Arc::new(v.net);
+        let opts = PlayerOptions { seed, symbols, ..Default::default() };
+        let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut sources);
+        let mock = MockVehicle::from_net(&net, scenario.clone(), scenario.seed.unwrap_or(seed));
+        parts.push((v.mission, net, opts, tracer, mock));
+    }
+    let rt = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+        Ok(rt) => rt,
+        Err(e) => return usage(&format!("cannot start the runtime: {e}")),
+    };
+    let limits = Limits { time_limit: o.time_limit };
+    let shared: mcl_runtime::multi::SharedSink = sink.clone();
+    let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
+        let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = match o.transport {
+            Transport::InProcess => mcl_runtime::coord::in_process(&names)
+                .into_iter()
+                .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
+                .collect(),
+            Transport::Tcp => match mcl_runtime::coord::tcp_mesh(&names, &o.coord_host).await {
+                Ok(ends) => {
+                    if o.verbose {
+                        for e in &ends {
+                            eprintln!("coordination: `{}` listens on {}", e.mission_name(), e.local_addr());
+                        }
+                    }
+                    ends.into_iter().map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>).collect()
+                }
+                Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
+            },
+        };
+        let mut vs = Vec::new();
+        for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(transports) {
+            vs.push(mcl_runtime::multi::Vehicle::new(&name, net, opts, tracer, mock, tr)?);
+        }
+        if o.virtual_time {
+            mcl_runtime::multi::run_virtual(vs, shared, limits).await
+        } else {
+            mcl_runtime::multi::run_real_time(vs, shared, Clock::new(o.speed, 0.0), limits).await
+        }
+    });
+    let mut sink = match sink.lock() {
+        Ok(s) => s,
+        Err(_) => {
+            eprintln!("error: the run failed");
+            return 2;
+        }
+    };
+    if let Some(w) = &mut sink.trace {
+        if let Err(e) = w.flush() {
+            sink.error.get_or_insert(format!("cannot write the trace: {e}"));
+        }
+    }
+    let end = match result {
+        Ok(end) => end,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    if let Some(p) = &o.chronogram {
+        let svg = mcl_runtime::chronogram::render(&sink.records, &mcl_runtime::chronogram::Options::default());
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        if let Err(e) = std::fs::write(p, svg) {
+            eprintln!("error: cannot write `{}`: {e}", p.display());
+            return 2;
+        }
+    }
+    if let Some(e) = sink.error.take() {
+        eprintln!("error: {e}");
+        return 2;
+    }
+    for ((name, e, t), fired) in end.ends.iter().zip(&end.fired) {
+        eprintln!(
+            "mission `{name}`: {} at t={t:.3} s ({} actions, {} events, {} unexpected events, {fired} firings, {} messages sent, {} received)",
+            e.result().to_uppercase(),
+            count(&sink.records, name, "action"),
+            count(&sink.records, name, "event"),
+            count(&sink.records, name, "unexpected_event"),
+            count(&sink.records, name, "coord_send"),
+            count(&sink.records, name, "coord_receive"),
+        );
+    }
+    eprintln!(
+        "coordination: {} missions, {} messages sent ({} transport)",
+        end.ends.len(),
+        end.messages,
+        match o.transport {
+            Transport::InProcess => "in-process",
+            Transport::Tcp => "TCP",
+        }
     );
     end.exit_code()
 }

@@ -1,0 +1,393 @@
+//! Coordination messages between vehicles (seed 6.3; `docs/coordination.md`).
+//!
+//! When several vehicles run coordinated missions, each vehicle's net holds
+//! its part of the supervisors; the decentralization of `mcl-coord` says
+//! which of its transition firings it must tell which other vehicle
+//! (net property `coord.send`). A [`CoordMessage`] is one such firing: "mission
+//! `from` fired transition `transition`". The receiver turns it into the event
+//! [`CoordMessage::event`] (`from/transition`), which fires its receive
+//! transition `coord.recv.<from>.<transition>`.
+//!
+//! A [`CoordTransport`] is one vehicle's end of whatever carries the
+//! messages. The contract is small so that an existing messaging system can
+//! implement it (a Zenoh publisher on `mcl/coord/<to>` and a subscriber on
+//! `mcl/coord/<mission>`, or a ROS 2 topic per vehicle, with reliable QoS):
+//!
+//! * [`CoordTransport::send`] never blocks and queues the message for `to`;
+//! * delivery is reliable and in order between two missions;
+//! * [`CoordTransport::recv`] waits for the next message for this mission.
+//!
+//! Two implementations: [`in_process`] (tokio channels) and [`TcpEnd`]
+//! (one JSON object per line over TCP, [`CoordMessage`]'s serde form).
+
+use std::collections::HashMap;
+use std::future::Future;
+use std::net::SocketAddr;
+use std::pin::Pin;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+use tokio::io::{AsyncWriteExt, BufReader};
+use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::mpsc;
+
+use crate::protocol::{Line, LineReader, MAX_LINE};
+
+/// Net property of a vehicle net: `[{"transition": id, "to": mission}, …]`,
+/// the firings it must send.
+pub const SEND_PROPERTY: &str = "coord.send";
+/// Net property of a vehicle net: `[{"transition": id, "from": mission}, …]`,
+/// its receive transitions.
+pub const RECEIVE_PROPERTY: &str = "coord.receive";
+
+/// "Mission `from` fired `transition`", for mission `to`. On the wire (TCP):
+/// `{"from":"asc","to":"auv","transition":"call3.ok","seq":1,"t":15.0}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CoordMessage {
+    /// The sending mission.
+    pub from: String,
+    /// The receiving mission.
+    pub to: String,
+    /// Id of the transition that fired in `from`'s net.
+    pub transition: String,
+    /// Numbered from 1 by the sender, over all its messages (receivers drop
+    /// a message whose `seq` from that sender they have seen).
+    pub seq: u64,
+    /// Mission time of the firing at the sender (seconds).
+    pub t: f64,
+}
+
+impl CoordMessage {
+    /// The event the receiver's net waits for: `from/transition` (the same
+    /// name as `mcl_coord::decentral::message_event`).
+    pub fn event(&self) -> String {
+        format!("{}/{}", self.from, self.transition)
+    }
+}
+
+/// A future returned by [`CoordTransport::recv`].
+pub type RecvFuture<'a> = Pin<Box<dyn Future<Output = Option<CoordMessage>> + Send + 'a>>;
+
+/// One vehicle's end of a coordination transport. See the [module
+/// documentation](self).
+pub trait CoordTransport: Send {
+    /// The mission this end receives for.
+    fn mission(&self) -> &str;
+    /// Queues `msg` for `msg.to`. Never blocks. Errors when `msg.to` is
+    /// unknown or the transport is closed.
+    fn send(&mut self, msg: CoordMessage) -> Result<(), String>;
+    /// The next message for this mission, waiting for it; `None` once the
+    /// transport is closed. Cancel-safe (usable in `tokio::select!`).
+    fn recv(&mut self) -> RecvFuture<'_>;
+}
+
+/// Drops messages already seen (same sender, `seq` not above the last).
+#[derive(Debug, Default)]
+struct Dedupe(HashMap<String, u64>);
+
+impl Dedupe {
+    fn fresh(&mut self, m: &CoordMessage) -> bool {
+        let last = self.0.entry(m.from.clone()).or_insert(0);
+        if m.seq <= *last {
+            return false;
+        }
+        *last = m.seq;
+        true
+    }
+}
+
+// ---------------------------------------------------------------------------
+// In-process
+// ---------------------------------------------------------------------------
+
+/// An in-process end (see [`in_process`]).
+pub struct InProcessEnd {
+    mission: String,
+    peers: Arc<HashMap<String, mpsc::UnboundedSender<CoordMessage>>>,
+    inbox: mpsc::UnboundedReceiver<CoordMessage>,
+}
+
+/// One connected end per mission, over unbounded tokio channels. Works
+/// without a runtime for `send`.
+pub fn in_process(missions: &[String]) -> Vec<InProcessEnd> {
+    let mut senders = HashMap::new();
+    let mut receivers = Vec::new();
+    for m in missions {
+        let (tx, rx) = mpsc::unbounded_channel();
+        senders.insert(m.clone(), tx);
+        receivers.push((m.clone(), rx));
+    }
+    let peers = Arc::new(senders);
+    receivers.into_iter().map(|(mission, inbox)| InProcessEnd { mission, peers: peers.clone(), inbox }).collect()
+}
+
+impl CoordTransport for InProcessEnd {
+    fn mission(&self) -> &str {
+        &self.mission
+    }
+
+    fn send(&mut self, msg: CoordMessage) -> Result<(), String> {
+        let to = self.peers.get(&msg.to).ok_or_else(|| format!("no mission `{}` on this transport", msg.to))?;
+        to.send(msg).map_err(|m| format!("mission `{}` no longer receives", m.0.to))
+    }
+
+    fn recv(&mut self) -> RecvFuture<'_> {
+        Box::pin(self.inbox.recv())
+    }
+}
+
+// ---------------------------------------------------------------------------
+// TCP
+// ---------------------------------------------------------------------------
+
+/// A TCP end: listens for messages for its mission, and sends to its peers'
+/// addresses, one JSON [`CoordMessage`] per line (at most
+/// [`MAX_LINE`] bytes). A connection to a peer is opened at the first
+/// message and re-opened (every 100 ms) when it fails; the message being
+/// written is then written again (the receiver drops duplicates by `seq`).
+/// Lines that do not parse, or are for another mission, are dropped and
+/// counted in [`TcpEnd::rejected`]. Every task runs in the current tokio
+/// runtime and ends when the end is dropped.
+pub struct TcpEnd {
+    mission: String,
+    addr: SocketAddr,
+    peers: HashMap<String, mpsc::UnboundedSender<CoordMessage>>,
+    inbox: mpsc::UnboundedReceiver<CoordMessage>,
+    rejected: Arc<Mutex<Vec<String>>>,
+    accept: tokio::task::JoinHandle<()>,
+}
+
+impl TcpEnd {
+    /// Listens on `listen` (`127.0.0.1:0` picks a free loopback port).
+    pub async fn bind(mission: &str, listen: &str) -> std::io::Result<TcpEnd> {
+        let listener = TcpListener::bind(listen).await?;
+        let addr = listener.local_addr()?;
+        let (tx, inbox) = mpsc::unbounded_channel();
+        let rejected = Arc::new(Mutex::new(Vec::new()));
+        let seen = Arc::new(Mutex::new(Dedupe::default()));
+        let (me, rej) = (mission.to_string(), rejected.clone());
+        let accept = tokio::spawn(async move {
+            while let Ok((stream, _)) = listener.accept().await {
+                let (tx, me, rej, seen) = (tx.clone(), me.clone(), rej.clone(), seen.clone());
+                tokio::spawn(async move {
+                    let mut lines = LineReader::new(BufReader::new(stream), MAX_LINE);
+                    loop {
+                        let reason = match lines.next_line().await {
+                            Ok(Line::Text(bytes)) => match serde_json::from_slice::<CoordMessage>(&bytes) {
+                                Ok(m) if m.to == me => {
+                                    let fresh = seen.lock().map(|mut s| s.fresh(&m)).unwrap_or(true);
+                                    if fresh && tx.send(m).is_err() {
+                                        return;
+                                    }
+                                    continue;
+                                }
+                                Ok(m) => format!("a message for `{}` reached `{me}`", m.to),
+                                Err(e) => format!("not a coordination message: {e}"),
+                            },
+                            Ok(Line::TooLong(n)) => format!("a line of {n} bytes (more than {MAX_LINE})"),
+                            Ok(Line::Eof) | Err(_) => return,
+                        };
+                        if let Ok(mut r) = rej.lock() {
+                            r.push(reason);
+                        }
+                    }
+                });
+            }
+        });
+        Ok(TcpEnd { mission: mission.to_string(), addr, peers: HashMap::new(), inbox, rejected, accept })
+    }
+
+    /// The mission this end receives for.
+    pub fn mission_name(&self) -> &str {
+        &self.mission
+    }
+
+    /// The address this end listens on (give it to the peers).
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// Messages for `mission` go to `addr`.
+    pub fn add_peer(&mut self, mission: &str, addr: SocketAddr) {
+        let (tx, mut rx) = mpsc::unbounded_channel::<CoordMessage>();
+        tokio::spawn(async move {
+            let mut conn: Option<TcpStream> = None;
+            while let Some(m) = rx.recv().await {
+                let mut line = match serde_json::to_vec(&m) {
+                    Ok(l) => l,
+                    Err(_) => continue,
+                };
+                line.push(b'\n');
+                loop {
+                    if conn.is_none() {
+                        match TcpStream::connect(addr).await {
+                            Ok(s) => {
+                                let _ = s.set_nodelay(true);
+                                conn = Some(s);
+                            }
+                            Err(_) => {
+                                tokio::time::sleep(Duration::from_millis(100)).await;
+                                continue;
+                            }
+                        }
+                    }
+                    let Some(s) = conn.as_mut() else { continue };
+                    match s.write_all(&line).await {
+                        Ok(()) => break,
+                        Err(_) => conn = None,
+                    }
+                }
+            }
+        });
+        self.peers.insert(mission.to_string(), tx);
+    }
+
+    /// Lines dropped so far, with why.
+    pub fn rejected(&self) -> Vec<String> {
+        self.rejected.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+}
+
+impl Drop for TcpEnd {
+    fn drop(&mut self) {
+        self.accept.abort();
+    }
+}
+
+impl CoordTransport for TcpEnd {
+    fn mission(&self) -> &str {
+        &self.mission
+    }
+
+    fn send(&mut self, msg: CoordMessage) -> Result<(), String> {
+        let to = self.peers.get(&msg.to).ok_or_else(|| format!("no address for mission `{}`", msg.to))?;
+        to.send(msg).map_err(|m| format!("the connection to `{}` is closed", m.0.to))
+    }
+
+    fn recv(&mut self) -> RecvFuture<'_> {
+        Box::pin(self.inbox.recv())
+    }
+}
+
+/// One TCP end per mission, all listening on `host` (port chosen by the
+/// system) and knowing each other: the loopback set-up of `mcl run`.
+pub async fn tcp_mesh(missions: &[String], host: &str) -> std::io::Result<Vec<TcpEnd>> {
+    let mut ends = Vec::new();
+    for m in missions {
+        ends.push(TcpEnd::bind(m, &format!("{host}:0")).await?);
+    }
+    let addrs: Vec<(String, SocketAddr)> = ends.iter().map(|e| (e.mission.clone(), e.addr)).collect();
+    for e in &mut ends {
+        for (m, a) in &addrs {
+            if *m != e.mission {
+                e.add_peer(m, *a);
+            }
+        }
+    }
+    Ok(ends)
+}
+
+/// The send table of a vehicle net: transition id → the missions to tell,
+/// from its `coord.send` property (empty without it). Errors on a malformed
+/// property.
+pub fn send_table(net: &mcl_net::Net) -> Result<HashMap<String, Vec<String>>, String> {
+    #[derive(Deserialize)]
+    struct Send {
+        transition: String,
+        to: String,
+    }
+    let mut out: HashMap<String, Vec<String>> = HashMap::new();
+    let Some((_, v)) = net.properties().iter().find(|(k, _)| k == SEND_PROPERTY) else { return Ok(out) };
+    let list: Vec<Send> =
+        serde_json::from_str(v).map_err(|e| format!("net `{}`: bad `{SEND_PROPERTY}` property: {e}", net.name()))?;
+    for s in list {
+        if net.transition_by_id(&s.transition).is_none() {
+            return Err(format!(
+                "net `{}`: `{SEND_PROPERTY}` names transition `{}`, which the net does not have",
+                net.name(),
+                s.transition
+            ));
+        }
+        out.entry(s.transition).or_default().push(s.to);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn msg(from: &str, to: &str, transition: &str, seq: u64) -> CoordMessage {
+        CoordMessage { from: from.into(), to: to.into(), transition: transition.into(), seq, t: seq as f64 }
+    }
+
+    #[tokio::test]
+    async fn in_process_delivers_in_order_to_the_named_mission() {
+        let mut ends = in_process(&["a".into(), "b".into()]);
+        let mut b = ends.pop().unwrap();
+        let mut a = ends.pop().unwrap();
+        assert_eq!((a.mission(), b.mission()), ("a", "b"));
+        for i in 1..=3 {
+            a.send(msg("a", "b", &format!("t{i}"), i)).unwrap();
+        }
+        b.send(msg("b", "a", "x", 1)).unwrap();
+        assert!(a.send(msg("a", "zz", "t", 4)).unwrap_err().contains("zz"));
+        for i in 1..=3 {
+            assert_eq!(b.recv().await.unwrap().transition, format!("t{i}"));
+        }
+        assert_eq!(a.recv().await.unwrap().event(), "b/x");
+    }
+
+    #[tokio::test]
+    async fn tcp_delivers_in_order_drops_duplicates_and_garbage() {
+        let names: Vec<String> = vec!["auv".into(), "asc".into()];
+        let mut ends = tcp_mesh(&names, "127.0.0.1").await.unwrap();
+        let mut asc = ends.pop().unwrap();
+        let mut auv = ends.pop().unwrap();
+        assert!(auv.local_addr().ip().is_loopback());
+        for i in 1..=20 {
+            auv.send(msg("auv", "asc", &format!("call{i}.ok"), i)).unwrap();
+        }
+        auv.send(msg("auv", "asc", "again", 20)).unwrap(); // a duplicate seq
+        auv.send(msg("auv", "asc", "last", 21)).unwrap();
+        asc.send(msg("asc", "auv", "call3.ok", 1)).unwrap();
+        for i in 1..=20 {
+            let m = asc.recv().await.unwrap();
+            assert_eq!((m.transition.as_str(), m.seq), (format!("call{i}.ok").as_str(), i));
+        }
+        assert_eq!(asc.recv().await.unwrap().transition, "last");
+        let m = auv.recv().await.unwrap();
+        assert_eq!(m, msg("asc", "auv", "call3.ok", 1));
+        assert!(auv.send(msg("auv", "nobody", "t", 22)).is_err());
+
+        // Malformed lines and misrouted messages are dropped and reported.
+        let mut raw = TcpStream::connect(asc.local_addr()).await.unwrap();
+        raw.write_all(b"{not json\n").await.unwrap();
+        raw.write_all(br#"{"from":"auv","to":"other","transition":"t","seq":99,"t":0}"#).await.unwrap();
+        raw.write_all(b"\n").await.unwrap();
+        raw.write_all(br#"{"from":"x","to":"asc","transition":"ok","seq":1,"t":0}"#).await.unwrap();
+        raw.write_all(b"\n").await.unwrap();
+        assert_eq!(asc.recv().await.unwrap().event(), "x/ok");
+        let rejected = asc.rejected();
+        assert_eq!(rejected.len(), 2, "{rejected:?}");
+        assert!(rejected[0].contains("not a coordination message"));
+        assert!(rejected[1].contains("for `other`"));
+    }
+
+    #[test]
+    fn send_table_reads_the_property() {
+        let net = |send: &str| {
+            let mut b = mcl_net::NetBuilder::new("v");
+            let p = b.add_place(mcl_net::Place::new("p").with_tokens(1));
+            let t = b.add_transition(mcl_net::Transition::new("call1.ok"));
+            b.add_input(p, t, 1);
+            b.property(SEND_PROPERTY, send);
+            b.build().unwrap()
+        };
+        let ok = net(r#"[{"transition":"call1.ok","to":"b"},{"transition":"call1.ok","to":"c"}]"#);
+        assert_eq!(send_table(&ok).unwrap()["call1.ok"], ["b", "c"]);
+        assert!(send_table(&net(r#"[{"transition":"nope","to":"b"}]"#)).unwrap_err().contains("nope"));
+        assert!(send_table(&net("{")).unwrap_err().contains("bad `coord.send`"));
+    }
+}

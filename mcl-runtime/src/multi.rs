@@ -1,0 +1,679 @@
+//! Several coordinated vehicles at once (seed 6.3-6.4, `docs/coordination.md`).
+//!
+//! Each [`Vehicle`] is a player on its vehicle net (its mission with its part
+//! of the supervisors), its own in-process mock vehicle and its end of a
+//! [`CoordTransport`]. After every input, each firing of a transition listed
+//! in the net's `coord.send` property becomes a [`CoordMessage`] to each
+//! mission it names (trace record `coord_send`); a message received
+//! (`coord_receive`) is kept in the vehicle's inbox until its event
+//! ([`CoordMessage::event`]) is awaited by an enabled receive transition, and
+//! is then fed to the player as that event (never dropped: a mutex copy may
+//! have to give its token back first). The messages waiting in an inbox are
+//! fed together ([`Player::on_events`]): they are firings that happened
+//! before the vehicle reacts, so its net settles only once it has taken them
+//! all (otherwise two vehicles woken by one release of a mutex could both
+//! take it).
+//!
+//! * [`run_virtual`]: one discrete-event loop over every vehicle's timers and
+//!   mock, in virtual time. Deterministic for a seed, whatever the transport:
+//!   after each input the loop waits until the messages it sent have reached
+//!   their receivers, and delivers them at the same virtual instant, before
+//!   anything else happens, one receiving vehicle at a time, each reaction's
+//!   messages delivered before the next vehicle takes its own (the
+//!   synchronous communication that keeps the copies of a supervisor equal).
+//!   Vehicles start one after the other, each with the messages of the
+//!   previous ones' first firings already applied to its initial marking. At equal times vehicles go in the order
+//!   given, a player's timers before its mock's messages.
+//! * [`run_real_time`]: one tokio task per vehicle, each sleeping until its
+//!   next timer or mock message and waking for messages; a message is
+//!   delivered as soon as it arrives. The run ends when every mission has
+//!   ended, when nothing can happen any more (every vehicle without timers
+//!   nor pending mock messages, no message in flight: the unfinished
+//!   missions are stuck), or at the time limit.
+//!
+//! Every record names its mission; the last one, `coord_summary`, gives
+//! the number of messages sent.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use crate::clock::Clock;
+use crate::coord::{send_table, CoordMessage, CoordTransport};
+use crate::driver::{feed_mock, perception_or_event, End, Limits, Session, Sink};
+use crate::journal::Input;
+use crate::mock::MockVehicle;
+use crate::player::{Outcome, Output, Player, PlayerOptions};
+use crate::trace::{Record, Tracer};
+use mcl_net::Net;
+
+/// How long virtual time waits for a message to cross the transport.
+pub const DELIVERY_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// A sink shared by the sessions of several vehicles.
+pub type SharedSink = Arc<Mutex<dyn Sink + Send>>;
+
+struct SharedHandle(SharedSink);
+
+impl Sink for SharedHandle {
+    fn record(&mut self, r: &Record) {
+        if let Ok(mut s) = self.0.lock() {
+            s.record(r);
+        }
+    }
+    fn wants_records(&self) -> bool {
+        self.0.lock().map(|s| s.wants_records()).unwrap_or(false)
+    }
+}
+
+/// One vehicle of a coordinated run.
+pub struct Vehicle {
+    name: String,
+    player: Player,
+    opts: PlayerOptions,
+    tracer: Tracer,
+    mock: MockVehicle,
+    transport: Box<dyn CoordTransport>,
+    sends: HashMap<String, Vec<String>>,
+}
+
+impl Vehicle {
+    /// A vehicle named `name` playing `net` (its tracer should name it
+    /// too). Reads the send table from the net's `coord.send` property and
+    /// calls `mock.initial()`.
+    pub fn new(
+        name: &str,
+        net: Arc<Net>,
+        opts: PlayerOptions,
+        tracer: Tracer,
+        mut mock: MockVehicle,
+        transport: Box<dyn CoordTransport>,
+    ) -> Result<Self, String> {
+        let sends = send_table(&net)?;
+        mock.initial();
+        let player = Player::new(net, opts.clone());
+        Ok(Vehicle { name: name.to_string(), player, opts, tracer, mock, transport, sends })
+    }
+
+    /// The mission name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+}
+
+/// How a coordinated run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MultiEnd {
+    /// Per mission, in the order given: its end and its last time.
+    pub ends: Vec<(String, End, f64)>,
+    /// Coordination messages sent.
+    pub messages: u64,
+    /// Firings per mission (same order).
+    pub fired: Vec<u64>,
+}
+
+impl MultiEnd {
+    /// The worst exit status of the missions (0 ok, 1 fail, 3 stuck or time limit).
+    pub fn exit_code(&self) -> u8 {
+        self.ends.iter().map(|(_, e, _)| e.exit_code()).max().unwrap_or(0)
+    }
+
+    /// `ok` when every mission is, else the worst result.
+    pub fn result(&self) -> &'static str {
+        self.ends.iter().map(|(_, e, _)| e).max_by_key(|e| e.exit_code()).map_or("ok", |e| {
+            if e.exit_code() == 0 {
+                "ok"
+            } else {
+                e.result()
+            }
+        })
+    }
+}
+
+/// A vehicle while it runs.
+struct Live<'a> {
+    name: String,
+    s: Session<'a>,
+    opts: PlayerOptions,
+    mock: MockVehicle,
+    transport: Box<dyn CoordTransport>,
+    sends: HashMap<String, Vec<String>>,
+    inbox: VecDeque<CoordMessage>,
+    seq: u64,
+    end: Option<End>,
+}
+
+impl Live<'_> {
+    /// Feeds the actions of `outs` to the mock and sends the messages its
+    /// firings require; returns them (already sent).
+    fn after(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
+        let now = self.s.player.now();
+        feed_mock(&mut self.s, &mut self.mock, now, outs);
+        let mut sent = Vec::new();
+        for o in outs {
+            let Output::Fired { t, transition, .. } = o else { continue };
+            let id = self.s.player.net().transitions()[transition.index()].id.clone();
+            let Some(to) = self.sends.get(&id) else { continue };
+            for to in to.clone() {
+                self.seq += 1;
+                let m = CoordMessage { from: self.name.clone(), to, transition: id.clone(), seq: self.seq, t: *t };
+                let mut r = Record::new(*t, "coord_send");
+                r.to = Some(m.to.clone());
+                r.transition = Some(m.transition.clone());
+                r.seq = Some(m.seq);
+                self.s.emit_record(r);
+                self.transport.send(m.clone())?;
+                sent.push(m);
+            }
+        }
+        Ok(sent)
+    }
+
+    /// Records `m`, taken from the transport at time `t`, and keeps it.
+    fn received(&mut self, m: CoordMessage, t: f64) {
+        let mut r = Record::new(t.max(self.s.player.now()), "coord_receive");
+        r.from = Some(m.from.clone());
+        r.transition = Some(m.transition.clone());
+        r.seq = Some(m.seq);
+        r.event = Some(m.event());
+        self.s.emit_record(r);
+        self.inbox.push_back(m);
+    }
+
+    /// Starts the player at `t`. Messages received before are delivered
+    /// first: their receive transitions (which touch supervisor copies
+    /// only) fire on the initial marking, so that the start's cascade
+    /// already sees them (a call that another vehicle holds under a mutex
+    /// stays held). Each is recorded as an `event`.
+    fn start(&mut self, t: f64) -> Result<Vec<Output>, String> {
+        if !self.inbox.is_empty() {
+            let net = self.s.player.net().clone();
+            let mut tokens: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+            let mut kept = VecDeque::new();
+            let mut delivered = Vec::new();
+            for m in std::mem::take(&mut self.inbox) {
+                let event = m.event();
+                let enabled = net.event_transitions(&event).iter().copied().find(|&tr| {
+                    net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
+                        && net
+                            .post(tr)
+                            .iter()
+                            .chain(net.pre(tr))
+                            .all(|&(p, _)| net.place(p).is_some_and(|x| x.id.starts_with("coord.")))
+                });
+                match enabled {
+                    Some(tr) => {
+                        for &(p, w) in net.pre(tr) {
+                            tokens[p.index()] -= w;
+                        }
+                        for &(p, w) in net.post(tr) {
+                            tokens[p.index()] += w;
+                        }
+                        delivered.push((event, net.transitions()[tr.index()].id.clone()));
+                    }
+                    None => kept.push_back(m),
+                }
+            }
+            self.inbox = kept;
+            if !delivered.is_empty() {
+                let mut b = net.to_builder();
+                for p in net.place_ids() {
+                    if let Some(place) = b.place_mut(p) {
+                        place.initial = tokens[p.index()];
+                    }
+                }
+                let net = b.build().map_err(|e| format!("`{}`: {e}", self.name))?;
+                self.s.player = Player::new(Arc::new(net), self.opts.clone());
+                for (event, transition) in delivered {
+                    let mut r = Record::new(t, "event");
+                    r.event = Some(event);
+                    r.transition = Some(transition);
+                    self.s.emit_record(r);
+                }
+            }
+        }
+        self.s.step(Input::Start(t))
+    }
+
+    /// Delivers at time `t`, all at once ([`Player::on_events`]), the
+    /// messages of the inbox whose receive transitions can fire; the others
+    /// stay. None when none can.
+    fn deliver(&mut self, t: f64) -> Option<Vec<Output>> {
+        if !self.s.player.is_started() || self.s.player.outcome().is_some() || self.inbox.is_empty() {
+            return None;
+        }
+        let awaited = self.s.player.awaited_events();
+        if !self.inbox.iter().any(|m| awaited.binary_search(&m.event()).is_ok()) {
+            return None;
+        }
+        let events: Vec<String> = self.inbox.iter().map(CoordMessage::event).collect();
+        let (outs, mut left) = self.s.player.on_events(t.max(self.s.player.now()), events);
+        // Keep the messages not taken (the first ones of each event left).
+        let mut kept = VecDeque::new();
+        for m in std::mem::take(&mut self.inbox) {
+            if let Some(k) = left.iter().position(|e| *e == m.event()) {
+                left.remove(k);
+                kept.push_back(m);
+            }
+        }
+        self.inbox = kept;
+        for o in &outs {
+            self.s.emit(o);
+        }
+        Some(outs)
+    }
+
+    fn idle(&self) -> bool {
+        self.end.is_some() || (self.s.player.next_deadline().is_none() && self.mock.next_deadline().is_none())
+    }
+
+    fn stuck(&mut self, t: f64) -> End {
+        let awaited = self.s.player.awaited_events();
+        let waiting: Vec<&String> = awaited.iter().filter(|e| e.contains('/')).collect();
+        self.s.end_by_driver(
+            t,
+            "stuck",
+            format!(
+                "nothing more can happen in any vehicle and no message is in flight; `{}` waits for {}{}",
+                self.name,
+                if awaited.is_empty() { "nothing".to_string() } else { awaited.join(", ") },
+                if waiting.is_empty() {
+                    String::new()
+                } else {
+                    " (events `mission/transition` are coordination messages)".into()
+                }
+            ),
+        );
+        End::Quiescent { awaited }
+    }
+}
+
+fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
+    vehicles
+        .into_iter()
+        .zip(handles.iter_mut())
+        .map(|(v, h)| Live {
+            name: v.name,
+            s: Session::new(v.player, v.tracer, h),
+            opts: v.opts,
+            mock: v.mock,
+            transport: v.transport,
+            sends: v.sends,
+            inbox: VecDeque::new(),
+            seq: 0,
+            end: None,
+        })
+        .collect()
+}
+
+fn summary(sink: &SharedSink, t: f64, end: &MultiEnd) {
+    let mut r = Record::new(t, "coord_summary");
+    r.messages = Some(end.messages);
+    r.result = Some(end.result().to_string());
+    if let Ok(mut s) = sink.lock() {
+        s.record(&r);
+    }
+}
+
+fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
+    MultiEnd {
+        ends: vs
+            .iter()
+            .map(|v| {
+                let end = v.end.clone().unwrap_or(End::Outcome(v.s.player.outcome().unwrap_or(Outcome::Stuck)));
+                (v.name.clone(), end, v.s.player.now())
+            })
+            .collect(),
+        fired: vs.iter().map(|v| v.s.player.fired_count()).collect(),
+        messages,
+    }
+}
+
+/// Runs `vehicles` in virtual time (see the [module documentation](self)),
+/// writing records to `sink`. Runs inside a tokio runtime (the transport's).
+pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limits) -> Result<MultiEnd, String> {
+    let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
+    let mut vs = live(vehicles, &mut handles);
+    let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
+    let mut work: VecDeque<(usize, Vec<Output>)> = VecDeque::new();
+    let mut sent = 0u64;
+    let mut now = 0.0f64;
+    // Vehicles start one after the other at 0, each after the messages of
+    // the previous ones' first firings.
+    let mut to_start = 0;
+    loop {
+        // Settle the consequences of the last input, messages included, at `now`.
+        while let Some((i, outs)) = work.pop_front() {
+            let msgs = vs[i].after(&outs)?;
+            sent += msgs.len() as u64;
+            for m in msgs {
+                let j =
+                    *index.get(&m.to).ok_or_else(|| format!("`{}` sends to an unknown mission `{}`", m.from, m.to))?;
+                let got = tokio::time::timeout(DELIVERY_TIMEOUT, vs[j].transport.recv())
+                    .await
+                    .map_err(|_| {
+                        format!("a message from `{}` did not reach `{}` within {DELIVERY_TIMEOUT:?}", m.from, m.to)
+                    })?
+                    .ok_or_else(|| format!("the transport of `{}` closed", m.to))?;
+                vs[j].received(got, now.max(m.t));
+            }
+            if work.is_empty() {
+                // One vehicle takes its messages; what it does in reaction
+                // reaches the others before the next one does.
+                if let Some((j, outs)) = vs.iter_mut().enumerate().find_map(|(j, v)| v.deliver(now).map(|o| (j, o))) {
+                    work.push_back((j, outs));
+                }
+            }
+        }
+        if to_start < vs.len() {
+            work.push_back((to_start, vs[to_start].start(0.0)?));
+            to_start += 1;
+            continue;
+        }
+        for v in vs.iter_mut().filter(|v| v.end.is_none()) {
+            if let Some(o) = v.s.player.outcome() {
+                v.end = Some(End::Outcome(o));
+            }
+        }
+        if vs.iter().all(|v| v.end.is_some()) {
+            break;
+        }
+        // The next input: the earliest timer or mock message of a running vehicle.
+        let mut next: Option<(f64, usize, bool)> = None;
+        for (i, v) in vs.iter().enumerate().filter(|(_, v)| v.end.is_none()) {
+            for (t, timer) in [(v.s.player.next_deadline(), true), (v.mock.next_deadline(), false)] {
+                if let Some(t) = t {
+                    if next.is_none_or(|(n, _, _)| t < n) {
+                        next = Some((t, i, timer));
+                    }
+                }
+            }
+        }
+        let Some((t, i, timer)) = next else {
+            for v in vs.iter_mut().filter(|v| v.end.is_none()) {
+                let t = v.s.player.now();
+                v.end = Some(v.stuck(t));
+            }
+            break;
+        };
+        if let Some(limit) = limits.time_limit {
+            if t > limit {
+                for v in vs.iter_mut().filter(|v| v.end.is_none()) {
+                    v.s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                    v.end = Some(End::TimeLimit(limit));
+                }
+                break;
+            }
+        }
+        now = now.max(t);
+        let v = &mut vs[i];
+        if timer {
+            work.push_back((i, v.s.step(Input::Timer(t))?));
+        } else if let Some((tm, m)) = v.mock.pop_due(t) {
+            if let Some(input) = perception_or_event(tm, m) {
+                work.push_back((i, v.s.step(input)?));
+            }
+        }
+    }
+    let end = finish(&vs, sent);
+    summary(&sink, now, &end);
+    Ok(end)
+}
+
+/// Shared state of the real-time run: which vehicles are idle (or ended), and
+/// per vehicle the messages sent to it and those it took from the transport.
+struct Global {
+    idle: Vec<bool>,
+    sent_to: Vec<u64>,
+    received: Vec<u64>,
+    stop: tokio::sync::watch::Sender<bool>,
+}
+
+impl Global {
+    /// Records whether vehicle `i` is idle, and stops the run when every
+    /// vehicle is (an ended one is) and no message is in flight.
+    fn set_idle(&mut self, i: usize, idle: bool) {
+        self.idle[i] = idle;
+        let quiet = (0..self.idle.len()).all(|j| self.idle[j] && self.sent_to[j] == self.received[j]);
+        if quiet {
+            let _ = self.stop.send(true);
+        }
+    }
+}
+
+fn lock(g: &Mutex<Global>) -> Result<std::sync::MutexGuard<'_, Global>, String> {
+    g.lock().map_err(|_| "a vehicle task panicked".to_string())
+}
+
+/// Runs `vehicles` in real time with `clock` (see the [module
+/// documentation](self)), one task per vehicle on the current tokio runtime.
+pub async fn run_real_time(
+    vehicles: Vec<Vehicle>,
+    sink: SharedSink,
+    clock: Clock,
+    limits: Limits,
+) -> Result<MultiEnd, String> {
+    let n = vehicles.len();
+    let (stop_tx, stop_rx) = tokio::sync::watch::channel(false);
+    let index: Arc<HashMap<String, usize>> =
+        Arc::new(vehicles.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect());
+    let global =
+        Arc::new(Mutex::new(Global { idle: vec![false; n], sent_to: vec![0; n], received: vec![0; n], stop: stop_tx }));
+    let mut tasks = Vec::new();
+    for (i, v) in vehicles.into_iter().enumerate() {
+        let (sink, global, mut stop, index) = (sink.clone(), global.clone(), stop_rx.clone(), index.clone());
+        let on_error = global.clone();
+        tasks.push(tokio::spawn(async move {
+            let r = async move {
+                let mut handle = [SharedHandle(sink)];
+                let mut vs = live(vec![v], &mut handle);
+                let v = &mut vs[0];
+                let mut outs = v.start(clock.now())?;
+                let result: Result<End, String> = loop {
+                    let msgs = v.after(&outs)?;
+                    {
+                        let mut g = lock(&global)?;
+                        for m in &msgs {
+                            if let Some(&j) = index.get(&m.to) {
+                                g.sent_to[j] += 1;
+                            }
+                        }
+                    }
+                    outs = Vec::new();
+                    if let Some(o) = v.deliver(clock.now()) {
+                        outs = o;
+                        continue;
+                    }
+                    if let Some(o) = v.s.player.outcome() {
+                        break Ok(End::Outcome(o));
+                    }
+                    lock(&global)?.set_idle(i, v.idle());
+                    let (tp, tm) = (v.s.player.next_deadline(), v.mock.next_deadline());
+                    let wake = [tp, tm, limits.time_limit].into_iter().flatten().reduce(f64::min);
+                    let sleep = async {
+                        match wake {
+                            Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
+                            None => std::future::pending::<()>().await,
+                        }
+                    };
+                    tokio::select! {
+                        m = v.transport.recv() => match m {
+                            Some(m) => {
+                                {
+                                    let mut g = lock(&global)?;
+                                    g.received[i] += 1;
+                                    g.set_idle(i, false);
+                                }
+                                v.received(m, clock.now());
+                            }
+                            None => break Err(format!("the coordination transport of `{}` closed", v.name)),
+                        },
+                        _ = sleep => {
+                            let now = clock.now().max(v.s.player.now());
+                            if tp.is_some_and(|d| d <= now) {
+                                outs = v.s.step(Input::Timer(now))?;
+                            } else if tm.is_some_and(|d| d <= now) {
+                                while let Some((_, m)) = v.mock.pop_due(now) {
+                                    if let Some(input) = perception_or_event(now, m) {
+                                        let o = v.s.step(input)?;
+                                        outs.extend(o);
+                                    }
+                                }
+                            } else if let Some(limit) = limits.time_limit.filter(|&l| l <= now) {
+                                v.s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                                break Ok(End::TimeLimit(limit));
+                            }
+                        }
+                        _ = stop.wait_for(|&s| s) => {
+                            let t = clock.now();
+                            break Ok(v.stuck(t));
+                        }
+                    }
+                };
+                v.end = Some(result?);
+                {
+                    let mut g = lock(&global)?;
+                    g.set_idle(i, true);
+                }
+                // Keep taking messages (recorded; the mission has ended)
+                // until every vehicle is done and none is in flight.
+                loop {
+                    tokio::select! {
+                        m = v.transport.recv() => match m {
+                            Some(m) => {
+                                v.received(m, clock.now());
+                                let mut g = lock(&global)?;
+                                g.received[i] += 1;
+                                g.set_idle(i, true);
+                            }
+                            None => break,
+                        },
+                        _ = stop.wait_for(|&s| s) => break,
+                    }
+                }
+                // The transport lives until every vehicle has ended: others may
+                // still send to this one.
+                let end = finish(&vs, 0);
+                let transport = vs.pop().map(|v| v.transport);
+                Ok::<_, String>((end, transport))
+            }
+            .await;
+            if r.is_err() {
+                // Stop the others: they may wait for this one.
+                if let Ok(g) = on_error.lock() {
+                    let _ = g.stop.send(true);
+                }
+            }
+            r
+        }));
+    }
+    let mut ends = Vec::new();
+    let mut fired = Vec::new();
+    let mut transports = Vec::new();
+    let mut error = None;
+    for t in tasks {
+        match t.await.map_err(|e| format!("a vehicle task failed: {e}")).and_then(|r| r) {
+            Ok((e, tr)) => {
+                ends.extend(e.ends);
+                fired.extend(e.fired);
+                transports.push(tr);
+            }
+            Err(e) => {
+                error.get_or_insert(e);
+            }
+        }
+    }
+    drop(transports);
+    if let Some(e) = error {
+        return Err(e);
+    }
+    let messages = global.lock().map(|g| g.sent_to.iter().sum()).unwrap_or_default();
+    let end = MultiEnd { ends, messages, fired };
+    let last = end.ends.iter().map(|(_, _, t)| *t).fold(0.0, f64::max);
+    summary(&sink, last, &end);
+    Ok(end)
+}
+
+/// The scenario of `mission` from a scenario file's text: the file itself,
+/// or, when it has `[missions.NAME]` tables, its top level merged with the
+/// table of that mission (tables merged key by key, the mission's values
+/// winning; arrays such as `events` appended). Errors in a merged scenario
+/// name the mission's table; errors in a file without `missions` keep their
+/// line and column.
+pub fn scenario_for(text: &str, origin: &str, mission: &str) -> Result<crate::scenario::Scenario, String> {
+    let mut table: toml::Table = match toml::from_str(text) {
+        Ok(t) => t,
+        // The scenario parser gives the better message (line and column).
+        Err(_) => return crate::scenario::Scenario::from_toml(text, origin),
+    };
+    let Some(missions) = table.remove("missions") else {
+        return crate::scenario::Scenario::from_toml(text, origin);
+    };
+    let toml::Value::Table(mut missions) = missions else {
+        return Err(format!("{origin}: `missions` must be a table of `[missions.NAME]` tables"));
+    };
+    if let Some(own) = missions.remove(mission) {
+        let toml::Value::Table(own) = own else {
+            return Err(format!("{origin}: `missions.{mission}` must be a table"));
+        };
+        merge(&mut table, own);
+    }
+    let merged = toml::to_string(&table).map_err(|e| format!("{origin}: {e}"))?;
+    crate::scenario::Scenario::from_toml(&merged, &format!("{origin} (merged for mission `{mission}`)"))
+}
+
+/// The `[missions.NAME]` tables of a scenario text (empty when it has none
+/// or does not parse).
+pub fn scenario_missions(text: &str) -> Vec<String> {
+    match toml::from_str::<toml::Table>(text).ok().and_then(|mut t| t.remove("missions")) {
+        Some(toml::Value::Table(m)) => m.keys().cloned().collect(),
+        _ => Vec::new(),
+    }
+}
+
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (Some(toml::Value::Array(b)), toml::Value::Array(o)) => b.extend(o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn per_mission_scenario_sections() {
+        let text = r#"
+default_duration = 2
+[tasks.Goto]
+delay = 10
+[[events]]
+at = 1
+event = "a"
+[missions.asc.tasks.Goto]
+outcome = "fail"
+[[missions.asc.events]]
+at = 2
+event = "b"
+"#;
+        let asc = scenario_for(text, "s.toml", "asc").unwrap();
+        let auv = scenario_for(text, "s.toml", "auv").unwrap();
+        assert_eq!(asc.default_duration, Some(2.0));
+        assert_eq!(asc.events.len(), 2);
+        assert_eq!(auv.events.len(), 1);
+        assert_eq!(asc.tasks["Goto"].base().outcome, Some(crate::scenario::OutcomeRule::Fail));
+        assert_eq!(auv.tasks["Goto"].base().outcome, None);
+        assert_eq!(scenario_missions(text), ["asc"]);
+        // Without sections, errors keep their position.
+        let e = scenario_for("[tasks.Goto]\ndelai = 3\n", "s.toml", "auv").unwrap_err();
+        assert!(e.starts_with("s.toml:2:"), "{e}");
+        let e = scenario_for("[missions.asc.tasks.Goto]\ndelai = 3\n", "s.toml", "asc").unwrap_err();
+        assert!(e.contains("mission `asc`") && e.contains("delai"), "{e}");
+    }
+}
