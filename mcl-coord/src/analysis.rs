@@ -219,7 +219,7 @@ pub fn analyze_with(
 }
 
 fn pid(net: &Net, p: PlaceId) -> String {
-    net.place(p).map_or_else(String::new, |x| x.id.clone())
+    net.place(p).map_or_else(String::new, |x| x.id.to_string())
 }
 
 fn problem(
@@ -252,7 +252,7 @@ fn problem(
                 .iter()
                 .find(|(_, a)| a.started.contains(t))
                 .map(|(m, a)| format!("{}:{}", plant.parts[*m].name, a.label))
-                .unwrap_or_else(|| net.transition(*t).map_or_else(String::new, |x| x.id.clone()))
+                .unwrap_or_else(|| net.transition(*t).map_or_else(String::new, |x| x.id.to_string()))
         })
         .collect();
     let marking: Vec<String> =
@@ -286,7 +286,11 @@ fn problem(
     Problem {
         kind: w.kind,
         constraints: cs,
-        counterexample: w.path.iter().map(|&t| net.transition(t).map_or_else(String::new, |x| x.id.clone())).collect(),
+        counterexample: w
+            .path
+            .iter()
+            .map(|&t| net.transition(t).map_or_else(String::new, |x| x.id.to_string()))
+            .collect(),
         marking,
         waiting,
         siphon,
