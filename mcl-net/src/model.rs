@@ -729,13 +729,9 @@ impl NetBuilder {
         if np + nt >= u32::MAX as usize || self.arcs.len() >= u32::MAX as usize {
             return Err(NetError::TooLarge);
         }
-        let mut by_id = IdIndex::with_capacity(np, nt);
-        for (i, p) in self.places.iter().enumerate() {
+        for p in &self.places {
             if p.id.is_empty() {
                 return Err(NetError::EmptyId);
-            }
-            if !by_id.insert(&p.id, i as u32, |c| node_id(&self.places, &self.transitions, c)) {
-                return Err(NetError::DuplicateId(p.id.to_string()));
             }
         }
         let mut by_event: HashMap<String, Vec<TransitionId>> = HashMap::default();
@@ -744,9 +740,6 @@ impl NetBuilder {
                 return Err(NetError::EmptyId);
             }
             let tid = TransitionId(i as u32);
-            if !by_id.insert(&t.id, (np + i) as u32, |c| node_id(&self.places, &self.transitions, c)) {
-                return Err(NetError::DuplicateId(t.id.to_string()));
-            }
             match &t.kind {
                 TransitionKind::Timed(Delay::Fixed(d)) if !(d.is_finite() && *d >= 0.0) => {
                     return Err(NetError::InvalidDelay { transition: t.id.to_string() })
@@ -760,6 +753,16 @@ impl NetBuilder {
                 _ => {}
             }
         }
+        let id_of = |c: u32| node_id(&self.places, &self.transitions, c);
+        let by_id = match IdIndex::build(np, nt, id_of) {
+            Some(ix) => ix,
+            None => {
+                // The first id, in node order, that an earlier node has.
+                let mut seen = rustc_hash::FxHashSet::default();
+                let dup = (0..(np + nt) as u32).map(id_of).find(|id| !seen.insert(*id)).unwrap_or_default();
+                return Err(NetError::DuplicateId(dup.to_string()));
+            }
+        };
 
         // Validate the arcs, in order.
         let ids = |p: PlaceId, t: TransitionId| {
@@ -1065,9 +1068,40 @@ struct IdIndex {
 }
 
 impl IdIndex {
-    fn with_capacity(places: usize, transitions: usize) -> Self {
-        let size = (2 * (places + transitions)).next_power_of_two().max(8);
-        IdIndex { slots: vec![(0, 0); size], places: places as u32 }
+    /// The index of the ids of `places` places and `transitions`
+    /// transitions (`id_of(code)`), or `None` if two nodes share an id.
+    ///
+    /// Built by partitions of the table (radix partitioning on the hash):
+    /// inserting in node order would touch the whole table at random, a cache
+    /// miss per node once the table outgrows the cache.
+    fn build<'a>(places: usize, transitions: usize, id_of: impl Fn(u32) -> &'a str) -> Option<Self> {
+        let n = places + transitions;
+        let size = (2 * n).next_power_of_two().max(8);
+        let mut ix = IdIndex { slots: vec![(0, 0); size], places: places as u32 };
+        let bits = size.trailing_zeros();
+        // Partitions of at least 4096 slots (32 KiB), at most 1024 of them.
+        let pbits = bits.saturating_sub(12).min(10);
+        if pbits == 0 {
+            return (0..n as u32).all(|c| ix.insert(Self::hash(id_of(c)), c, &id_of)).then_some(ix);
+        }
+        let hashes: Vec<u64> = (0..n as u32).map(|c| Self::hash(id_of(c))).collect();
+        let part = |h: u64| (h >> (64 - pbits)) as usize;
+        let mut offsets = vec![0u32; (1 << pbits) + 1];
+        for &h in &hashes {
+            offsets[part(h) + 1] += 1;
+        }
+        for i in 1..offsets.len() {
+            offsets[i] += offsets[i - 1];
+        }
+        // (hash, code) by partition, so that the inserts read them in order.
+        let mut order = vec![(0u64, 0u32); n];
+        for (c, &h) in hashes.iter().enumerate() {
+            let slot = &mut offsets[part(h)];
+            order[*slot as usize] = (h, c as u32);
+            *slot += 1;
+        }
+        drop(hashes);
+        order.iter().all(|&(h, c)| ix.insert(h, c, &id_of)).then_some(ix)
     }
 
     #[inline]
@@ -1076,19 +1110,30 @@ impl IdIndex {
         rustc_hash::FxBuildHasher.hash_one(id)
     }
 
-    /// Adds `code` for `id`; false if a node with that id is already there.
-    fn insert<'a>(&mut self, id: &str, code: u32, id_of: impl Fn(u32) -> &'a str) -> bool {
-        let h = Self::hash(id);
-        let tag = (h >> 32) as u32;
+    /// The first slot to probe for hash `h`: its high bits, so that
+    /// partitions by high bits are runs of slots.
+    #[inline]
+    fn home(&self, h: u64) -> usize {
+        let bits = self.slots.len().trailing_zeros();
+        if bits == 0 {
+            0
+        } else {
+            (h >> (64 - bits)) as usize
+        }
+    }
+
+    /// Adds `code` with hash `h`; false if a node with the same id is already there.
+    fn insert<'a>(&mut self, h: u64, code: u32, id_of: &impl Fn(u32) -> &'a str) -> bool {
+        let tag = h as u32;
         let mask = self.slots.len() - 1;
-        let mut i = h as usize & mask;
+        let mut i = self.home(h);
         loop {
             let (c, t) = self.slots[i];
             if c == 0 {
                 self.slots[i] = (code + 1, tag);
                 return true;
             }
-            if t == tag && id_of(c - 1) == id {
+            if t == tag && id_of(c - 1) == id_of(code) {
                 return false;
             }
             i = (i + 1) & mask;
@@ -1099,8 +1144,8 @@ impl IdIndex {
     fn find<'a>(&self, id: &str, id_of: impl Fn(u32) -> &'a str) -> Option<NodeId> {
         let mask = self.slots.len().checked_sub(1)?;
         let h = Self::hash(id);
-        let tag = (h >> 32) as u32;
-        let mut i = h as usize & mask;
+        let tag = h as u32;
+        let mut i = self.home(h);
         loop {
             let (c, t) = self.slots[i];
             if c == 0 {
@@ -1145,20 +1190,30 @@ mod tests {
     #[test]
     fn ids_are_found_and_derived_tables_do_not_change_equality() {
         let mut b = NetBuilder::new("n");
-        let ps: Vec<_> = (0..1000).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
-        let ts: Vec<_> = (0..1000).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
-        for i in 0..1000 {
-            b.add_input(ps[i], ts[i], 1).add_output(ts[i], ps[(i + 1) % 1000], 1);
+        let ps: Vec<_> = (0..3000).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
+        let ts: Vec<_> = (0..3000).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
+        for i in 0..3000 {
+            b.add_input(ps[i], ts[i], 1).add_output(ts[i], ps[(i + 1) % 3000], 1);
         }
         let net = b.build().unwrap();
         let fresh = net.clone();
-        for i in 0..1000 {
+        for i in 0..3000 {
             assert_eq!(net.place_by_id(&format!("p{i}")), Some(ps[i]));
             assert_eq!(net.transition_by_id(&format!("t{i}")), Some(ts[i]));
             assert_eq!(net.consumers(ps[i]), &[ts[i]]);
         }
-        assert_eq!(net.node("p1000"), None);
+        assert_eq!(net.node("p3000"), None);
         assert_eq!(net, fresh);
+
+        // Duplicates are found in large nets too (partitioned index), and
+        // reported as the first repeated id in node order.
+        let mut b = NetBuilder::new("n");
+        for i in 0..3000 {
+            b.add_place(Place::new(format!("p{i}")));
+        }
+        b.add_transition(Transition::new("p2999"));
+        b.add_transition(Transition::new("p7"));
+        assert_eq!(b.build(), Err(NetError::DuplicateId("p2999".into())));
     }
 
     #[test]
