@@ -9,7 +9,7 @@ use rustc_hash::FxHashMap as HashMap;
 use std::fmt;
 use std::sync::OnceLock;
 
-pub use crate::name::Name;
+pub use crate::name::{Name, SharedText};
 
 use serde::Serialize;
 

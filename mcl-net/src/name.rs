@@ -3,7 +3,7 @@
 use std::borrow::Borrow;
 use std::fmt;
 use std::ops::Deref;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use serde::{Serialize, Serializer};
 
@@ -12,15 +12,15 @@ use serde::{Serialize, Serializer};
 /// A compiled mission has hundreds of thousands of nodes, each with an id and
 /// a name that is usually the same text. A `Name` is a range of a shared,
 /// reference-counted text: cloning it counts a reference, and a generator can
-/// write the ids of many nodes into one text and hand out ranges of it
-/// ([`Name::shared`]), one allocation for hundreds of nodes. It reads like a
-/// `&str` (it dereferences to `str`, compares with `str`, `&str` and
-/// `String`, displays, hashes, orders and borrows as `str`), and converts
-/// from and into `String`.
+/// write the ids of many nodes into one [`SharedText`] and cut names from it,
+/// one allocation for hundreds of nodes. It reads like a `&str` (it
+/// dereferences to `str`, compares with `str`, `&str` and `String`,
+/// displays, hashes, orders and borrows as `str`), and converts from and
+/// into `String`.
 #[derive(Clone)]
 pub struct Name {
     /// A thin pointer (16 bytes in all): a net holds two names per node.
-    text: Arc<Box<str>>,
+    text: Arc<OnceLock<Box<str>>>,
     start: u32,
     end: u32,
 }
@@ -29,29 +29,52 @@ impl Name {
     /// The text.
     #[inline]
     pub fn as_str(&self) -> &str {
-        &self.text[self.start as usize..self.end as usize]
-    }
-
-    /// The name `text[range]`, sharing `text`. Panics if the range is out of
-    /// bounds, not on character boundaries, or `text` is 4 GiB or more.
-    pub fn shared(text: &Arc<Box<str>>, range: std::ops::Range<usize>) -> Name {
-        assert!(text.get(range.clone()).is_some(), "Name::shared: bad range {range:?}");
-        let (start, end) = (u32::try_from(range.start), u32::try_from(range.end));
-        let (Ok(start), Ok(end)) = (start, end) else { panic!("Name::shared: text too long") };
-        Name { text: text.clone(), start, end }
+        match self.text.get() {
+            Some(t) => t.get(self.start as usize..self.end as usize).unwrap_or(""),
+            None => "",
+        }
     }
 
     fn whole(text: Box<str>) -> Name {
         let end = u32::try_from(text.len()).expect("a name is shorter than 4 GiB");
-        Name { text: Arc::new(text), start: 0, end }
+        Name { text: Arc::new(OnceLock::from(text)), start: 0, end }
+    }
+}
+
+/// A text that names are cut from before it is written: a generator hands
+/// out names ([`SharedText::name`]) while it writes their text into a buffer,
+/// then sets the text once ([`SharedText::set`]). Until then, and if a range
+/// does not fall on the text's character boundaries, those names read as
+/// the empty string.
+#[derive(Clone, Debug, Default)]
+pub struct SharedText(Arc<OnceLock<Box<str>>>);
+
+impl SharedText {
+    /// A text not written yet.
+    pub fn new() -> Self {
+        SharedText::default()
+    }
+
+    /// The name `text[range]` of the text to come. Panics if the range ends
+    /// at 4 GiB or more.
+    pub fn name(&self, range: std::ops::Range<usize>) -> Name {
+        let (Ok(start), Ok(end)) = (u32::try_from(range.start), u32::try_from(range.end)) else {
+            panic!("SharedText::name: text too long")
+        };
+        Name { text: self.0.clone(), start, end }
+    }
+
+    /// Writes the text; false if it was already written.
+    pub fn set(&self, text: &str) -> bool {
+        self.0.set(Box::from(text)).is_ok()
     }
 }
 
 impl Default for Name {
     /// The empty name (shared: no allocation).
     fn default() -> Self {
-        static EMPTY: std::sync::OnceLock<Arc<Box<str>>> = std::sync::OnceLock::new();
-        Name { text: EMPTY.get_or_init(|| Arc::new(Box::from(""))).clone(), start: 0, end: 0 }
+        static EMPTY: OnceLock<Arc<OnceLock<Box<str>>>> = OnceLock::new();
+        Name { text: EMPTY.get_or_init(|| Arc::new(OnceLock::from(Box::from("")))).clone(), start: 0, end: 0 }
     }
 }
 
@@ -224,11 +247,17 @@ mod tests {
         set.insert(n);
         assert!(set.contains("call1.start"));
         assert_eq!(Name::default(), "");
-        let text: Arc<Box<str>> = Arc::new(Box::from("m.0.p_runcall1.run"));
-        let a = Name::shared(&text, 0..8);
-        let b = Name::shared(&text, 8..18);
+        let text = SharedText::new();
+        let a = text.name(0..8);
+        let b = text.name(8..18);
+        assert_eq!(a, "");
+        assert!(text.set("m.0.p_runcall1.run"));
+        assert!(!text.set("again"));
         assert_eq!((a.as_str(), b.as_str()), ("m.0.p_ru", "ncall1.run"));
         assert_eq!(b, Name::from("ncall1.run"));
-        assert!(set.contains(&*Name::shared(&Arc::new(Box::from("xcall1.start")), 1..12)));
+        let c = SharedText::new();
+        let d = c.name(1..12);
+        c.set("xcall1.start");
+        assert!(set.contains(&*d));
     }
 }

@@ -5,13 +5,15 @@
 //! A mission compiles to hundreds of thousands of nodes, so node creation
 //! allocates as little as possible: the provenance is one shared record per
 //! structure or call, and ids are assembled from [`Part`]s (no `format!`)
-//! into a text shared by the next few hundred nodes: a node made with an
-//! [`Id::Pending`] gets its id (and the same text as name) when that text is
-//! complete ([`Builder::finish`] completes the last one).
+//! into a text shared by the next few hundred nodes ([`SharedText`]): the
+//! ids of a text read as empty until it is complete ([`Builder::finish`]
+//! completes the last one).
 
 use std::sync::Arc;
 
-use mcl_net::{Delay, Name, NetBuilder, Place, PlaceId, Provenance, Transition, TransitionId, TransitionKind};
+use mcl_net::{
+    Delay, Name, NetBuilder, Place, PlaceId, Provenance, SharedText, Transition, TransitionId, TransitionKind,
+};
 
 /// The four places of an interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -29,26 +31,6 @@ pub enum Part<'a> {
     N(usize),
 }
 
-/// The id of a node to create: a name, or a range of the builder's pending
-/// text (from [`Builder::id`]).
-#[derive(Clone, Debug)]
-pub enum Id {
-    Name(Name),
-    Pending(u32, u32),
-}
-
-impl<T: Into<Name>> From<T> for Id {
-    fn from(n: T) -> Self {
-        Id::Name(n.into())
-    }
-}
-
-#[derive(Clone, Copy)]
-enum Node {
-    Place(PlaceId),
-    Transition(TransitionId),
-}
-
 /// Size of a shared id text.
 const CHUNK: usize = 16 * 1024;
 
@@ -57,10 +39,9 @@ pub struct Builder {
     pub net: NetBuilder,
     /// Provenance given to the nodes created next (shared by all of them).
     pub provenance: Arc<Provenance>,
-    /// The text of pending ids.
+    /// The text of the ids cut from `text`, not complete yet.
     buf: String,
-    /// Nodes whose id is a range of `buf`.
-    pending: Vec<(Node, u32, u32)>,
+    text: SharedText,
 }
 
 impl Builder {
@@ -70,7 +51,7 @@ impl Builder {
 
     /// A builder that extends `net`.
     pub fn from_net(net: NetBuilder) -> Self {
-        Builder { net, provenance: Provenance::none(), buf: String::new(), pending: Vec::new() }
+        Builder { net, provenance: Provenance::none(), buf: String::new(), text: SharedText::new() }
     }
 
     /// The net, every node with its id.
@@ -79,36 +60,18 @@ impl Builder {
         self.net
     }
 
-    /// Gives the pending nodes their ids, in a new shared text.
+    /// Completes the current text: its ids read as written.
     fn flush(&mut self) {
-        if self.pending.is_empty() {
-            return;
+        if !self.buf.is_empty() {
+            self.text.set(&self.buf);
+            self.text = SharedText::new();
+            self.buf.clear();
         }
-        let text: Arc<Box<str>> = Arc::new(Box::from(self.buf.as_str()));
-        for &(node, start, end) in &self.pending {
-            let name = Name::shared(&text, start as usize..end as usize);
-            match node {
-                Node::Place(p) => {
-                    if let Some(p) = self.net.place_mut(p) {
-                        p.name = name.clone();
-                        p.id = name;
-                    }
-                }
-                Node::Transition(t) => {
-                    if let Some(t) = self.net.transition_mut(t) {
-                        t.name = name.clone();
-                        t.id = name;
-                    }
-                }
-            }
-        }
-        self.pending.clear();
-        self.buf.clear();
     }
 
-    /// The id made of `parts`, concatenated; the node created with it gets
-    /// it when the pending text is complete.
-    pub fn id(&mut self, parts: &[Part]) -> Id {
+    /// The id made of `parts`, concatenated (it reads as empty until the
+    /// builder completes its text).
+    pub fn id(&mut self, parts: &[Part]) -> Name {
         if self.buf.len() >= CHUNK {
             self.flush();
         }
@@ -122,27 +85,15 @@ impl Builder {
                 Part::N(n) => push_decimal(&mut self.buf, n),
             }
         }
-        Id::Pending(start as u32, self.buf.len() as u32)
-    }
-
-    fn name(&mut self, id: Id, node: Node) -> Name {
-        match id {
-            Id::Name(n) => n,
-            Id::Pending(start, end) => {
-                self.pending.push((node, start, end));
-                Name::default()
-            }
-        }
+        self.text.name(start..self.buf.len())
     }
 
     /// A place with `tokens` initial tokens, outside any interface.
-    pub fn place(&mut self, id: impl Into<Id>, tokens: u32) -> PlaceId {
+    pub fn place(&mut self, id: impl Into<Name>, tokens: u32) -> PlaceId {
         self.add_place(id.into(), tokens, mcl_net::model::INTERFACE_NONE)
     }
 
-    fn add_place(&mut self, id: Id, tokens: u32, interface: u32) -> PlaceId {
-        let next = PlaceId(self.net.place_count() as u32);
-        let name = self.name(id, Node::Place(next));
+    fn add_place(&mut self, name: Name, tokens: u32, interface: u32) -> PlaceId {
         self.net.add_place(Place {
             id: name.clone(),
             name,
@@ -172,13 +123,12 @@ impl Builder {
     /// A transition of any kind with unit-weight arcs.
     pub fn transition(
         &mut self,
-        id: impl Into<Id>,
+        id: impl Into<Name>,
         kind: TransitionKind,
         inputs: &[PlaceId],
         outputs: &[PlaceId],
     ) -> TransitionId {
-        let next = TransitionId(self.net.transition_count() as u32);
-        let name = self.name(id.into(), Node::Transition(next));
+        let name = id.into();
         let t = self.net.add_transition(Transition {
             id: name.clone(),
             name,
@@ -198,13 +148,13 @@ impl Builder {
     }
 
     /// An immediate transition.
-    pub fn imm(&mut self, id: impl Into<Id>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
+    pub fn imm(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
         self.transition(id, TransitionKind::Immediate, inputs, outputs)
     }
 
     /// A deferred transition: timed with delay 0, so it fires only in a
     /// tangible marking, after every immediate cascade has settled.
-    pub fn deferred(&mut self, id: impl Into<Id>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
+    pub fn deferred(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
         self.transition(id, TransitionKind::Timed(Delay::Fixed(0.0)), inputs, outputs)
     }
 }
