@@ -232,6 +232,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::mutable_key_type)] // the text is written before the names are used as keys
     fn reads_like_a_str() {
         let n = Name::from("call1.start");
         let m = n.clone();

@@ -120,15 +120,15 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
         let n = format!("child{i}");
         match c {
             Child::Reduced => {
-                let exe = b.place(&format!("{n}.exe"), 0);
-                b.imm(&format!("{n}.start"), &[k.begin], &[exe]);
-                b.transition(&format!("{n}.end_ok"), TransitionKind::Event(format!("{n}.ok")), &[exe], &[k.ok]);
-                b.transition(&format!("{n}.end_fail"), TransitionKind::Event(format!("{n}.fail")), &[exe], &[k.fail]);
-                b.imm(&format!("{n}.abort"), &[k.abort, exe], &[]);
+                let exe = b.place(format!("{n}.exe"), 0);
+                b.imm(format!("{n}.start"), &[k.begin], &[exe]);
+                b.transition(format!("{n}.end_ok"), TransitionKind::Event(format!("{n}.ok")), &[exe], &[k.ok]);
+                b.transition(format!("{n}.end_fail"), TransitionKind::Event(format!("{n}.fail")), &[exe], &[k.fail]);
+                b.imm(format!("{n}.abort"), &[k.abort, exe], &[]);
             }
             Child::Instant => {
-                b.imm(&format!("{n}.now_ok"), &[k.begin], &[k.ok]);
-                b.imm(&format!("{n}.now_fail"), &[k.begin], &[k.fail]);
+                b.imm(format!("{n}.now_ok"), &[k.begin], &[k.ok]);
+                b.imm(format!("{n}.now_fail"), &[k.begin], &[k.fail]);
             }
         }
     }
