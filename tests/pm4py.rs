@@ -62,7 +62,7 @@ fn pm4py_reads_our_pnml() {
             let mut got_arcs = got["arcs"].as_array().unwrap().clone();
             got_arcs.sort_by_key(|a| a.to_string());
             let initial: serde_json::Map<String, serde_json::Value> =
-                net.places().iter().filter(|p| p.initial > 0).map(|p| (p.id.clone(), p.initial.into())).collect();
+                net.places().iter().filter(|p| p.initial > 0).map(|p| (p.id.to_string(), p.initial.into())).collect();
             assert_eq!(got["places"], serde_json::json!(places), "{example}/{}", m.name);
             assert_eq!(got["transitions"], serde_json::json!(transitions), "{example}/{}", m.name);
             assert_eq!(got_arcs, arcs, "{example}/{}", m.name);

@@ -225,7 +225,7 @@ pub fn analyze_with(
 }
 
 fn pid(net: &Net, p: PlaceId) -> String {
-    net.place(p).map_or_else(String::new, |x| x.id.clone())
+    net.place(p).map_or_else(String::new, |x| x.id.to_string())
 }
 
 fn problem(
@@ -258,7 +258,7 @@ fn problem(
                 .iter()
                 .find(|(_, a)| a.started.contains(t))
                 .map(|(m, a)| format!("{}:{}", plant.parts[*m].name, a.label))
-                .unwrap_or_else(|| net.transition(*t).map_or_else(String::new, |x| x.id.clone()))
+                .unwrap_or_else(|| net.transition(*t).map_or_else(String::new, |x| x.id.to_string()))
         })
         .collect();
     let held_by: Vec<(String, Vec<usize>)> = w
@@ -268,7 +268,7 @@ fn problem(
             let mut ks: Vec<usize> = ss.iter().flat_map(|&s| sups[s].origin.constraints()).collect();
             ks.sort_unstable();
             ks.dedup();
-            (net.transition(*t).map_or_else(String::new, |x| x.id.clone()), ks)
+            (net.transition(*t).map_or_else(String::new, |x| x.id.to_string()), ks)
         })
         .collect();
     let marking: Vec<String> =
@@ -302,7 +302,11 @@ fn problem(
     Problem {
         kind: w.kind,
         constraints: cs,
-        counterexample: w.path.iter().map(|&t| net.transition(t).map_or_else(String::new, |x| x.id.clone())).collect(),
+        counterexample: w
+            .path
+            .iter()
+            .map(|&t| net.transition(t).map_or_else(String::new, |x| x.id.to_string()))
+            .collect(),
         marking,
         waiting,
         held_by,

@@ -82,14 +82,14 @@ pub fn centralize(missions: &[Mission]) -> Result<Plant, CoordError> {
         }
         for p in m.net.places() {
             let mut p = p.clone();
-            p.id = pre(&p.id);
-            p.name = pre(&p.name);
+            p.id = pre(&p.id).into();
+            p.name = pre(&p.name).into();
             b.add_place(p);
         }
         for t in m.net.transitions() {
             let mut t = t.clone();
-            t.id = pre(&t.id);
-            t.name = pre(&t.name);
+            t.id = pre(&t.id).into();
+            t.name = pre(&t.name).into();
             if let TransitionKind::Event(e) = &t.kind {
                 t.kind = TransitionKind::Event(pre(e));
             }

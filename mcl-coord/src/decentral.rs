@@ -342,7 +342,7 @@ pub fn vehicle_nets(
                     debug_assert!(told.contains(&t));
                     *recv.entry(t.0).or_insert_with(|| {
                         let from = &plant.parts[o].name;
-                        let id = missions[o].net.transition(lt).map_or_else(String::new, |x| x.id.clone());
+                        let id = missions[o].net.transition(lt).map_or_else(String::new, |x| x.id.to_string());
                         let rid = format!("coord.recv.{from}.{id}");
                         receive.push((rid.clone(), from.clone()));
                         b.add_transition(
@@ -368,7 +368,7 @@ pub fn vehicle_nets(
         for &(x, t) in &comm.alpha {
             let (o, lt) = local_t(t);
             if o == i {
-                let id = m.net.transition(lt).map_or_else(String::new, |x| x.id.clone());
+                let id = m.net.transition(lt).map_or_else(String::new, |x| x.id.to_string());
                 send.push((id, plant.parts[x].name.clone()));
             }
         }

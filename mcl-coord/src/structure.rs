@@ -242,7 +242,7 @@ pub fn control(net: &Net, siphon: &[PlaceId]) -> Control {
 /// `net` (steps 4-6 of Extract 6.1).
 pub fn siphon_supervisor(net: &Net, id: impl Into<String>, siphon: &[PlaceId], constraints: Vec<usize>) -> Supervisor {
     let l: Vec<(PlaceId, i64)> = siphon.iter().map(|&p| (p, -1)).collect();
-    let names = siphon.iter().map(|&p| net.place(p).map_or_else(String::new, |x| x.id.clone())).collect();
+    let names = siphon.iter().map(|&p| net.place(p).map_or_else(String::new, |x| x.id.to_string())).collect();
     Supervisor::synthesize(net, id, Origin::Siphon { siphon: names, constraints }, &l, &[], -1)
 }
 
@@ -283,7 +283,9 @@ pub fn analyze_structure(snet: &Net, plant: &Plant, supervisor_from: usize, limi
     let invariant_list = if inv.invariants.len() <= 64 {
         inv.invariants
             .iter()
-            .map(|v| v.iter().map(|&(p, w)| (snet.place(p).map_or_else(String::new, |x| x.id.clone()), w)).collect())
+            .map(|v| {
+                v.iter().map(|&(p, w)| (snet.place(p).map_or_else(String::new, |x| x.id.to_string()), w)).collect()
+            })
             .collect()
     } else {
         Vec::new()
@@ -303,7 +305,7 @@ pub fn analyze_structure(snet: &Net, plant: &Plant, supervisor_from: usize, limi
     let siphons = sets
         .iter()
         .map(|s| SiphonInfo {
-            places: s.iter().map(|&p| w.place(p).map_or_else(String::new, |x| x.id.clone())).collect(),
+            places: s.iter().map(|&p| w.place(p).map_or_else(String::new, |x| x.id.to_string())).collect(),
             initially_marked: s.iter().any(|&p| m0.get(p) > 0),
             control: control(&w, s),
             has_supervisor: s.iter().any(|p| p.index() >= supervisor_from),

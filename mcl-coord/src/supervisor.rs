@@ -188,8 +188,8 @@ impl Supervisor {
     /// The constraint as text, with node ids of `net`.
     pub fn describe(&self, net: &Net) -> String {
         let mut terms = Vec::new();
-        let pname = |p: PlaceId| net.place(p).map_or_else(|| format!("p{}", p.0), |x| x.id.clone());
-        let tname = |t: TransitionId| net.transition(t).map_or_else(|| format!("t{}", t.0), |x| x.id.clone());
+        let pname = |p: PlaceId| net.place(p).map_or_else(|| format!("p{}", p.0), |x| x.id.to_string());
+        let tname = |t: TransitionId| net.transition(t).map_or_else(|| format!("t{}", t.0), |x| x.id.to_string());
         for &(p, w) in &self.l {
             terms.push(term(w, &format!("μ({})", pname(p))));
         }

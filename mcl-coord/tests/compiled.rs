@@ -156,7 +156,7 @@ fn auv_asc_per_vehicle_nets() {
     // The AUV holds the order supervisors whose second call is its own.
     let coord_places = |n: &mcl_net::Net| {
         let mut v: Vec<String> =
-            n.places().iter().filter(|p| p.id.starts_with("coord.")).map(|p| p.id.clone()).collect();
+            n.places().iter().filter(|p| p.id.starts_with("coord.")).map(|p| p.id.to_string()).collect();
         v.sort();
         v
     };

@@ -157,7 +157,7 @@ fn figure_6_9b_is_repaired_by_one_supervisor() {
     // first region (T2', T7') and given back when it leaves P3 (T3) or P8
     // (T7): at most one vehicle between those points.
     let names = |v: &[(mcl_net::TransitionId, u32)]| {
-        sorted(v.iter().map(|&(t, _)| r.net.transition(t).unwrap().id.clone()).collect())
+        sorted(v.iter().map(|&(t, _)| r.net.transition(t).unwrap().id.to_string()).collect())
     };
     assert_eq!(names(&s.consumed_by), vec!["v1/T2'".to_string(), "v2/T7'".to_string()]);
     assert_eq!(names(&s.produced_by), vec!["v1/T3".to_string(), "v2/T7".to_string()]);

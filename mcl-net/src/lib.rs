@@ -32,6 +32,7 @@
 
 pub mod explore;
 pub mod model;
+mod name;
 pub mod pnml;
 pub mod semantics;
 pub mod structural;
@@ -39,8 +40,8 @@ mod xml;
 
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{
-    ActionRef, Arc, CallBinding, Delay, Marking, Net, NetBuilder, NetError, NodeId, Place, PlaceId, Provenance,
-    SourceSpan, Transition, TransitionId, TransitionKind,
+    ActionRef, Arc, CallBinding, Delay, Marking, Name, Net, NetBuilder, NetError, NodeId, Place, PlaceId, Provenance,
+    SharedText, SourceSpan, Transition, TransitionId, TransitionKind,
 };
 pub use pnml::{read_pnml, read_pnml_nets, write_pnml, PnmlError};
 pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};

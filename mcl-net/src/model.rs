@@ -7,6 +7,9 @@
 
 use rustc_hash::FxHashMap as HashMap;
 use std::fmt;
+use std::sync::OnceLock;
+
+pub use crate::name::{Name, SharedText};
 
 use serde::Serialize;
 
@@ -61,6 +64,12 @@ impl Provenance {
     pub fn is_empty(&self) -> bool {
         *self == Provenance::default()
     }
+
+    /// The empty provenance, shared by every node that has none (no allocation).
+    pub fn none() -> std::sync::Arc<Provenance> {
+        static NONE: OnceLock<std::sync::Arc<Provenance>> = OnceLock::new();
+        NONE.get_or_init(Default::default).clone()
+    }
 }
 
 /// A byte range `start..end` in a source file.
@@ -78,26 +87,27 @@ pub struct SourceSpan {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Place {
     /// Unique id (shared namespace with transitions, as in PNML).
-    pub id: String,
-    /// Human-readable name (defaults to the id).
-    pub name: String,
+    pub id: Name,
+    /// Human-readable name (defaults to the id, sharing its text).
+    pub name: Name,
     /// Initial number of tokens.
     pub initial: u32,
     /// Interface id: [`INTERFACE_NONE`], [`INTERFACE_EXTERNAL`], or 2.. for internal interfaces.
     pub interface: u32,
-    /// Source mapping.
-    pub provenance: Provenance,
+    /// Source mapping, shared by the nodes that come from the same place in
+    /// the source (read it as a [`Provenance`]; build it with `.into()`).
+    pub provenance: std::sync::Arc<Provenance>,
 }
 
 impl Place {
     /// A place with the given id (also used as name), no tokens and no interface.
-    pub fn new(id: impl Into<String>) -> Self {
+    pub fn new(id: impl Into<Name>) -> Self {
         let id = id.into();
-        Place { name: id.clone(), id, initial: 0, interface: INTERFACE_NONE, provenance: Provenance::default() }
+        Place { name: id.clone(), id, initial: 0, interface: INTERFACE_NONE, provenance: Provenance::none() }
     }
 
     /// Sets the name.
-    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+    pub fn with_name(mut self, name: impl Into<Name>) -> Self {
         self.name = name.into();
         self
     }
@@ -114,9 +124,9 @@ impl Place {
         self
     }
 
-    /// Sets the provenance.
-    pub fn with_provenance(mut self, provenance: Provenance) -> Self {
-        self.provenance = provenance;
+    /// Sets the provenance (a [`Provenance`], or one shared with other nodes).
+    pub fn with_provenance(mut self, provenance: impl Into<std::sync::Arc<Provenance>>) -> Self {
+        self.provenance = provenance.into();
         self
     }
 }
@@ -185,24 +195,26 @@ pub struct CallBinding {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Transition {
     /// Unique id (shared namespace with places, as in PNML).
-    pub id: String,
-    /// Human-readable name (defaults to the id).
-    pub name: String,
+    pub id: Name,
+    /// Human-readable name (defaults to the id, sharing its text).
+    pub name: Name,
     /// Trigger kind.
     pub kind: TransitionKind,
     /// Actions sent when the transition fires, in order.
     pub actions: Vec<ActionRef>,
     /// Priority among enabled immediate transitions (higher first; `None` = 0).
     pub priority: Option<u32>,
-    /// For the transition that starts a call: the call's arguments.
-    pub binding: Option<CallBinding>,
-    /// Source mapping.
-    pub provenance: Provenance,
+    /// For the transition that starts a call: the call's arguments (boxed:
+    /// few transitions have one; set it with `Some(binding.into())`).
+    pub binding: Option<Box<CallBinding>>,
+    /// Source mapping, shared by the nodes that come from the same place in
+    /// the source (read it as a [`Provenance`]; build it with `.into()`).
+    pub provenance: std::sync::Arc<Provenance>,
 }
 
 impl Transition {
     /// An immediate transition with the given id (also used as name).
-    pub fn new(id: impl Into<String>) -> Self {
+    pub fn new(id: impl Into<Name>) -> Self {
         let id = id.into();
         Transition {
             name: id.clone(),
@@ -211,12 +223,12 @@ impl Transition {
             actions: Vec::new(),
             priority: None,
             binding: None,
-            provenance: Provenance::default(),
+            provenance: Provenance::none(),
         }
     }
 
     /// Sets the name.
-    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+    pub fn with_name(mut self, name: impl Into<Name>) -> Self {
         self.name = name.into();
         self
     }
@@ -239,9 +251,9 @@ impl Transition {
         self
     }
 
-    /// Sets the provenance.
-    pub fn with_provenance(mut self, provenance: Provenance) -> Self {
-        self.provenance = provenance;
+    /// Sets the provenance (a [`Provenance`], or one shared with other nodes).
+    pub fn with_provenance(mut self, provenance: impl Into<std::sync::Arc<Provenance>>) -> Self {
+        self.provenance = provenance.into();
         self
     }
 
@@ -292,13 +304,9 @@ pub(crate) struct Csr<T> {
 }
 
 impl<T: Copy> Csr<T> {
-    pub(crate) fn from_rows(rows: impl IntoIterator<Item = Vec<T>>) -> Self {
-        let mut offsets = vec![0u32];
-        let mut items = Vec::new();
-        for row in rows {
-            items.extend(row);
-            offsets.push(items.len() as u32);
-        }
+    /// Rows given by their offsets (`offsets[0] == 0`, non-decreasing, last = `items.len()`).
+    fn from_parts(offsets: Vec<u32>, items: Vec<T>) -> Self {
+        debug_assert_eq!(offsets.last().map(|&o| o as usize), Some(items.len()));
         Csr { offsets, items }
     }
 
@@ -380,10 +388,10 @@ pub struct Net {
     // Derived data.
     pre: Csr<(PlaceId, u32)>,
     post: Csr<(PlaceId, u32)>,
-    delta: Csr<(PlaceId, i64)>,
-    consumers: Csr<TransitionId>,
-    producers: Csr<TransitionId>,
-    by_id: HashMap<String, NodeId>,
+    /// Delta, consumers and producers: built on first use (a compiled
+    /// mission is often written out or checked without them).
+    adjacency: Derived,
+    by_id: IdIndex,
     by_event: HashMap<String, Vec<TransitionId>>,
 }
 
@@ -450,7 +458,13 @@ impl Net {
 
     /// Looks a node up by its id.
     pub fn node(&self, id: &str) -> Option<NodeId> {
-        self.by_id.get(id).copied()
+        self.by_id.find(id, |code| self.code_id(code))
+    }
+
+    /// The id of the node with index code `code` (places first, then transitions).
+    #[inline]
+    fn code_id(&self, code: u32) -> &str {
+        node_id(&self.places, &self.transitions, code)
     }
 
     /// Looks a place up by its id.
@@ -484,19 +498,24 @@ impl Net {
     /// Net marking change of firing `t`: `(place, post - pre)` for every place where it is non-zero.
     #[inline]
     pub fn delta(&self, t: TransitionId) -> &[(PlaceId, i64)] {
-        self.delta.row(t.index())
+        self.adjacency().delta.row(t.index())
     }
 
     /// Transitions that consume from `p` (p•), sorted.
     #[inline]
     pub fn consumers(&self, p: PlaceId) -> &[TransitionId] {
-        self.consumers.row(p.index())
+        self.adjacency().consumers.row(p.index())
     }
 
     /// Transitions that produce into `p` (•p), sorted.
     #[inline]
     pub fn producers(&self, p: PlaceId) -> &[TransitionId] {
-        self.producers.row(p.index())
+        self.adjacency().producers.row(p.index())
+    }
+
+    #[inline]
+    fn adjacency(&self) -> &Adjacency {
+        self.adjacency.0.get_or_init(|| Adjacency::new(&self.pre, &self.post, self.places.len()))
     }
 
     /// Transitions whose enabledness may change when `t` fires: the consumers of
@@ -620,6 +639,14 @@ impl NetBuilder {
         self
     }
 
+    /// Reserves room for that many more places, transitions and arcs.
+    pub fn reserve(&mut self, places: usize, transitions: usize, arcs: usize) -> &mut Self {
+        self.places.reserve(places);
+        self.transitions.reserve(transitions);
+        self.arcs.reserve(arcs);
+        self
+    }
+
     /// Adds a place and returns its index.
     pub fn add_place(&mut self, place: Place) -> PlaceId {
         self.places.push(place);
@@ -692,19 +719,19 @@ impl NetBuilder {
     }
 
     /// Validates the net and precomputes its adjacency.
+    ///
+    /// Linear in the size of the net: ids are indexed by an open-addressing
+    /// table of node indices (no id is copied), and the adjacency rows are
+    /// built by counting sort, without a vector per row.
     pub fn build(self) -> Result<Net, NetError> {
         let np = self.places.len();
         let nt = self.transitions.len();
-        if np >= u32::MAX as usize || nt >= u32::MAX as usize {
+        if np + nt >= u32::MAX as usize || self.arcs.len() >= u32::MAX as usize {
             return Err(NetError::TooLarge);
         }
-        let mut by_id = HashMap::with_capacity_and_hasher(np + nt, Default::default());
-        for (i, p) in self.places.iter().enumerate() {
+        for p in &self.places {
             if p.id.is_empty() {
                 return Err(NetError::EmptyId);
-            }
-            if by_id.insert(p.id.clone(), NodeId::Place(PlaceId(i as u32))).is_some() {
-                return Err(NetError::DuplicateId(p.id.clone()));
             }
         }
         let mut by_event: HashMap<String, Vec<TransitionId>> = HashMap::default();
@@ -713,89 +740,110 @@ impl NetBuilder {
                 return Err(NetError::EmptyId);
             }
             let tid = TransitionId(i as u32);
-            if by_id.insert(t.id.clone(), NodeId::Transition(tid)).is_some() {
-                return Err(NetError::DuplicateId(t.id.clone()));
-            }
             match &t.kind {
                 TransitionKind::Timed(Delay::Fixed(d)) if !(d.is_finite() && *d >= 0.0) => {
-                    return Err(NetError::InvalidDelay { transition: t.id.clone() })
+                    return Err(NetError::InvalidDelay { transition: t.id.to_string() })
                 }
-                TransitionKind::Event(e) => by_event.entry(e.clone()).or_default().push(tid),
+                TransitionKind::Event(e) => match by_event.get_mut(e.as_str()) {
+                    Some(v) => v.push(tid),
+                    None => {
+                        by_event.insert(e.clone(), vec![tid]);
+                    }
+                },
                 _ => {}
             }
         }
+        let id_of = |c: u32| node_id(&self.places, &self.transitions, c);
+        let by_id = match IdIndex::build(np, nt, id_of) {
+            Some(ix) => ix,
+            None => {
+                // The first id, in node order, that an earlier node has.
+                let mut seen = rustc_hash::FxHashSet::default();
+                let dup = (0..(np + nt) as u32).map(id_of).find(|id| !seen.insert(*id)).unwrap_or_default();
+                return Err(NetError::DuplicateId(dup.to_string()));
+            }
+        };
 
-        // Merge parallel arcs, keeping the position of the first occurrence.
-        let mut arcs: Vec<Arc> = Vec::with_capacity(self.arcs.len());
-        let mut seen: HashMap<(bool, u32, u32), usize> =
-            HashMap::with_capacity_and_hasher(self.arcs.len(), Default::default());
+        // Validate the arcs, in order.
+        let ids = |p: PlaceId, t: TransitionId| {
+            (self.places[p.index()].id.to_string(), self.transitions[t.index()].id.to_string())
+        };
         for arc in &self.arcs {
-            let (input, p, t, w) = match *arc {
-                Arc::Input { place, transition, weight } => (true, place, transition, weight),
-                Arc::Output { transition, place, weight } => (false, place, transition, weight),
+            let (p, t, w) = match *arc {
+                Arc::Input { place, transition, weight } => (place, transition, weight),
+                Arc::Output { transition, place, weight } => (place, transition, weight),
             };
-            let place = self.places.get(p.index()).ok_or_else(|| NetError::UnknownNode(format!("place #{}", p.0)))?;
-            let trans =
-                self.transitions.get(t.index()).ok_or_else(|| NetError::UnknownNode(format!("transition #{}", t.0)))?;
-            if w == 0 {
-                return Err(NetError::ZeroWeight { place: place.id.clone(), transition: trans.id.clone() });
+            if p.index() >= np {
+                return Err(NetError::UnknownNode(format!("place #{}", p.0)));
             }
-            match seen.get(&(input, p.0, t.0)) {
-                Some(&k) => {
-                    let slot = match &mut arcs[k] {
-                        Arc::Input { weight, .. } | Arc::Output { weight, .. } => weight,
-                    };
-                    *slot = slot.checked_add(w).ok_or_else(|| NetError::WeightOverflow {
-                        place: place.id.clone(),
-                        transition: trans.id.clone(),
-                    })?;
-                }
-                None => {
-                    seen.insert((input, p.0, t.0), arcs.len());
-                    arcs.push(*arc);
-                }
+            if t.index() >= nt {
+                return Err(NetError::UnknownNode(format!("transition #{}", t.0)));
+            }
+            if w == 0 {
+                let (place, transition) = ids(p, t);
+                return Err(NetError::ZeroWeight { place, transition });
             }
         }
 
-        let mut pre = vec![Vec::new(); nt];
-        let mut post = vec![Vec::new(); nt];
-        let mut consumers = vec![Vec::new(); np];
-        let mut producers = vec![Vec::new(); np];
-        for arc in &arcs {
+        // Pre and post sets by counting sort; parallel arcs (rare) take the general path.
+        let (mut in_off, mut out_off) = (vec![0u32; nt + 1], vec![0u32; nt + 1]);
+        for arc in &self.arcs {
             match *arc {
-                Arc::Input { place, transition, weight } => {
-                    pre[transition.index()].push((place, weight));
-                    consumers[place.index()].push(transition);
-                }
-                Arc::Output { transition, place, weight } => {
-                    post[transition.index()].push((place, weight));
-                    producers[place.index()].push(transition);
-                }
+                Arc::Input { transition, .. } => in_off[transition.index() + 1] += 1,
+                Arc::Output { transition, .. } => out_off[transition.index() + 1] += 1,
             }
         }
-        for row in pre.iter_mut().chain(post.iter_mut()) {
-            row.sort_unstable();
+        for i in 0..nt {
+            in_off[i + 1] += in_off[i];
+            out_off[i + 1] += out_off[i];
         }
-        for row in consumers.iter_mut().chain(producers.iter_mut()) {
-            row.sort_unstable();
-        }
-        let delta: Vec<Vec<(PlaceId, i64)>> = (0..nt)
-            .map(|t| {
-                let mut d: Vec<(PlaceId, i64)> = Vec::new();
-                for &(p, w) in &pre[t] {
-                    d.push((p, -i64::from(w)));
-                }
-                for &(p, w) in &post[t] {
-                    match d.iter_mut().find(|(q, _)| *q == p) {
-                        Some(e) => e.1 += i64::from(w),
-                        None => d.push((p, i64::from(w))),
+        let mut in_items = vec![(PlaceId(0), 0u32); in_off[nt] as usize];
+        let mut out_items = vec![(PlaceId(0), 0u32); out_off[nt] as usize];
+        {
+            // Fill cursors: the start of each row, moved along.
+            let (mut in_fill, mut out_fill) = (in_off[..nt].to_vec(), out_off[..nt].to_vec());
+            for arc in &self.arcs {
+                match *arc {
+                    Arc::Input { place, transition, weight } => {
+                        let slot = &mut in_fill[transition.index()];
+                        in_items[*slot as usize] = (place, weight);
+                        *slot += 1;
+                    }
+                    Arc::Output { transition, place, weight } => {
+                        let slot = &mut out_fill[transition.index()];
+                        out_items[*slot as usize] = (place, weight);
+                        *slot += 1;
                     }
                 }
-                d.retain(|&(_, x)| x != 0);
-                d.sort_unstable();
-                d
-            })
-            .collect();
+            }
+        }
+        let sort_rows = |offsets: &[u32], items: &mut [(PlaceId, u32)]| -> bool {
+            let mut parallel = false;
+            for t in 0..nt {
+                let row = &mut items[offsets[t] as usize..offsets[t + 1] as usize];
+                // Rows are short: insertion sort by place, noting equal places.
+                for i in 1..row.len() {
+                    let x = row[i];
+                    let mut j = i;
+                    while j > 0 && row[j - 1].0 > x.0 {
+                        row[j] = row[j - 1];
+                        j -= 1;
+                    }
+                    row[j] = x;
+                    parallel |= j > 0 && row[j - 1].0 == x.0;
+                }
+            }
+            parallel
+        };
+        let parallel_in = sort_rows(&in_off, &mut in_items);
+        let parallel_out = sort_rows(&out_off, &mut out_items);
+        let (pre, post) = (Csr::from_parts(in_off, in_items), Csr::from_parts(out_off, out_items));
+        let (arcs, pre, post) = if parallel_in || parallel_out {
+            drop((pre, post));
+            merge_parallel_arcs(&self.arcs, &self.places, &self.transitions)?
+        } else {
+            (self.arcs, pre, post)
+        };
 
         Ok(Net {
             id: self.id,
@@ -804,14 +852,315 @@ impl NetBuilder {
             places: self.places,
             transitions: self.transitions,
             arcs,
-            pre: Csr::from_rows(pre),
-            post: Csr::from_rows(post),
-            delta: Csr::from_rows(delta),
-            consumers: Csr::from_rows(consumers),
-            producers: Csr::from_rows(producers),
+            pre,
+            post,
+            adjacency: Derived::default(),
             by_id,
             by_event,
         })
+    }
+}
+
+/// The adjacency derived from the pre and post sets.
+#[derive(Clone, Debug)]
+struct Adjacency {
+    delta: Csr<(PlaceId, i64)>,
+    consumers: Csr<TransitionId>,
+    producers: Csr<TransitionId>,
+}
+
+/// [`Adjacency`] once computed; a function of the net, so any two are equal.
+#[derive(Clone, Debug, Default)]
+struct Derived(OnceLock<Adjacency>);
+
+impl PartialEq for Derived {
+    fn eq(&self, _: &Derived) -> bool {
+        true
+    }
+}
+
+impl Adjacency {
+    fn new(pre: &Csr<(PlaceId, u32)>, post: &Csr<(PlaceId, u32)>, np: usize) -> Adjacency {
+        let nt = pre.offsets.len().saturating_sub(1);
+        // Consumers and producers: transitions in increasing order, so rows come sorted.
+        let by_place = |adj: &Csr<(PlaceId, u32)>| -> Csr<TransitionId> {
+            let mut offsets = vec![0u32; np + 1];
+            for &(p, _) in &adj.items {
+                offsets[p.index() + 1] += 1;
+            }
+            for i in 0..np {
+                offsets[i + 1] += offsets[i];
+            }
+            let mut fill = offsets.clone();
+            let mut items = vec![TransitionId(0); adj.items.len()];
+            for t in 0..nt {
+                for &(p, _) in adj.row(t) {
+                    let slot = &mut fill[p.index()];
+                    items[*slot as usize] = TransitionId(t as u32);
+                    *slot += 1;
+                }
+            }
+            Csr::from_parts(offsets, items)
+        };
+        let consumers = by_place(pre);
+        let producers = by_place(post);
+
+        // Delta: merge of the pre and post rows (both sorted by place).
+        let mut d_off = Vec::with_capacity(nt + 1);
+        d_off.push(0u32);
+        let mut d_items: Vec<(PlaceId, i64)> = Vec::with_capacity(pre.items.len() + post.items.len());
+        for t in 0..nt {
+            let (a, b) = (pre.row(t), post.row(t));
+            let (mut i, mut j) = (0, 0);
+            while i < a.len() || j < b.len() {
+                let (p, x) = match (a.get(i), b.get(j)) {
+                    (Some(&(p, w)), Some(&(q, _))) if p < q => {
+                        i += 1;
+                        (p, -i64::from(w))
+                    }
+                    (Some(&(p, w)), Some(&(q, v))) if p == q => {
+                        i += 1;
+                        j += 1;
+                        (p, i64::from(v) - i64::from(w))
+                    }
+                    (_, Some(&(q, v))) => {
+                        j += 1;
+                        (q, i64::from(v))
+                    }
+                    (Some(&(p, w)), None) => {
+                        i += 1;
+                        (p, -i64::from(w))
+                    }
+                    (None, None) => unreachable!("loop condition"),
+                };
+                if x != 0 {
+                    d_items.push((p, x));
+                }
+            }
+            d_off.push(d_items.len() as u32);
+        }
+
+        Adjacency { delta: Csr::from_parts(d_off, d_items), consumers, producers }
+    }
+}
+
+/// Merges parallel arcs (the general case): rows of arcs per transition,
+/// inputs and outputs apart, sorted by place then position; the first of
+/// parallel arcs keeps the sum of their weights and the others are dropped.
+/// Returns the arcs and the pre and post sets.
+#[allow(clippy::type_complexity)]
+fn merge_parallel_arcs(
+    arcs_in: &[Arc],
+    places: &[Place],
+    transitions: &[Transition],
+) -> Result<(Vec<Arc>, Csr<(PlaceId, u32)>, Csr<(PlaceId, u32)>), NetError> {
+    let nt = transitions.len();
+    let ids = |p: PlaceId, t: TransitionId| (places[p.index()].id.to_string(), transitions[t.index()].id.to_string());
+    // Rows of arcs per transition, inputs and outputs apart, sorted by
+    // place then position: parallel arcs are neighbours, the first one
+    // keeps the sum of their weights and the others are dropped.
+    let mut weights: Vec<u32> = Vec::with_capacity(arcs_in.len());
+    let mut in_off = vec![0u32; nt + 1];
+    let mut out_off = vec![0u32; nt + 1];
+    for arc in arcs_in {
+        match *arc {
+            Arc::Input { transition, weight, .. } => {
+                in_off[transition.index() + 1] += 1;
+                weights.push(weight);
+            }
+            Arc::Output { transition, weight, .. } => {
+                out_off[transition.index() + 1] += 1;
+                weights.push(weight);
+            }
+        }
+    }
+    for i in 0..nt {
+        in_off[i + 1] += in_off[i];
+        out_off[i + 1] += out_off[i];
+    }
+    let mut in_rows = vec![(0u32, 0u32); in_off[nt] as usize];
+    let mut out_rows = vec![(0u32, 0u32); out_off[nt] as usize];
+    {
+        let mut in_fill = in_off.clone();
+        let mut out_fill = out_off.clone();
+        for (k, arc) in arcs_in.iter().enumerate() {
+            match *arc {
+                Arc::Input { place, transition, .. } => {
+                    let slot = &mut in_fill[transition.index()];
+                    in_rows[*slot as usize] = (place.0, k as u32);
+                    *slot += 1;
+                }
+                Arc::Output { transition, place, .. } => {
+                    let slot = &mut out_fill[transition.index()];
+                    out_rows[*slot as usize] = (place.0, k as u32);
+                    *slot += 1;
+                }
+            }
+        }
+    }
+    let mut dropped = vec![false; arcs_in.len()];
+    // Merges each row in place; returns the adjacency (place, weight) as CSR.
+    let mut merge = |off: &[u32], rows: &mut [(u32, u32)]| -> Result<Csr<(PlaceId, u32)>, NetError> {
+        let mut offsets = Vec::with_capacity(nt + 1);
+        offsets.push(0u32);
+        let mut items: Vec<(PlaceId, u32)> = Vec::with_capacity(rows.len());
+        for t in 0..nt {
+            let row = &mut rows[off[t] as usize..off[t + 1] as usize];
+            if row.len() > 1 {
+                row.sort_unstable();
+            }
+            let mut i = 0;
+            while i < row.len() {
+                let (p, first) = row[i];
+                let mut w = weights[first as usize];
+                let mut j = i + 1;
+                while j < row.len() && row[j].0 == p {
+                    let k = row[j].1 as usize;
+                    w = w.checked_add(weights[k]).ok_or_else(|| {
+                        let (place, transition) = ids(PlaceId(p), TransitionId(t as u32));
+                        NetError::WeightOverflow { place, transition }
+                    })?;
+                    dropped[k] = true;
+                    j += 1;
+                }
+                weights[first as usize] = w;
+                items.push((PlaceId(p), w));
+                i = j;
+            }
+            offsets.push(items.len() as u32);
+        }
+        Ok(Csr::from_parts(offsets, items))
+    };
+    let pre = merge(&in_off, &mut in_rows)?;
+    let post = merge(&out_off, &mut out_rows)?;
+    let arcs: Vec<Arc> = arcs_in
+        .iter()
+        .zip(&dropped)
+        .enumerate()
+        .filter(|(_, (_, &d))| !d)
+        .map(|(k, (arc, _))| match *arc {
+            Arc::Input { place, transition, .. } => Arc::Input { place, transition, weight: weights[k] },
+            Arc::Output { transition, place, .. } => Arc::Output { transition, place, weight: weights[k] },
+        })
+        .collect();
+    Ok((arcs, pre, post))
+}
+
+/// The id of node `code`: place `code`, or transition `code - places.len()`.
+#[inline]
+fn node_id<'a>(places: &'a [Place], transitions: &'a [Transition], code: u32) -> &'a str {
+    let c = code as usize;
+    match places.get(c) {
+        Some(p) => &p.id,
+        None => &transitions[c - places.len()].id,
+    }
+}
+
+/// Node ids by text without copying them: an open-addressing table (linear
+/// probing, load ≤ 1/2) of node codes (places first, then transitions), each
+/// with 32 bits of its id's hash; ids are compared through the nodes.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+struct IdIndex {
+    /// (code + 1, hash) per slot; code + 1 = 0 for an empty slot.
+    slots: Vec<(u32, u32)>,
+    /// Number of places: codes below are places.
+    places: u32,
+}
+
+impl IdIndex {
+    /// The index of the ids of `places` places and `transitions`
+    /// transitions (`id_of(code)`), or `None` if two nodes share an id.
+    ///
+    /// Built by partitions of the table (radix partitioning on the hash):
+    /// inserting in node order would touch the whole table at random, a cache
+    /// miss per node once the table outgrows the cache.
+    fn build<'a>(places: usize, transitions: usize, id_of: impl Fn(u32) -> &'a str) -> Option<Self> {
+        let n = places + transitions;
+        let size = (2 * n).next_power_of_two().max(8);
+        let mut ix = IdIndex { slots: vec![(0, 0); size], places: places as u32 };
+        let bits = size.trailing_zeros();
+        // Partitions of at least 4096 slots (32 KiB), at most 1024 of them.
+        let pbits = bits.saturating_sub(12).min(10);
+        if pbits == 0 {
+            return (0..n as u32).all(|c| ix.insert(Self::hash(id_of(c)), c, &id_of)).then_some(ix);
+        }
+        let hashes: Vec<u64> = (0..n as u32).map(|c| Self::hash(id_of(c))).collect();
+        let part = |h: u64| (h >> (64 - pbits)) as usize;
+        let mut offsets = vec![0u32; (1 << pbits) + 1];
+        for &h in &hashes {
+            offsets[part(h) + 1] += 1;
+        }
+        for i in 1..offsets.len() {
+            offsets[i] += offsets[i - 1];
+        }
+        // (hash, code) by partition, so that the inserts read them in order.
+        let mut order = vec![(0u64, 0u32); n];
+        for (c, &h) in hashes.iter().enumerate() {
+            let slot = &mut offsets[part(h)];
+            order[*slot as usize] = (h, c as u32);
+            *slot += 1;
+        }
+        drop(hashes);
+        order.iter().all(|&(h, c)| ix.insert(h, c, &id_of)).then_some(ix)
+    }
+
+    #[inline]
+    fn hash(id: &str) -> u64 {
+        use std::hash::BuildHasher;
+        rustc_hash::FxBuildHasher.hash_one(id)
+    }
+
+    /// The first slot to probe for hash `h`: its high bits, so that
+    /// partitions by high bits are runs of slots.
+    #[inline]
+    fn home(&self, h: u64) -> usize {
+        let bits = self.slots.len().trailing_zeros();
+        if bits == 0 {
+            0
+        } else {
+            (h >> (64 - bits)) as usize
+        }
+    }
+
+    /// Adds `code` with hash `h`; false if a node with the same id is already there.
+    fn insert<'a>(&mut self, h: u64, code: u32, id_of: &impl Fn(u32) -> &'a str) -> bool {
+        let tag = h as u32;
+        let mask = self.slots.len() - 1;
+        let mut i = self.home(h);
+        loop {
+            let (c, t) = self.slots[i];
+            if c == 0 {
+                self.slots[i] = (code + 1, tag);
+                return true;
+            }
+            if t == tag && id_of(c - 1) == id_of(code) {
+                return false;
+            }
+            i = (i + 1) & mask;
+        }
+    }
+
+    /// The node with id `id`.
+    fn find<'a>(&self, id: &str, id_of: impl Fn(u32) -> &'a str) -> Option<NodeId> {
+        let mask = self.slots.len().checked_sub(1)?;
+        let h = Self::hash(id);
+        let tag = h as u32;
+        let mut i = self.home(h);
+        loop {
+            let (c, t) = self.slots[i];
+            if c == 0 {
+                return None;
+            }
+            if t == tag && id_of(c - 1) == id {
+                let code = c - 1;
+                return Some(if code < self.places {
+                    NodeId::Place(PlaceId(code))
+                } else {
+                    NodeId::Transition(TransitionId(code - self.places))
+                });
+            }
+            i = (i + 1) & mask;
+        }
     }
 }
 
@@ -836,6 +1185,35 @@ mod tests {
         assert_eq!(net.affected_by(t).collect::<Vec<_>>(), vec![t]);
         assert_eq!(net.place_by_id("q"), Some(q));
         assert_eq!(net.transition_by_id("p"), None);
+    }
+
+    #[test]
+    fn ids_are_found_and_derived_tables_do_not_change_equality() {
+        let mut b = NetBuilder::new("n");
+        let ps: Vec<_> = (0..3000).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
+        let ts: Vec<_> = (0..3000).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
+        for i in 0..3000 {
+            b.add_input(ps[i], ts[i], 1).add_output(ts[i], ps[(i + 1) % 3000], 1);
+        }
+        let net = b.build().unwrap();
+        let fresh = net.clone();
+        for i in 0..3000 {
+            assert_eq!(net.place_by_id(&format!("p{i}")), Some(ps[i]));
+            assert_eq!(net.transition_by_id(&format!("t{i}")), Some(ts[i]));
+            assert_eq!(net.consumers(ps[i]), &[ts[i]]);
+        }
+        assert_eq!(net.node("p3000"), None);
+        assert_eq!(net, fresh);
+
+        // Duplicates are found in large nets too (partitioned index), and
+        // reported as the first repeated id in node order.
+        let mut b = NetBuilder::new("n");
+        for i in 0..3000 {
+            b.add_place(Place::new(format!("p{i}")));
+        }
+        b.add_transition(Transition::new("p2999"));
+        b.add_transition(Transition::new("p7"));
+        assert_eq!(b.build(), Err(NetError::DuplicateId("p2999".into())));
     }
 
     #[test]

@@ -308,7 +308,7 @@ impl<'a> Ctx<'a> {
         let id = self.required(el, "id")?;
         let mut p = Place::new(id);
         if let Some(name) = self.label_text(el, "name")? {
-            p.name = name.to_string();
+            p.name = name.into();
         }
         p.initial = self.label_number(el, "initialMarking")?.unwrap_or(0);
         if let Some(ts) = self.mcl_block(el)? {
@@ -318,7 +318,7 @@ impl<'a> Ctx<'a> {
                         p.interface =
                             self.number(c, "id")?.ok_or_else(|| self.err(c, "<interface> has no `id` attribute"))?
                     }
-                    "provenance" => p.provenance = self.provenance(c)?,
+                    "provenance" => p.provenance = self.provenance(c)?.into(),
                     other => return Err(self.err(c, format!("unknown MCL place data <{other}>"))),
                 }
             }
@@ -330,7 +330,7 @@ impl<'a> Ctx<'a> {
         let id = self.required(el, "id")?;
         let mut t = Transition::new(id);
         if let Some(name) = self.label_text(el, "name")? {
-            t.name = name.to_string();
+            t.name = name.into();
         }
         if let Some(ts) = self.mcl_block(el)? {
             for c in &ts.children {
@@ -347,9 +347,9 @@ impl<'a> Ctx<'a> {
                         if t.binding.is_some() {
                             return Err(self.err(c, "a transition has at most one <binding>"));
                         }
-                        t.binding = Some(self.binding(c)?);
+                        t.binding = Some(self.binding(c)?.into());
                     }
-                    "provenance" => t.provenance = self.provenance(c)?,
+                    "provenance" => t.provenance = self.provenance(c)?.into(),
                     other => return Err(self.err(c, format!("unknown MCL transition data <{other}>"))),
                 }
             }

@@ -24,13 +24,13 @@ fn sample_net() -> mcl_net::Net {
         params: vec![("x".into(), "24".into()), ("y".into(), "-2.5".into())],
     }));
     if let Some(t) = b.transition_mut(start) {
-        t.binding = Some(CallBinding {
+        t.binding = Some(Box::new(CallBinding {
             task: "Goto".into(),
             call_site: 3,
             label: Some("first".into()),
             args: vec![("way-point".into(), "[24, 12]".into())],
             role: Some("while_condition".into()),
-        });
+        }));
     }
     let done = b.add_transition(Transition::new("done").with_kind(TransitionKind::Event("goto_ok".into())));
     let timeout =

@@ -125,7 +125,7 @@ fn build(s: &Spec) -> Net {
             .with_provenance(prov.clone());
         t.actions = actions.clone();
         t.priority = *prio;
-        t.binding = binding.clone();
+        t.binding = binding.clone().map(Box::new);
         b.add_transition(t);
     }
     let (np, nt) = (s.places.len(), s.transitions.len());

@@ -151,12 +151,15 @@ fn with_abort_hook(net: &Net, remap: Option<&dyn Fn(&mut SourceSpan)>) -> Result
     let mut b = net.to_builder();
     if let Some(remap) = remap {
         for t in net.transition_ids() {
-            if let Some(span) = b.transition_mut(t).and_then(|tr| tr.provenance.span.as_mut()) {
+            if let Some(span) =
+                b.transition_mut(t).and_then(|tr| std::sync::Arc::make_mut(&mut tr.provenance).span.as_mut())
+            {
                 remap(span);
             }
         }
         for p in net.place_ids() {
-            if let Some(span) = b.place_mut(p).and_then(|pl| pl.provenance.span.as_mut()) {
+            if let Some(span) = b.place_mut(p).and_then(|pl| std::sync::Arc::make_mut(&mut pl.provenance).span.as_mut())
+            {
                 remap(span);
             }
         }

@@ -133,7 +133,7 @@ impl<'a> Session<'a> {
             let ids = self.player.net().transitions();
             for o in &out {
                 if let Output::Fired { t, transition, .. } = o {
-                    j.append(&Entry::Fire { t: *t, transition: ids[transition.index()].id.clone() });
+                    j.append(&Entry::Fire { t: *t, transition: ids[transition.index()].id.to_string() });
                 }
             }
             j.sync()?;

@@ -152,7 +152,7 @@ impl Live<'_> {
         let mut sent = Vec::new();
         for o in outs {
             let Output::Fired { t, transition, .. } = o else { continue };
-            let id = self.s.player.net().transitions()[transition.index()].id.clone();
+            let id = self.s.player.net().transitions()[transition.index()].id.to_string();
             let Some(to) = self.sends.get(&id) else { continue };
             for to in to.clone() {
                 self.seq += 1;
@@ -227,7 +227,7 @@ impl Live<'_> {
                 for (event, transition) in delivered {
                     let mut r = Record::new(t, "event");
                     r.event = Some(event);
-                    r.transition = Some(transition);
+                    r.transition = Some(transition.to_string());
                     self.s.emit_record(r);
                 }
             }

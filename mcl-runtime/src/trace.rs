@@ -177,7 +177,7 @@ impl Tracer {
         }
         Tracer {
             mission,
-            ids: net.transitions().iter().map(|t| t.id.clone()).collect(),
+            ids: net.transitions().iter().map(|t| t.id.to_string()).collect(),
             tasks: net
                 .transitions()
                 .iter()

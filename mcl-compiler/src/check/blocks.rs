@@ -30,7 +30,7 @@ pub fn task_verdict(db: &dyn Db, key: TaskKey<'_>) -> Option<verify::Verdict> {
     let scope = scope::local_scope(db, *key.root(db));
     let mut b = Builder::new(key.name(db));
     let (_, _) = add_task_net(db, scope, &mut b, key.name(db), "").ok()??;
-    let net = b.net.build().ok()?;
+    let net = b.finish().build().ok()?;
     let h = verify::task_harness(&net)?;
     Some(h.verify(MAX_STATES))
 }

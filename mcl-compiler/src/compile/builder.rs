@@ -1,8 +1,19 @@
 //! A thin layer over `mcl_net::NetBuilder` for generating blocks: places and
 //! transitions by id, interfaces as place quadruples, and the provenance that
 //! every node created next receives.
+//!
+//! A mission compiles to hundreds of thousands of nodes, so node creation
+//! allocates as little as possible: the provenance is one shared record per
+//! structure or call, and ids are assembled from [`Part`]s (no `format!`)
+//! into a text shared by the next few hundred nodes ([`SharedText`]): the
+//! ids of a text read as empty until it is complete ([`Builder::finish`]
+//! completes the last one).
 
-use mcl_net::{Delay, NetBuilder, Place, PlaceId, Provenance, Transition, TransitionId, TransitionKind};
+use std::sync::Arc;
+
+use mcl_net::{
+    Delay, Name, NetBuilder, Place, PlaceId, Provenance, SharedText, Transition, TransitionId, TransitionKind,
+};
 
 /// The four places of an interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -13,42 +24,120 @@ pub struct Iface {
     pub fail: PlaceId,
 }
 
+/// A piece of a node id: text or a decimal number.
+#[derive(Clone, Copy, Debug)]
+pub enum Part<'a> {
+    S(&'a str),
+    N(usize),
+}
+
+/// Size of a shared id text.
+const CHUNK: usize = 16 * 1024;
+
 /// Generates nodes into a net under construction.
 pub struct Builder {
     pub net: NetBuilder,
-    /// Provenance given to the nodes created next.
-    pub provenance: Provenance,
+    /// Provenance given to the nodes created next (shared by all of them).
+    pub provenance: Arc<Provenance>,
+    /// The text of the ids cut from `text`, not complete yet.
+    buf: String,
+    text: SharedText,
 }
 
 impl Builder {
     pub fn new(id: &str) -> Self {
-        Builder { net: NetBuilder::new(id), provenance: Provenance::default() }
+        Builder::from_net(NetBuilder::new(id))
+    }
+
+    /// A builder that extends `net`.
+    pub fn from_net(net: NetBuilder) -> Self {
+        Builder { net, provenance: Provenance::none(), buf: String::new(), text: SharedText::new() }
+    }
+
+    /// The net, every node with its id.
+    pub fn finish(mut self) -> NetBuilder {
+        self.flush();
+        self.net
+    }
+
+    /// Completes the current text: its ids read as written.
+    fn flush(&mut self) {
+        if !self.buf.is_empty() {
+            self.text.set(&self.buf);
+            self.text = SharedText::new();
+            self.buf.clear();
+        }
+    }
+
+    /// The id made of `parts`, concatenated (it reads as empty until the
+    /// builder completes its text).
+    pub fn id(&mut self, parts: &[Part]) -> Name {
+        if self.buf.len() >= CHUNK {
+            self.flush();
+        }
+        if self.buf.capacity() == 0 {
+            self.buf.reserve(CHUNK + 256);
+        }
+        let start = self.buf.len();
+        for part in parts {
+            match *part {
+                Part::S(s) => self.buf.push_str(s),
+                Part::N(n) => push_decimal(&mut self.buf, n),
+            }
+        }
+        self.text.name(start..self.buf.len())
     }
 
     /// A place with `tokens` initial tokens, outside any interface.
-    pub fn place(&mut self, id: &str, tokens: u32) -> PlaceId {
-        self.net.add_place(Place::new(id).with_tokens(tokens).with_provenance(self.provenance.clone()))
+    pub fn place(&mut self, id: impl Into<Name>, tokens: u32) -> PlaceId {
+        self.add_place(id.into(), tokens, mcl_net::model::INTERFACE_NONE)
+    }
+
+    fn add_place(&mut self, name: Name, tokens: u32, interface: u32) -> PlaceId {
+        self.net.add_place(Place {
+            id: name.clone(),
+            name,
+            initial: tokens,
+            interface,
+            provenance: self.provenance.clone(),
+        })
     }
 
     /// The places `prefix.begin`, `prefix.abort`, `prefix.ok`, `prefix.fail` on interface `interface`.
     pub fn iface(&mut self, prefix: &str, interface: u32) -> Iface {
+        self.iface_parts(&[Part::S(prefix)], interface)
+    }
+
+    /// [`Builder::iface`] with a prefix made of parts (at most seven).
+    pub fn iface_parts(&mut self, prefix: &[Part], interface: u32) -> Iface {
         let mut mk = |n: &str| {
-            self.net.add_place(
-                Place::new(format!("{prefix}.{n}")).with_interface(interface).with_provenance(self.provenance.clone()),
-            )
+            let mut parts: [Part; 8] = [Part::S(""); 8];
+            parts[..prefix.len()].copy_from_slice(prefix);
+            parts[prefix.len()] = Part::S(n);
+            let id = self.id(&parts[..=prefix.len()]);
+            self.add_place(id, 0, interface)
         };
-        Iface { begin: mk("begin"), abort: mk("abort"), ok: mk("ok"), fail: mk("fail") }
+        Iface { begin: mk(".begin"), abort: mk(".abort"), ok: mk(".ok"), fail: mk(".fail") }
     }
 
     /// A transition of any kind with unit-weight arcs.
     pub fn transition(
         &mut self,
-        id: &str,
+        id: impl Into<Name>,
         kind: TransitionKind,
         inputs: &[PlaceId],
         outputs: &[PlaceId],
     ) -> TransitionId {
-        let t = self.net.add_transition(Transition::new(id).with_kind(kind).with_provenance(self.provenance.clone()));
+        let name = id.into();
+        let t = self.net.add_transition(Transition {
+            id: name.clone(),
+            name,
+            kind,
+            actions: Vec::new(),
+            priority: None,
+            binding: None,
+            provenance: self.provenance.clone(),
+        });
         for &p in inputs {
             self.net.add_input(p, t, 1);
         }
@@ -59,13 +148,28 @@ impl Builder {
     }
 
     /// An immediate transition.
-    pub fn imm(&mut self, id: &str, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
+    pub fn imm(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
         self.transition(id, TransitionKind::Immediate, inputs, outputs)
     }
 
     /// A deferred transition: timed with delay 0, so it fires only in a
     /// tangible marking, after every immediate cascade has settled.
-    pub fn deferred(&mut self, id: &str, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
+    pub fn deferred(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
         self.transition(id, TransitionKind::Timed(Delay::Fixed(0.0)), inputs, outputs)
     }
+}
+
+/// Appends `n` in decimal.
+pub fn push_decimal(out: &mut String, mut n: usize) {
+    let mut digits = [0u8; 20];
+    let mut i = digits.len();
+    loop {
+        i -= 1;
+        digits[i] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    out.push_str(std::str::from_utf8(&digits[i..]).unwrap_or_default());
 }

@@ -135,8 +135,8 @@ pub fn to_dot(net: &Net) -> String {
             }
         };
         let id = |n: NodeId| match n {
-            NodeId::Place(p) => net.place(p).map(|x| x.id.clone()).unwrap_or_default(),
-            NodeId::Transition(t) => net.transition(t).map(|x| x.id.clone()).unwrap_or_default(),
+            NodeId::Place(p) => net.place(p).map(|x| x.id.to_string()).unwrap_or_default(),
+            NodeId::Transition(t) => net.transition(t).map(|x| x.id.to_string()).unwrap_or_default(),
         };
         let label = if w > 1 { format!(" [label=\"{w}\"]") } else { String::new() };
         let _ = writeln!(out, "  \"{}\" -> \"{}\"{label};", esc(&id(src)), esc(&id(dst)));

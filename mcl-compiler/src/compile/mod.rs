@@ -19,10 +19,11 @@ pub mod verify;
 
 use crate::db::{Db, SourceFile};
 use crate::scope::{self, DefKind, Scope};
-use builder::{Builder, Iface};
+use builder::{Builder, Iface, Part::N, Part::S};
 use mcl_net::{ActionRef, CallBinding, Net, NetError, Provenance, SourceSpan, TransitionKind};
 use mcl_syntax::ast::*;
 use rustc_hash::FxHashMap;
+use std::sync::Arc;
 use structures::Structure;
 
 /// The places of the external interface of the compiled mission.
@@ -80,6 +81,9 @@ pub fn compile_mission(
         role: None,
     };
     cx.b.net.name(&name);
+    // Room for the whole net at once: no copying as it grows.
+    let (calls, children) = size_of_block(&mission.body);
+    cx.b.net.reserve(2 * calls + 8 * children + 64, 6 * calls + 12 * children + 64, 17 * calls + 40 * children + 256);
     for p in &mission.params {
         cx.b.net.property("mission_param", &p.text);
     }
@@ -107,13 +111,56 @@ pub fn compile_mission(
     if let Some(e) = cx.error {
         return Err(e);
     }
-    Ok(cx.b.net.build()?)
+    Ok(cx.b.finish().build()?)
+}
+
+/// The number of calls and of structure children in `block`, to size the net.
+fn size_of_block(block: &Block) -> (usize, usize) {
+    let (mut calls, mut children) = (0, block.stmts.len());
+    let is_call = |s: &Stmt| matches!(s.kind, StmtKind::Call(_));
+    calls += block.stmts.iter().filter(|s| is_call(s)).count();
+    let mut add = |b: &Block| {
+        let (c, k) = size_of_block(b);
+        calls += c;
+        children += k;
+    };
+    for s in &block.stmts {
+        match &s.kind {
+            StmtKind::Call(_) => {}
+            StmtKind::While { cond, body, .. } => {
+                add(cond);
+                add(body);
+            }
+            StmtKind::If { cond, then, otherwise, .. } => {
+                add(cond);
+                add(then);
+                if let Some(o) = otherwise {
+                    add(o);
+                }
+            }
+            StmtKind::Try { body, catch, .. } => {
+                add(body);
+                add(catch);
+            }
+            StmtKind::Not { body, .. } => add(body),
+            StmtKind::Parallel { branches, .. } => branches.iter().for_each(&mut add),
+            StmtKind::Monitor { body, handlers, .. } => {
+                add(body);
+                for h in handlers {
+                    add(&h.condition);
+                    add(&h.action);
+                }
+            }
+            StmtKind::Error => {}
+        }
+    }
+    (calls, children)
 }
 
 struct TaskNet {
     iface: Iface,
     lock: mcl_net::PlaceId,
-    params: Vec<String>,
+    params: Arc<[String]>,
 }
 
 struct Composer<'a> {
@@ -130,7 +177,11 @@ struct Composer<'a> {
 }
 
 impl Composer<'_> {
-    fn prov(&self, structure: &str, path: &str, span: mcl_syntax::Span) -> Provenance {
+    fn prov(&self, structure: &str, path: &str, span: mcl_syntax::Span) -> Arc<Provenance> {
+        Arc::new(self.prov_record(structure, path, span))
+    }
+
+    fn prov_record(&self, structure: &str, path: &str, span: mcl_syntax::Span) -> Provenance {
         Provenance {
             task: None,
             call_site: None,
@@ -212,30 +263,39 @@ impl Composer<'_> {
         let (tiface, lock, params) = (task.iface, task.lock, task.params.clone());
         self.calls += 1;
         let id = self.calls;
-        let mut prov = self.prov("call", path, c.span);
+        let mut prov = self.prov_record("call", path, c.span);
         prov.task = Some(c.name.text.clone());
         prov.call_site = Some(id);
-        self.b.provenance = prov;
-        let p = format!("call{id}");
-        let run = self.b.place(&format!("{p}.run"), 0);
-        let stopping = self.b.place(&format!("{p}.stopping"), 0);
-        let start = self.b.imm(&format!("{p}.start"), &[ext.begin, lock], &[run, tiface.begin]);
+        self.b.provenance = Arc::new(prov);
+        let n = id as usize;
+        let name = |b: &mut Builder, node: &str| b.id(&[S("call"), N(n), S(node)]);
+        let node = name(&mut self.b, ".run");
+        let run = self.b.place(node, 0);
+        let node = name(&mut self.b, ".stopping");
+        let stopping = self.b.place(node, 0);
+        let node = name(&mut self.b, ".start");
+        let start = self.b.imm(node, &[ext.begin, lock], &[run, tiface.begin]);
         let args: Vec<(String, String)> = params.iter().cloned().zip(c.args.iter().map(value_json)).collect();
         let label = c.label.as_ref().map(|l| l.text.clone());
         if let Some(t) = self.b.net.transition_mut(start) {
-            t.binding = Some(CallBinding {
+            t.binding = Some(Box::new(CallBinding {
                 task: c.name.text.clone(),
                 call_site: id,
                 label,
                 args,
                 role: self.role.map(String::from),
-            });
+            }));
         }
-        self.b.imm(&format!("{p}.ok"), &[run, tiface.ok], &[ext.ok, lock]);
-        self.b.imm(&format!("{p}.fail"), &[run, tiface.fail], &[ext.fail, lock]);
-        self.b.imm(&format!("{p}.cancel"), &[ext.abort, ext.begin], &[]);
-        self.b.imm(&format!("{p}.abort"), &[ext.abort, run], &[tiface.abort, stopping]);
-        self.b.deferred(&format!("{p}.release"), &[stopping], &[lock]);
+        let node = name(&mut self.b, ".ok");
+        self.b.imm(node, &[run, tiface.ok], &[ext.ok, lock]);
+        let node = name(&mut self.b, ".fail");
+        self.b.imm(node, &[run, tiface.fail], &[ext.fail, lock]);
+        let node = name(&mut self.b, ".cancel");
+        self.b.imm(node, &[ext.abort, ext.begin], &[]);
+        let node = name(&mut self.b, ".abort");
+        self.b.imm(node, &[ext.abort, run], &[tiface.abort, stopping]);
+        let node = name(&mut self.b, ".release");
+        self.b.deferred(node, &[stopping], &[lock]);
     }
 
     /// The net of a task, created on first use.
@@ -257,9 +317,9 @@ impl Composer<'_> {
         };
         let (ok, fail) = task_outcome_events(self.db, self.scope, name);
         self.b.net.property(format!("task_events:{name}"), serde_json::json!({ "ok": ok, "fail": fail }).to_string());
-        self.b.provenance = Provenance { task: Some(name.to_string()), ..Default::default() };
-        let lock = self.b.place(&format!("task.{name}.idle"), 1);
-        Some(TaskNet { iface, lock, params })
+        self.b.provenance = Arc::new(Provenance { task: Some(name.to_string()), ..Default::default() });
+        let lock = self.b.place(format!("task.{name}.idle"), 1);
+        Some(TaskNet { iface, lock, params: params.into() })
     }
 }
 
@@ -291,12 +351,14 @@ pub fn add_task_net(
             None => return Ok(None),
         };
         let file_path = tid.file.path(db).display().to_string();
-        let prov = |span: mcl_syntax::Span| Provenance {
-            task: Some(name.to_string()),
-            call_site: None,
-            structure: None,
-            path: None,
-            span: Some(SourceSpan { file: file_path.clone(), start: span.start, end: span.end }),
+        let prov = |span: mcl_syntax::Span| {
+            Arc::new(Provenance {
+                task: Some(name.to_string()),
+                call_site: None,
+                structure: None,
+                path: None,
+                span: Some(SourceSpan { file: file_path.clone(), start: span.start, end: span.end }),
+            })
         };
 
         let mut places = FxHashMap::default();
@@ -346,7 +408,7 @@ pub fn add_task_net(
                 (None, Some(Delay::Param(p))) => TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone())),
                 (None, None) => TransitionKind::Immediate,
             };
-            let tid = b.transition(&format!("{prefix}{}", t.name.text), kind, &[], &[]);
+            let tid = b.transition(format!("{prefix}{}", t.name.text), kind, &[], &[]);
             if let Some(tr) = b.net.transition_mut(tid) {
                 tr.actions = actions.remove(t.name.text.as_str()).unwrap_or_default();
             }
@@ -433,7 +495,7 @@ pub fn compile_file(db: &dyn Db, file: SourceFile) -> Result<Vec<CompiledMission
 pub fn task_outcome_events(db: &dyn Db, scope: &Scope, name: &str) -> (Vec<String>, Vec<String>) {
     let mut b = Builder::new(name);
     let Ok(Some((iface, _))) = add_task_net(db, scope, &mut b, name, "") else { return (vec![], vec![]) };
-    let Ok(net) = b.net.build() else { return (vec![], vec![]) };
+    let Ok(net) = b.finish().build() else { return (vec![], vec![]) };
     let fire = |m: &[u32], t: mcl_net::TransitionId| -> Option<Vec<u32>> {
         let mut m2 = m.to_vec();
         for &(p, w) in net.pre(t) {

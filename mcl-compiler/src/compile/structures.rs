@@ -23,7 +23,8 @@
 //! deferred too, so that an aborted child has returned to rest before it can
 //! be started again.
 
-use super::builder::{Builder, Iface};
+use super::builder::{Builder, Iface, Part, Part::N, Part::S};
+use mcl_net::PlaceId;
 use mcl_syntax::ast::MonitorKind;
 
 /// A control structure and the number of its children.
@@ -99,149 +100,166 @@ impl Structure {
 /// Builds the net of `s` on the external interface `ext` and returns the
 /// internal interfaces of its children, in the order of [`Structure`].
 pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<Iface> {
-    let kids: Vec<Iface> = (0..s.arity()).map(|i| b.iface(&format!("{prefix}.{i}"), i as u32 + 2)).collect();
+    let kids: Vec<Iface> = (0..s.arity()).map(|i| b.iface_parts(&[S(prefix), S("."), N(i)], i as u32 + 2)).collect();
     // Local nodes are `prefix.p_NAME` and `prefix.t_NAME`, apart from the
     // interface places `prefix.I.begin` of the children.
-    let p = |b: &mut Builder, name: &str| b.place(&format!("{prefix}.p_{name}"), 0);
-    let t = |name: &str| format!("{prefix}.t_{name}");
+    let local = |b: &mut Builder, kind: &str, name: &[Part]| {
+        let mut parts: [Part; 8] = [S(""); 8];
+        parts[0] = S(prefix);
+        parts[1] = S(kind);
+        parts[2..2 + name.len()].copy_from_slice(name);
+        b.id(&parts[..2 + name.len()])
+    };
+    let p = |b: &mut Builder, name: &[Part]| {
+        let id = local(b, ".p_", name);
+        b.place(id, 0)
+    };
+    let ti = |b: &mut Builder, name: &[Part], inputs: &[PlaceId], outputs: &[PlaceId]| {
+        let id = local(b, ".t_", name);
+        b.imm(id, inputs, outputs)
+    };
+    let td = |b: &mut Builder, name: &[Part], inputs: &[PlaceId], outputs: &[PlaceId]| {
+        let id = local(b, ".t_", name);
+        b.deferred(id, inputs, outputs)
+    };
     match s {
         Structure::Not => {
-            let run = p(b, "run");
+            let run = p(b, &[S("run")]);
             let a = kids[0];
-            b.imm(&t("start"), &[ext.begin], &[a.begin, run]);
-            b.imm(&t("ok_to_fail"), &[run, a.ok], &[ext.fail]);
-            b.imm(&t("fail_to_ok"), &[run, a.fail], &[ext.ok]);
-            b.imm(&t("abort"), &[ext.abort, run], &[a.abort]);
+            ti(b, &[S("start")], &[ext.begin], &[a.begin, run]);
+            ti(b, &[S("ok_to_fail")], &[run, a.ok], &[ext.fail]);
+            ti(b, &[S("fail_to_ok")], &[run, a.fail], &[ext.ok]);
+            ti(b, &[S("abort")], &[ext.abort, run], &[a.abort]);
         }
         Structure::Sequence(n) => {
-            let runs: Vec<_> = (0..*n).map(|i| p(b, &format!("run{i}"))).collect();
-            b.imm(&t("start"), &[ext.begin], &[kids[0].begin, runs[0]]);
+            let runs: Vec<_> = (0..*n).map(|i| p(b, &[S("run"), N(i)])).collect();
+            ti(b, &[S("start")], &[ext.begin], &[kids[0].begin, runs[0]]);
             for i in 0..*n {
                 if i + 1 < *n {
-                    b.imm(&t(&format!("next{i}")), &[runs[i], kids[i].ok], &[kids[i + 1].begin, runs[i + 1]]);
+                    ti(b, &[S("next"), N(i)], &[runs[i], kids[i].ok], &[kids[i + 1].begin, runs[i + 1]]);
                 } else {
-                    b.imm(&t(&format!("ok{i}")), &[runs[i], kids[i].ok], &[ext.ok]);
+                    ti(b, &[S("ok"), N(i)], &[runs[i], kids[i].ok], &[ext.ok]);
                 }
-                b.imm(&t(&format!("fail{i}")), &[runs[i], kids[i].fail], &[ext.fail]);
-                b.imm(&t(&format!("abort{i}")), &[ext.abort, runs[i]], &[kids[i].abort]);
+                ti(b, &[S("fail"), N(i)], &[runs[i], kids[i].fail], &[ext.fail]);
+                ti(b, &[S("abort"), N(i)], &[ext.abort, runs[i]], &[kids[i].abort]);
             }
         }
         Structure::IfThen | Structure::IfThenElse | Structure::While | Structure::TryCatch => {
-            let runs: Vec<_> = (0..kids.len()).map(|i| p(b, &format!("run{i}"))).collect();
+            let runs: Vec<_> = (0..kids.len()).map(|i| p(b, &[S("run"), N(i)])).collect();
             let (a, bb) = (kids[0], kids[1]);
-            b.imm(&t("start"), &[ext.begin], &[a.begin, runs[0]]);
+            ti(b, &[S("start")], &[ext.begin], &[a.begin, runs[0]]);
             match s {
                 Structure::IfThen => {
-                    b.imm(&t("cond_ok"), &[runs[0], a.ok], &[bb.begin, runs[1]]);
-                    b.imm(&t("cond_fail"), &[runs[0], a.fail], &[ext.ok]);
+                    ti(b, &[S("cond_ok")], &[runs[0], a.ok], &[bb.begin, runs[1]]);
+                    ti(b, &[S("cond_fail")], &[runs[0], a.fail], &[ext.ok]);
                 }
                 Structure::IfThenElse => {
                     let c = kids[2];
-                    b.imm(&t("cond_ok"), &[runs[0], a.ok], &[bb.begin, runs[1]]);
-                    b.imm(&t("cond_fail"), &[runs[0], a.fail], &[c.begin, runs[2]]);
-                    b.imm(&t("else_ok"), &[runs[2], c.ok], &[ext.ok]);
-                    b.imm(&t("else_fail"), &[runs[2], c.fail], &[ext.fail]);
+                    ti(b, &[S("cond_ok")], &[runs[0], a.ok], &[bb.begin, runs[1]]);
+                    ti(b, &[S("cond_fail")], &[runs[0], a.fail], &[c.begin, runs[2]]);
+                    ti(b, &[S("else_ok")], &[runs[2], c.ok], &[ext.ok]);
+                    ti(b, &[S("else_fail")], &[runs[2], c.fail], &[ext.fail]);
                 }
                 Structure::While => {
-                    b.imm(&t("cond_ok"), &[runs[0], a.ok], &[bb.begin, runs[1]]);
-                    b.imm(&t("cond_fail"), &[runs[0], a.fail], &[ext.ok]);
+                    ti(b, &[S("cond_ok")], &[runs[0], a.ok], &[bb.begin, runs[1]]);
+                    ti(b, &[S("cond_fail")], &[runs[0], a.fail], &[ext.ok]);
                 }
                 Structure::TryCatch => {
-                    b.imm(&t("try_ok"), &[runs[0], a.ok], &[ext.ok]);
-                    b.imm(&t("try_fail"), &[runs[0], a.fail], &[bb.begin, runs[1]]);
+                    ti(b, &[S("try_ok")], &[runs[0], a.ok], &[ext.ok]);
+                    ti(b, &[S("try_fail")], &[runs[0], a.fail], &[bb.begin, runs[1]]);
                 }
                 _ => unreachable!("outer match"),
             }
             if *s == Structure::While {
-                b.imm(&t("body_ok"), &[runs[1], bb.ok], &[a.begin, runs[0]]);
+                ti(b, &[S("body_ok")], &[runs[1], bb.ok], &[a.begin, runs[0]]);
             } else {
-                b.imm(&t("body_ok"), &[runs[1], bb.ok], &[ext.ok]);
+                ti(b, &[S("body_ok")], &[runs[1], bb.ok], &[ext.ok]);
             }
-            b.imm(&t("body_fail"), &[runs[1], bb.fail], &[ext.fail]);
+            ti(b, &[S("body_fail")], &[runs[1], bb.fail], &[ext.fail]);
             for (i, (k, r)) in kids.iter().zip(&runs).enumerate() {
-                b.imm(&t(&format!("abort{i}")), &[ext.abort, *r], &[k.abort]);
+                ti(b, &[S("abort"), N(i)], &[ext.abort, *r], &[k.abort]);
             }
         }
         Structure::ParallelAnd(n) => {
-            let good = p(b, "all_ok");
-            let bad = p(b, "some_fail");
-            let stop = p(b, "stop");
-            let runs: Vec<_> = (0..*n).map(|i| p(b, &format!("run{i}"))).collect();
-            let done: Vec<_> = (0..*n).map(|i| p(b, &format!("done{i}"))).collect();
+            let good = p(b, &[S("all_ok")]);
+            let bad = p(b, &[S("some_fail")]);
+            let stop = p(b, &[S("stop")]);
+            let runs: Vec<_> = (0..*n).map(|i| p(b, &[S("run"), N(i)])).collect();
+            let done: Vec<_> = (0..*n).map(|i| p(b, &[S("done"), N(i)])).collect();
             let mut start_out = vec![good];
             for i in 0..*n {
                 start_out.push(kids[i].begin);
                 start_out.push(runs[i]);
             }
-            b.imm(&t("start"), &[ext.begin], &start_out);
+            ti(b, &[S("start")], &[ext.begin], &start_out);
             for i in 0..*n {
-                b.imm(&t(&format!("ok{i}")), &[runs[i], kids[i].ok], &[done[i]]);
-                b.imm(&t(&format!("fail{i}")), &[runs[i], kids[i].fail, good], &[done[i], bad]);
-                b.imm(&t(&format!("fail{i}_again")), &[runs[i], kids[i].fail, bad], &[done[i], bad]);
-                b.imm(&t(&format!("kill{i}")), &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
+                ti(b, &[S("ok"), N(i)], &[runs[i], kids[i].ok], &[done[i]]);
+                ti(b, &[S("fail"), N(i)], &[runs[i], kids[i].fail, good], &[done[i], bad]);
+                ti(b, &[S("fail"), N(i), S("_again")], &[runs[i], kids[i].fail, bad], &[done[i], bad]);
+                ti(b, &[S("kill"), N(i)], &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
             }
-            b.imm(&t("end_ok"), &with(&done, good), &[ext.ok]);
-            b.imm(&t("end_fail"), &with(&done, bad), &[ext.fail]);
-            b.imm(&t("abort"), &[ext.abort, good], &[stop]);
-            b.imm(&t("abort_failing"), &[ext.abort, bad], &[stop]);
-            b.imm(&t("aborted"), &with(&done, stop), &[]);
+            ti(b, &[S("end_ok")], &with(&done, good), &[ext.ok]);
+            ti(b, &[S("end_fail")], &with(&done, bad), &[ext.fail]);
+            ti(b, &[S("abort")], &[ext.abort, good], &[stop]);
+            ti(b, &[S("abort_failing")], &[ext.abort, bad], &[stop]);
+            ti(b, &[S("aborted")], &with(&done, stop), &[]);
         }
         Structure::ParallelOr(n) => {
-            let open = p(b, "open");
-            let won_ok = p(b, "won_ok");
-            let won_fail = p(b, "won_fail");
-            let stop = p(b, "stop");
-            let runs: Vec<_> = (0..*n).map(|i| p(b, &format!("run{i}"))).collect();
-            let done: Vec<_> = (0..*n).map(|i| p(b, &format!("done{i}"))).collect();
+            let open = p(b, &[S("open")]);
+            let won_ok = p(b, &[S("won_ok")]);
+            let won_fail = p(b, &[S("won_fail")]);
+            let stop = p(b, &[S("stop")]);
+            let runs: Vec<_> = (0..*n).map(|i| p(b, &[S("run"), N(i)])).collect();
+            let done: Vec<_> = (0..*n).map(|i| p(b, &[S("done"), N(i)])).collect();
             let mut start_out = vec![open];
             for i in 0..*n {
                 start_out.push(kids[i].begin);
                 start_out.push(runs[i]);
             }
-            b.imm(&t("start"), &[ext.begin], &start_out);
+            ti(b, &[S("start")], &[ext.begin], &start_out);
             for i in 0..*n {
-                b.imm(&t(&format!("first_ok{i}")), &[open, runs[i], kids[i].ok], &[won_ok, done[i]]);
-                b.imm(&t(&format!("first_fail{i}")), &[open, runs[i], kids[i].fail], &[won_fail, done[i]]);
+                ti(b, &[S("first_ok"), N(i)], &[open, runs[i], kids[i].ok], &[won_ok, done[i]]);
+                ti(b, &[S("first_fail"), N(i)], &[open, runs[i], kids[i].fail], &[won_fail, done[i]]);
                 for (m, mname) in [(won_ok, "won_ok"), (won_fail, "won_fail")] {
-                    b.imm(&t(&format!("late_ok{i}_{mname}")), &[m, runs[i], kids[i].ok], &[m, done[i]]);
-                    b.imm(&t(&format!("late_fail{i}_{mname}")), &[m, runs[i], kids[i].fail], &[m, done[i]]);
-                    b.deferred(&t(&format!("kill{i}_{mname}")), &[m, runs[i]], &[m, kids[i].abort, done[i]]);
+                    ti(b, &[S("late_ok"), N(i), S("_"), S(mname)], &[m, runs[i], kids[i].ok], &[m, done[i]]);
+                    ti(b, &[S("late_fail"), N(i), S("_"), S(mname)], &[m, runs[i], kids[i].fail], &[m, done[i]]);
+                    td(b, &[S("kill"), N(i), S("_"), S(mname)], &[m, runs[i]], &[m, kids[i].abort, done[i]]);
                 }
-                b.imm(&t(&format!("stop{i}")), &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
+                ti(b, &[S("stop"), N(i)], &[stop, runs[i]], &[stop, kids[i].abort, done[i]]);
             }
             // Deferred: the aborted branches have settled before the result moves on.
-            b.deferred(&t("end_ok"), &with(&done, won_ok), &[ext.ok]);
-            b.deferred(&t("end_fail"), &with(&done, won_fail), &[ext.fail]);
+            td(b, &[S("end_ok")], &with(&done, won_ok), &[ext.ok]);
+            td(b, &[S("end_fail")], &with(&done, won_fail), &[ext.fail]);
             for (m, mname) in [(open, "open"), (won_ok, "won_ok"), (won_fail, "won_fail")] {
-                b.imm(&t(&format!("abort_{mname}")), &[ext.abort, m], &[stop]);
+                ti(b, &[S("abort_"), S(mname)], &[ext.abort, m], &[stop]);
             }
-            b.imm(&t("aborted"), &with(&done, stop), &[]);
+            ti(b, &[S("aborted")], &with(&done, stop), &[]);
         }
         Structure::Monitor(kinds) => {
             let k = kinds.len();
-            let open = p(b, "open");
-            let a_ok = p(b, "monitored_ok");
-            let a_fail = p(b, "monitored_fail");
-            let stop = p(b, "stop");
-            let trig: Vec<_> = (0..k).map(|j| p(b, &format!("triggered{j}"))).collect();
-            let do_run: Vec<_> = (0..k).map(|j| p(b, &format!("do_run{j}"))).collect();
+            let open = p(b, &[S("open")]);
+            let a_ok = p(b, &[S("monitored_ok")]);
+            let a_fail = p(b, &[S("monitored_fail")]);
+            let stop = p(b, &[S("stop")]);
+            let trig: Vec<_> = (0..k).map(|j| p(b, &[S("triggered"), N(j)])).collect();
+            let do_run: Vec<_> = (0..k).map(|j| p(b, &[S("do_run"), N(j)])).collect();
             // Parallel part: the monitored block (0) and the conditions (1..=k).
             let par: Vec<Iface> = std::iter::once(kids[0]).chain((0..k).map(|j| kids[1 + 2 * j])).collect();
-            let runs: Vec<_> = (0..par.len()).map(|i| p(b, &format!("run{i}"))).collect();
-            let done: Vec<_> = (0..par.len()).map(|i| p(b, &format!("done{i}"))).collect();
+            let runs: Vec<_> = (0..par.len()).map(|i| p(b, &[S("run"), N(i)])).collect();
+            let done: Vec<_> = (0..par.len()).map(|i| p(b, &[S("done"), N(i)])).collect();
             let mut start_out = vec![open];
             for i in 0..par.len() {
                 start_out.push(par[i].begin);
                 start_out.push(runs[i]);
             }
-            b.imm(&t("start"), &[ext.begin], &start_out);
-            b.imm(&t("monitored_first_ok"), &[open, runs[0], par[0].ok], &[a_ok, done[0]]);
-            b.imm(&t("monitored_first_fail"), &[open, runs[0], par[0].fail], &[a_fail, done[0]]);
+            ti(b, &[S("start")], &[ext.begin], &start_out);
+            ti(b, &[S("monitored_first_ok")], &[open, runs[0], par[0].ok], &[a_ok, done[0]]);
+            ti(b, &[S("monitored_first_fail")], &[open, runs[0], par[0].fail], &[a_fail, done[0]]);
             for j in 0..k {
                 let i = j + 1;
-                b.imm(&t(&format!("condition{j}_ok")), &[open, runs[i], par[i].ok], &[trig[j], done[i]]);
+                ti(b, &[S("condition"), N(j), S("_ok")], &[open, runs[i], par[i].ok], &[trig[j], done[i]]);
                 // Seed 4.5.3: whenever the condition finalizes first (ok or fail), the do-block runs.
-                b.imm(&t(&format!("condition{j}_fail")), &[open, runs[i], par[i].fail], &[trig[j], done[i]]);
+                ti(b, &[S("condition"), N(j), S("_fail")], &[open, runs[i], par[i].fail], &[trig[j], done[i]]);
             }
             let modes: Vec<(_, String)> = [(a_ok, "monitored_ok".to_string()), (a_fail, "monitored_fail".to_string())]
                 .into_iter()
@@ -249,35 +267,35 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
                 .collect();
             for (m, mname) in &modes {
                 for i in 0..par.len() {
-                    b.imm(&t(&format!("late_ok{i}_{mname}")), &[*m, runs[i], par[i].ok], &[*m, done[i]]);
-                    b.imm(&t(&format!("late_fail{i}_{mname}")), &[*m, runs[i], par[i].fail], &[*m, done[i]]);
-                    b.deferred(&t(&format!("kill{i}_{mname}")), &[*m, runs[i]], &[*m, par[i].abort, done[i]]);
+                    ti(b, &[S("late_ok"), N(i), S("_"), S(mname)], &[*m, runs[i], par[i].ok], &[*m, done[i]]);
+                    ti(b, &[S("late_fail"), N(i), S("_"), S(mname)], &[*m, runs[i], par[i].fail], &[*m, done[i]]);
+                    td(b, &[S("kill"), N(i), S("_"), S(mname)], &[*m, runs[i]], &[*m, par[i].abort, done[i]]);
                 }
             }
             // Deferred: the aborted blocks have settled before anything else starts.
-            b.deferred(&t("end_ok"), &with(&done, a_ok), &[ext.ok]);
-            b.deferred(&t("end_fail"), &with(&done, a_fail), &[ext.fail]);
+            td(b, &[S("end_ok")], &with(&done, a_ok), &[ext.ok]);
+            td(b, &[S("end_fail")], &with(&done, a_fail), &[ext.fail]);
             for j in 0..k {
                 let c = kids[2 + 2 * j];
-                b.deferred(&t(&format!("do{j}")), &with(&done, trig[j]), &[c.begin, do_run[j]]);
+                td(b, &[S("do"), N(j)], &with(&done, trig[j]), &[c.begin, do_run[j]]);
                 match kinds[j] {
                     MonitorKind::Condition => {
-                        b.imm(&t(&format!("do{j}_ok")), &[do_run[j], c.ok], &[ext.ok]);
+                        ti(b, &[S("do"), N(j), S("_ok")], &[do_run[j], c.ok], &[ext.ok]);
                     }
                     MonitorKind::WhileCondition => {
-                        b.imm(&t(&format!("do{j}_ok_restart")), &[do_run[j], c.ok], &start_out);
+                        ti(b, &[S("do"), N(j), S("_ok_restart")], &[do_run[j], c.ok], &start_out);
                     }
                 }
-                b.imm(&t(&format!("do{j}_fail")), &[do_run[j], c.fail], &[ext.fail]);
-                b.imm(&t(&format!("abort_do{j}")), &[ext.abort, do_run[j]], &[c.abort]);
+                ti(b, &[S("do"), N(j), S("_fail")], &[do_run[j], c.fail], &[ext.fail]);
+                ti(b, &[S("abort_do"), N(j)], &[ext.abort, do_run[j]], &[c.abort]);
             }
             for (m, mname) in std::iter::once(&(open, "open".to_string())).chain(modes.iter()) {
-                b.imm(&t(&format!("abort_{mname}")), &[ext.abort, *m], &[stop]);
+                ti(b, &[S("abort_"), S(mname)], &[ext.abort, *m], &[stop]);
             }
             for i in 0..par.len() {
-                b.imm(&t(&format!("stop{i}")), &[stop, runs[i]], &[stop, par[i].abort, done[i]]);
+                ti(b, &[S("stop"), N(i)], &[stop, runs[i]], &[stop, par[i].abort, done[i]]);
             }
-            b.imm(&t("aborted"), &with(&done, stop), &[]);
+            ti(b, &[S("aborted")], &with(&done, stop), &[]);
         }
     }
     kids

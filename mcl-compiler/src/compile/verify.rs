@@ -120,19 +120,19 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
         let n = format!("child{i}");
         match c {
             Child::Reduced => {
-                let exe = b.place(&format!("{n}.exe"), 0);
-                b.imm(&format!("{n}.start"), &[k.begin], &[exe]);
-                b.transition(&format!("{n}.end_ok"), TransitionKind::Event(format!("{n}.ok")), &[exe], &[k.ok]);
-                b.transition(&format!("{n}.end_fail"), TransitionKind::Event(format!("{n}.fail")), &[exe], &[k.fail]);
-                b.imm(&format!("{n}.abort"), &[k.abort, exe], &[]);
+                let exe = b.place(format!("{n}.exe"), 0);
+                b.imm(format!("{n}.start"), &[k.begin], &[exe]);
+                b.transition(format!("{n}.end_ok"), TransitionKind::Event(format!("{n}.ok")), &[exe], &[k.ok]);
+                b.transition(format!("{n}.end_fail"), TransitionKind::Event(format!("{n}.fail")), &[exe], &[k.fail]);
+                b.imm(format!("{n}.abort"), &[k.abort, exe], &[]);
             }
             Child::Instant => {
-                b.imm(&format!("{n}.now_ok"), &[k.begin], &[k.ok]);
-                b.imm(&format!("{n}.now_fail"), &[k.begin], &[k.fail]);
+                b.imm(format!("{n}.now_ok"), &[k.begin], &[k.ok]);
+                b.imm(format!("{n}.now_fail"), &[k.begin], &[k.fail]);
             }
         }
     }
-    let net = b.net.build().expect("generated structure nets are well formed");
+    let net = b.finish().build().expect("generated structure nets are well formed");
     Harness {
         abort_place: Some(ext.abort),
         net,
@@ -151,10 +151,9 @@ pub fn task_harness(task: &Net) -> Option<Harness> {
     let mut nb = task.to_builder();
     let find = |id: &str| task.place_by_id(id);
     let ext = Iface { begin: find("begin")?, abort: find("abort")?, ok: find("ok")?, fail: find("fail")? };
-    let mut b =
-        Builder { net: std::mem::replace(&mut nb, mcl_net::NetBuilder::new("x")), provenance: Default::default() };
+    let mut b = Builder::from_net(std::mem::replace(&mut nb, mcl_net::NetBuilder::new("x")));
     let (got_ok, got_fail, aborted, env, env_transitions) = environment(&mut b, ext);
-    let net = b.net.build().ok()?;
+    let net = b.finish().build().ok()?;
     Some(Harness {
         abort_place: Some(ext.abort),
         net,
@@ -305,7 +304,7 @@ impl Harness {
                         m2 == g.markings[j as usize]
                     }
                 });
-                let name = t.and_then(|t| self.net.transition(t)).map(|x| x.id.clone()).unwrap_or_default();
+                let name = t.and_then(|t| self.net.transition(t)).map(|x| x.id.to_string()).unwrap_or_default();
                 let _ = writeln!(out, "  s{i} -> s{j} [label=\"{name}\"];");
             }
         }
@@ -316,7 +315,7 @@ impl Harness {
     fn trace(&self, g: &Graph, mut s: u32) -> Vec<String> {
         let mut out = Vec::new();
         while let Some((p, t)) = g.parent[s as usize] {
-            let name = self.net.transition(t).map(|x| x.id.clone()).unwrap_or_default();
+            let name = self.net.transition(t).map(|x| x.id.to_string()).unwrap_or_default();
             out.push(if self.env_transitions.contains(&t) {
                 format!("({})", name.trim_start_matches("env."))
             } else {
@@ -335,7 +334,7 @@ impl Harness {
             .iter()
             .zip(m)
             .filter(|(_, &k)| k > 0)
-            .map(|(p, &k)| if k == 1 { p.id.clone() } else { format!("{}×{k}", p.id) })
+            .map(|(p, &k)| if k == 1 { p.id.to_string() } else { format!("{}×{k}", p.id) })
             .collect();
         format!("{{{}}}", marked.join(", "))
     }
@@ -551,7 +550,7 @@ mod tests {
         b.transition("c.ok", TransitionKind::Event("e1".into()), &[exe], &[a.ok]);
         b.transition("c.fail", TransitionKind::Event("e2".into()), &[exe], &[a.fail]);
         b.imm("c.abort", &[a.abort, exe], &[]);
-        let net = b.net.build().unwrap();
+        let net = b.finish().build().unwrap();
         let h = Harness {
             abort_place: Some(ext.abort),
             net,

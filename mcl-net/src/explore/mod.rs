@@ -374,11 +374,11 @@ pub fn report(net: &Net, ss: &StateSpace, max_dead_examples: usize) -> AnalysisR
                 marking: ss
                     .marking(s)
                     .support()
-                    .map(|(p, n)| (net.place(p).map_or_else(String::new, |pl| pl.id.clone()), n))
+                    .map(|(p, n)| (net.place(p).map_or_else(String::new, |pl| pl.id.to_string()), n))
                     .collect(),
                 path_names: path
                     .iter()
-                    .map(|&t| net.transition(t).map_or_else(String::new, |tr| tr.name.clone()))
+                    .map(|&t| net.transition(t).map_or_else(String::new, |tr| tr.name.to_string()))
                     .collect(),
                 path,
             }
@@ -397,7 +397,12 @@ pub fn report(net: &Net, ss: &StateSpace, max_dead_examples: usize) -> AnalysisR
         one_safe: bounds.iter().all(|&b| b <= 1),
         max_tokens,
         max_tokens_in_place: bounds.iter().copied().max().unwrap_or(0),
-        bounds: net.places().iter().zip(bounds).map(|(p, &b)| PlaceBound { place: p.id.clone(), bound: b }).collect(),
+        bounds: net
+            .places()
+            .iter()
+            .zip(bounds)
+            .map(|(p, &b)| PlaceBound { place: p.id.to_string(), bound: b })
+            .collect(),
         vanishing_states: ss.vanishing_count(),
         cut_states: ss.cut.len() as u64,
     }
