@@ -164,8 +164,12 @@ enum Command {
     /// Runs until killed.
     MockAac {
         /// The missions: an .mcl or .pnml file (the player's hello names the mission).
-        #[arg(long, value_name = "FILE")]
-        net: PathBuf,
+        #[arg(long, value_name = "FILE", required_unless_present = "plan", conflicts_with = "plan")]
+        net: Option<PathBuf>,
+        /// Serve the vehicle of a planned mission (`mcl plan FILE.mcl --run --aac`): one mock for the
+        /// actions of every mission of the operators file FILE.mcl.
+        #[arg(long, value_name = "FILE.mcl")]
+        plan: Option<PathBuf>,
         /// How the mock vehicle answers (TOML, see docs/scenarios.md).
         #[arg(long, value_name = "FILE")]
         scenario: Option<PathBuf>,
@@ -197,8 +201,9 @@ enum Command {
     /// --domain/--problem say otherwise. Prints the plan in the IPC format. Exit status: 0 with a
     /// plan (or a valid plan with --validate), 1 when the problem has no solution (or the plan is
     /// invalid), 2 on bad input, 3 when --max-states is reached. With --run --mock, executes the
-    /// plan as a dry run against the mock vehicle and re-plans when the world differs (exit status
-    /// 0 goal reached, 1 no plan or gave up, 2 bad input, 3 --time-limit).
+    /// plan as a dry run against the mock vehicle, with --run --aac HOST:PORT against a vehicle's
+    /// AAC in real time, and re-plans when the world differs (exit status 0 goal reached, 1 no
+    /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit).
     Plan {
         /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
         file: Option<PathBuf>,
@@ -230,12 +235,19 @@ enum Command {
         #[arg(long)]
         stats: bool,
         /// Execute the plan: run each step's MCL mission on the player, watch the world through
-        /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock).
+        /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock or --aac).
         #[arg(long)]
         run: bool,
         /// With --run: against the in-process mock vehicle (a dry run).
         #[arg(long, requires = "run")]
         mock: bool,
+        /// With --run: against the vehicle's AAC listening at HOST:PORT, in real time (e.g.
+        /// `mcl mock-aac --plan FILE.mcl`).
+        #[arg(long, value_name = "HOST:PORT", requires = "run", conflicts_with = "mock")]
+        aac: Option<String>,
+        /// With --aac: shared secret for the AAC.
+        #[arg(long, requires = "aac")]
+        token: Option<String>,
         /// With --run: how the mock vehicle answers and which perceptions it sends (TOML, docs/scenarios.md).
         #[arg(long, value_name = "S.toml", requires = "run")]
         scenario: Option<PathBuf>,
@@ -326,6 +338,8 @@ fn main() -> ExitCode {
             stats,
             run,
             mock,
+            aac,
+            token,
             scenario,
             world,
             virtual_time,
@@ -349,6 +363,8 @@ fn main() -> ExitCode {
             stats,
             execute: run.then_some(cmd::plan::Execute {
                 mock,
+                aac,
+                token,
                 scenario,
                 world,
                 virtual_time,
@@ -404,9 +420,10 @@ fn main() -> ExitCode {
             transport,
             coord_host,
         }),
-        Command::MockAac { net, scenario, listen, token, speed, state, seed, timeout, quiet } => {
+        Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {
                 net,
+                plan,
                 scenario,
                 listen,
                 token,

@@ -185,6 +185,97 @@ fn without_perceptions_the_world_never_matches_and_replanning_gives_up() {
     assert!(kind(&rs, "holding").is_empty());
 }
 
+/// A `mcl mock-aac` process, killed when dropped.
+struct MockAac {
+    child: std::process::Child,
+    addr: String,
+}
+
+impl Drop for MockAac {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `mcl mock-aac ARGS --listen 127.0.0.1:0` and reads the address it listens on.
+fn mock_aac(args: &[&str]) -> MockAac {
+    use std::io::BufRead;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .arg("mock-aac")
+        .args(args)
+        .args(["--listen", "127.0.0.1:0", "--quiet"])
+        .current_dir(root())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start mcl mock-aac");
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let addr = line.trim().strip_prefix("listening on ").unwrap_or_else(|| panic!("{line:?}")).to_string();
+    MockAac { child, addr }
+}
+
+#[test]
+fn the_plan_runs_against_a_vehicle_aac_over_tcp_in_real_time() {
+    // The mock vehicle of the planned mission behind the AAC protocol, 200 times faster than real time.
+    let aac = mock_aac(&["--plan", CABLE, "--scenario", SCENARIO, "--speed", "200", "--token", "s3cret"]);
+
+    // The AAC refuses a player without the token: bad input, nothing runs.
+    let o = mcl(&[CABLE, "--run", "--aac", &aac.addr, "--speed", "200", "--token", "wrong"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("refused the connection (unauthorized)"), "{}", text(&o.stderr));
+
+    let t = tmp("aac.jsonl");
+    let ts = t.display().to_string();
+    let o = mcl(&[
+        CABLE,
+        "--run",
+        "--aac",
+        &aac.addr,
+        "--token",
+        "s3cret",
+        "--speed",
+        "200",
+        "--holding",
+        "Holding",
+        "--trace",
+        &ts,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}\n{}", text(&o.stdout), text(&o.stderr));
+    assert!(text(&o.stderr).contains("planned mission: OK"), "{}", text(&o.stderr));
+    let rs: Vec<Value> =
+        std::fs::read_to_string(&t).unwrap().lines().map(|l| serde_json::from_str(l).expect("a JSON line")).collect();
+
+    // The first plan is the seed's; the vehicle's events ended the steps and
+    // its perceptions, through the world modeler, made the executor re-plan.
+    let plans = kind(&rs, "plan");
+    assert_eq!(strings(&plans[0]["steps"]), SEED_PLAN);
+    let replans = kind(&rs, "replan");
+    assert!(!replans.is_empty(), "no re-plan");
+    assert_eq!(plans.len(), replans.len() + 1);
+    assert!(kind(&rs, "event").iter().any(|e| e["event"] == "eventGotoOk"));
+    assert!(kind(&rs, "facts").iter().any(|f| strings(&f["added"]).contains(&"(found cable)".to_string())));
+    assert!(
+        replans.iter().any(|r| r["reason"].as_str().unwrap().contains("missing [(found cable)]")),
+        "the lost cable (a perception from the AAC) is a divergence: {replans:#?}"
+    );
+    // The holding mission ran on the vehicle while re-planning.
+    let holding: Vec<&str> = rs
+        .iter()
+        .filter(|x| x["kind"] == "action" && x["mission"] == "holding:Holding")
+        .map(|x| x["action"].as_str().unwrap())
+        .collect();
+    assert_eq!(holding.len(), 2 * replans.len(), "{holding:?}");
+    // The goal is reached: the last step brought the vehicle to the recovery zone.
+    let ends = kind(&rs, "step_end");
+    assert_eq!(ends.last().unwrap()["action"], "(gotoop auv inspection recovery)");
+    assert_eq!(ends.last().unwrap()["result"], "ok");
+    let out = rs.last().unwrap();
+    assert_eq!((out["kind"].as_str(), out["result"].as_str()), (Some("outcome"), Some("ok")), "{out}");
+    assert!(text(&o.stdout).contains("PLANNED MISSION OK"), "{}", text(&o.stdout));
+}
+
 #[test]
 fn bad_input_is_reported() {
     let o = mcl(&[CABLE, "--run", "--virtual-time"]);
@@ -214,6 +305,16 @@ fn bad_input_is_reported() {
     let o = mcl(&[CABLE, "--run", "--mock", "--virtual-time", "--world", &w.display().to_string()]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("world.xml"), "{}", text(&o.stderr));
+
+    // A vehicle's AAC runs in real time, with its own scenario.
+    let o = mcl(&[CABLE, "--run", "--aac", "127.0.0.1:1", "--virtual-time"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("--virtual-time needs --mock"), "{}", text(&o.stderr));
+    let o = mcl(&[CABLE, "--run", "--aac", "127.0.0.1:1", "--scenario", SCENARIO]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("mcl mock-aac --plan"), "{}", text(&o.stderr));
+    let o = mcl(&[CABLE, "--run", "--aac", "127.0.0.1:1", "--mock"]);
+    assert_eq!(o.status.code(), Some(2));
 
     // --mock without --run is a usage error.
     let o = mcl(&[CABLE, "--mock"]);

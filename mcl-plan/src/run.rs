@@ -17,10 +17,13 @@
 //! (`kind`: `plan`, `replan`, `step`, `step_end`, `facts`, `holding`, then
 //! the final `outcome`), with a live-log line.
 //!
-//! One mock vehicle serves the whole run: its tables are the union of those
-//! of the operators file's missions (an instance has the call sites of its
-//! operator), call sites and sequence numbers are renumbered so that the
-//! missions played one after the other look like one stream of actions.
+//! One vehicle serves the whole run: the mock vehicle's tables are the union
+//! of those of the operators file's missions (an instance has the call sites
+//! of its operator), call sites and sequence numbers are renumbered so that
+//! the missions played one after the other look like one stream of actions.
+//! With [`run_planned_aac`] that stream goes to a vehicle's AAC through an
+//! [`AacLink`] (the caller's TCP link) in real time; an AAC that mocks the
+//! vehicle for a plan uses the same tables ([`Missions::mock_tables`]).
 
 use crate::executor::{Decision, Executor};
 use crate::ground::{McValue, MclInstance};
@@ -98,6 +101,28 @@ impl Report {
             _ => 3,
         }
     }
+}
+
+/// A vehicle's AAC as the run sees it: a link that takes actions and
+/// delivers events and perceptions (`Inbound::Ack`, `Connected` and
+/// `Disconnected` are accepted too), in real time.
+pub trait AacLink {
+    /// Sends an action; an error means the link is closed for good.
+    fn send(&mut self, action: Action) -> Result<(), String>;
+    /// Waits up to `timeout` (`None`: without limit) for the next message:
+    /// `Ok(None)` when the time is up, an error when the link is closed for good.
+    fn recv(&mut self, timeout: Option<Duration>) -> Result<Option<Inbound>, String>;
+}
+
+/// Real time the run keeps taking what the AAC sends after a mission ended
+/// before deciding what to do next (the perceptions that follow a task's
+/// last event travel behind it).
+pub const AAC_SETTLE: Duration = Duration::from_millis(20);
+
+/// Where the actions go: the in-process mock, or a vehicle's AAC.
+enum Vehicle<'a> {
+    Mock(Box<MockVehicle>),
+    Aac(&'a mut dyn AacLink),
 }
 
 /// Receives each trace record (JSON) with its live-log line.
@@ -369,7 +394,9 @@ struct Run<'a> {
     ex: Executor,
     world: WorldModeler,
     missions: Missions,
-    mock: MockVehicle,
+    vehicle: Vehicle<'a>,
+    /// The AAC link closed while running.
+    link_error: Option<String>,
     sink: &'a mut dyn RecordSink,
     opts: RunOptions,
     sources: SourceMap,
@@ -453,7 +480,16 @@ impl Run<'_> {
         self.emit("plan", fields);
     }
 
-    /// Feeds one input to the running mission; records; forwards actions to the mock.
+    /// Mission time now (real time runs from the start of the run).
+    fn now(&self) -> f64 {
+        if self.opts.virtual_time {
+            self.t
+        } else {
+            (self.started.elapsed().as_secs_f64() * self.opts.speed).max(self.t)
+        }
+    }
+
+    /// Feeds one input to the running mission; records; forwards actions to the vehicle.
     fn apply(&mut self, input: Input) {
         let Some(run) = &mut self.running else { return };
         let out = input.apply(&mut run.player);
@@ -468,14 +504,27 @@ impl Run<'_> {
                     call_site: action.call_site.map(|c| index * CALL_SITE_STRIDE + c),
                     ..action.clone()
                 };
-                self.mock.on_action(self.t, &a);
+                match &mut self.vehicle {
+                    Vehicle::Mock(mock) => {
+                        mock.on_action(self.t, &a);
+                    }
+                    Vehicle::Aac(link) => {
+                        if let Err(e) = link.send(a) {
+                            self.link_error.get_or_insert(e);
+                        }
+                    }
+                }
             }
         }
         for r in records {
             let live = live_line(&r, false);
             self.sink.record(serde_json::to_value(&r).unwrap_or_default(), live);
         }
-        for w in self.mock.take_warnings() {
+        let warnings = match &mut self.vehicle {
+            Vehicle::Mock(mock) => mock.take_warnings(),
+            Vehicle::Aac(_) => Vec::new(),
+        };
+        for w in warnings {
             self.emit("warning", json!({ "message": w }));
         }
     }
@@ -546,9 +595,23 @@ impl Run<'_> {
         }
     }
 
-    /// Delivers what the mock sends at the current time (between steps).
+    /// Delivers what the vehicle sends at the current time (between steps):
+    /// the mock's messages due now; what the AAC sends until it has been
+    /// quiet for [`AAC_SETTLE`].
     fn settle(&mut self) {
-        while let Some((_, m)) = self.mock.pop_due(self.t) {
+        loop {
+            let m = match &mut self.vehicle {
+                Vehicle::Mock(mock) => mock.pop_due(self.t).map(|(_, m)| m),
+                Vehicle::Aac(link) => match link.recv(Some(AAC_SETTLE)) {
+                    Ok(m) => m,
+                    Err(e) => {
+                        self.link_error.get_or_insert(e);
+                        None
+                    }
+                },
+            };
+            let Some(m) = m else { return };
+            self.t = self.now();
             self.deliver(m);
         }
     }
@@ -560,7 +623,9 @@ impl Run<'_> {
                 None => self.emit("unexpected_event", json!({ "event": event, "reason": "no mission is running" })),
             },
             Inbound::Perception { name, value } => self.perceive(name, value),
-            _ => {}
+            Inbound::Disconnected => self.emit("warning", json!({ "message": "link to the AAC lost; reconnecting" })),
+            Inbound::Connected => self.emit("warning", json!({ "message": "link to the AAC up" })),
+            Inbound::Ack { .. } => {}
         }
     }
 
@@ -617,13 +682,65 @@ impl Run<'_> {
         Report { result: result.to_string(), reason, plans: self.ex.replans + 1, steps: self.steps, t: self.t }
     }
 
+    /// With an AAC: waits for the next message, the running mission's next
+    /// deadline or the time limit, and takes it. `Some` when the run ends.
+    fn wait_aac(&mut self) -> Option<Report> {
+        let tp = self.running.as_ref().and_then(|r| r.player.next_deadline());
+        let limit = self.opts.time_limit;
+        let now = self.now();
+        if limit.is_some_and(|l| now >= l && tp.is_none_or(|d| d > l)) {
+            let l = limit.unwrap_or_default();
+            self.t = self.t.max(l);
+            return Some(self.finish("time_limit", Some(format!("the time limit of {l} s passed"))));
+        }
+        let wake = match (tp, limit) {
+            (Some(d), Some(l)) => Some(d.min(l)),
+            (d, l) => d.or(l),
+        };
+        let timeout = wake.map(|w| Duration::from_secs_f64(((w - now) / self.opts.speed).max(0.0)));
+        let Vehicle::Aac(link) = &mut self.vehicle else { return None };
+        match link.recv(timeout) {
+            Err(e) => {
+                self.t = self.now();
+                Some(self.finish("fail", Some(e)))
+            }
+            Ok(Some(m)) => {
+                self.t = self.now();
+                self.deliver(m);
+                None
+            }
+            Ok(None) => {
+                match tp {
+                    Some(d) if wake.is_some_and(|w| d <= w) => {
+                        self.t = self.t.max(d);
+                        self.apply(Input::Timer(d));
+                    }
+                    _ => self.t = self.now(),
+                }
+                None
+            }
+        }
+    }
+
     fn go(&mut self) -> Result<Report, String> {
-        self.mock.initial();
+        match &mut self.vehicle {
+            Vehicle::Mock(mock) => {
+                mock.initial();
+            }
+            Vehicle::Aac(_) => self.started = Instant::now(),
+        }
         self.emit_plan("initial");
         loop {
+            if let Some(e) = self.link_error.take() {
+                self.t = self.now();
+                return Ok(self.finish("fail", Some(e)));
+            }
             // Between missions: take what is due now, then decide.
             if self.running.is_none() {
                 self.settle();
+                if self.link_error.is_some() {
+                    continue;
+                }
                 let facts = self.world.facts().clone();
                 match self.ex.next_step(&facts) {
                     Decision::Done => return Ok(self.finish("ok", None)),
@@ -679,8 +796,17 @@ impl Run<'_> {
                 self.end_step(o == PlayerOutcome::Ok);
                 continue;
             }
+            if matches!(self.vehicle, Vehicle::Aac(_)) {
+                if let Some(report) = self.wait_aac() {
+                    return Ok(report);
+                }
+                continue;
+            }
             let tp = self.running.as_ref().and_then(|r| r.player.next_deadline());
-            let tm = self.mock.next_deadline();
+            let tm = match &self.vehicle {
+                Vehicle::Mock(mock) => mock.next_deadline(),
+                Vehicle::Aac(_) => None,
+            };
             let next = match (tp, tm) {
                 (None, None) => {
                     let awaited = self.running.as_ref().map(|r| r.player.awaited_events()).unwrap_or_default();
@@ -704,7 +830,10 @@ impl Run<'_> {
             self.t = self.t.max(next);
             if tp.is_some_and(|a| a <= next) {
                 self.apply(Input::Timer(next));
-            } else if let Some((_, m)) = self.mock.pop_due(next) {
+            } else if let Some((_, m)) = match &mut self.vehicle {
+                Vehicle::Mock(mock) => mock.pop_due(next),
+                Vehicle::Aac(_) => None,
+            } {
                 self.deliver(m);
             }
         }
@@ -725,19 +854,52 @@ pub fn run_planned(
     sink: &mut dyn RecordSink,
 ) -> Result<Report, String> {
     let missions = Missions::load(operators)?;
+    let (tasks, calls) = missions.mock_tables();
+    let mock = MockVehicle::new(tasks, calls, scenario, opts.seed);
+    run_with(ex, world, missions, Vehicle::Mock(Box::new(mock)), opts, sink)
+}
+
+/// Runs the planned mission like [`run_planned`], in real time
+/// (`opts.virtual_time` is ignored), against a vehicle's AAC reached through
+/// `aac`: the actions of every step's mission (and of the holding mission)
+/// go to it as one stream (sequence numbers increasing over the run, call
+/// sites of the i-th mission of the operators file numbered
+/// `i * 1000000 + c`, as in [`Missions::mock_tables`]); its events drive the
+/// running mission and its perceptions feed the world modeler. A link that
+/// closes for good ends the run in `fail`.
+pub fn run_planned_aac(
+    ex: Executor,
+    world: WorldModeler,
+    operators: &Path,
+    aac: &mut dyn AacLink,
+    opts: RunOptions,
+    sink: &mut dyn RecordSink,
+) -> Result<Report, String> {
+    let missions = Missions::load(operators)?;
+    let opts = RunOptions { virtual_time: false, ..opts };
+    run_with(ex, world, missions, Vehicle::Aac(aac), opts, sink)
+}
+
+fn run_with<'a>(
+    ex: Executor,
+    world: WorldModeler,
+    missions: Missions,
+    vehicle: Vehicle<'a>,
+    opts: RunOptions,
+    sink: &'a mut dyn RecordSink,
+) -> Result<Report, String> {
     let holding = match &opts.holding {
         Some(h) => Some(missions.holding(h)?),
         None => None,
     };
-    let (tasks, calls) = missions.mock_tables();
-    let mock = MockVehicle::new(tasks, calls, scenario, opts.seed);
     let mut ex = ex;
     ex.max_replans = u32::MAX; // RunOptions::max_plans bounds the plans
     let mut run = Run {
         ex,
         world,
         missions,
-        mock,
+        vehicle,
+        link_error: None,
         sink,
         opts,
         sources: SourceMap::new(),

@@ -6,12 +6,19 @@
 //! scenario, in real time. With `--state FILE`, every executed action is
 //! saved before it is acknowledged and the sessions are restored at start:
 //! a killed and restarted mock-aac neither forgets nor repeats an action.
+//!
+//! With `--plan FILE.mcl` it serves the vehicle of a planned mission
+//! (`mcl plan FILE.mcl --run --aac`): every session gets one mock whose
+//! tables are those of all the missions of the operators file, with the call
+//! sites numbered as the planner's run numbers them
+//! ([`mcl_plan::run::Missions::mock_tables`]).
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use mcl_runtime::mock::MockVehicle;
+use mcl_runtime::mock::{CallInfo, MockVehicle, TaskEvents};
 use mcl_runtime::scenario::Scenario;
 use mcl_runtime::tcp::{serve_vehicle, LogLevel, ServeOptions, SessionKey, Vehicle, VehicleOptions};
 
@@ -20,7 +27,10 @@ use super::run::load_missions;
 /// Options of `mcl mock-aac`.
 #[derive(Debug)]
 pub struct Options {
-    pub net: PathBuf,
+    /// The missions (exactly one of `net` and `plan`).
+    pub net: Option<PathBuf>,
+    /// The mission operators of a planned mission.
+    pub plan: Option<PathBuf>,
     pub scenario: Option<PathBuf>,
     pub listen: String,
     pub token: Option<String>,
@@ -45,14 +55,35 @@ pub fn run(o: Options) -> u8 {
         eprintln!("error: --timeout must be a positive number of seconds");
         return 2;
     }
-    let missions = match load_missions(&o.net) {
-        Ok(m) if m.is_empty() => {
-            eprintln!("error: `{}` defines no mission", o.net.display());
+    let served = match (&o.net, &o.plan) {
+        (Some(net), None) => match load_missions(net) {
+            Ok(m) if m.is_empty() => {
+                eprintln!("error: `{}` defines no mission", net.display());
+                return 2;
+            }
+            Ok(m) => Served::Nets(m.into_iter().map(|m| (m.name, m.net)).collect()),
+            Err(code) => return code,
+        },
+        (None, Some(ops)) => match mcl_plan::run::Missions::load(ops) {
+            Ok(m) => {
+                let (tasks, calls) = m.mock_tables();
+                Served::Plan(tasks, calls)
+            }
+            Err(e) => {
+                // Rendered diagnostics (if any), then the summary line.
+                match e.trim_end().rsplit_once('\n') {
+                    Some((diags, last)) => eprintln!("{diags}\nerror: {last}"),
+                    None => eprintln!("error: {e}"),
+                }
+                return 2;
+            }
+        },
+        _ => {
+            eprintln!("error: give exactly one of --net FILE and --plan FILE.mcl");
             return 2;
         }
-        Ok(m) => m,
-        Err(code) => return code,
     };
+    let file = o.net.as_ref().or(o.plan.as_ref()).map(|p| p.display().to_string()).unwrap_or_default();
     let scenario = match &o.scenario {
         Some(p) => match Scenario::load(p) {
             Ok(s) => s,
@@ -67,8 +98,19 @@ pub fn run(o: Options) -> u8 {
     if !is_loopback(&o.listen) && o.token.is_none() {
         eprintln!("warning: listening on `{}`, not a loopback address, without --token: anyone who reaches it can command the vehicle", o.listen);
     }
-    let names: Vec<String> = missions.iter().map(|m| m.name.clone()).collect();
-    let nets: Arc<Vec<(String, mcl_net::Net)>> = Arc::new(missions.into_iter().map(|m| (m.name, m.net)).collect());
+    let names = match &served {
+        Served::Nets(nets) => nets.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>().join(", "),
+        Served::Plan(..) => "the operators of a planned mission".to_string(),
+    };
+    let nets: Arc<Vec<(String, mcl_net::Net)>> = Arc::new(match served {
+        Served::Nets(nets) => nets,
+        Served::Plan(tasks, calls) => {
+            let make = move |_: &SessionKey| -> Option<Box<dyn Vehicle>> {
+                Some(Box::new(MockVehicle::new(tasks.clone(), calls.clone(), scenario.clone(), seed)))
+            };
+            return serve(o, &file, &names, make);
+        }
+    });
     let make = move |key: &SessionKey| -> Option<Box<dyn Vehicle>> {
         let net = match nets.iter().find(|(n, _)| *n == key.mission) {
             Some((_, net)) => net,
@@ -86,6 +128,20 @@ pub fn run(o: Options) -> u8 {
         };
         Some(Box::new(MockVehicle::from_net(net, scenario.clone(), seed)))
     };
+    serve(o, &file, &names, make)
+}
+
+/// What the mock serves: missions by name, or the tables of a plan's operators.
+enum Served {
+    Nets(Vec<(String, mcl_net::Net)>),
+    Plan(HashMap<String, TaskEvents>, HashMap<u32, CallInfo>),
+}
+
+/// Listens and serves the vehicles `make` builds.
+fn serve<F>(o: Options, file: &str, names: &str, make: F) -> u8
+where
+    F: FnMut(&SessionKey) -> Option<Box<dyn Vehicle>> + Send + 'static,
+{
     let level = if o.quiet { LogLevel::Info } else { LogLevel::Messages };
     let serve = ServeOptions {
         token: o.token.clone(),
@@ -116,9 +172,7 @@ pub fn run(o: Options) -> u8 {
         println!("listening on {addr}");
         let _ = std::io::stdout().flush();
         eprintln!(
-            "mock-aac: serving {} ({}) on {addr}, speed {}, {}{}",
-            o.net.display(),
-            names.join(", "),
+            "mock-aac: serving {file} ({names}) on {addr}, speed {}, {}{}",
             o.speed,
             if o.token.is_some() { "token required" } else { "no token" },
             o.state.as_ref().map(|p| format!(", state in {}", p.display())).unwrap_or_default()

@@ -59,6 +59,9 @@ pub struct Options {
 /// Options of `mcl plan FILE.mcl --run`.
 pub struct Execute {
     pub mock: bool,
+    /// `--aac HOST:PORT`: a vehicle's AAC over TCP.
+    pub aac: Option<String>,
+    pub token: Option<String>,
     pub scenario: Option<PathBuf>,
     pub world: Option<PathBuf>,
     pub virtual_time: bool,
@@ -281,8 +284,107 @@ impl mcl_plan::run::RecordSink for RunSink {
     }
 }
 
-/// `mcl plan FILE.mcl --run --mock`: plans, executes each step's MCL mission
-/// on the player against the mock vehicle, and re-plans on divergence.
+/// The run's side of the TCP link to a vehicle's AAC ([`mcl_runtime::tcp`]),
+/// driven from the run's thread on a current-thread runtime.
+struct TcpAac {
+    rt: tokio::runtime::Runtime,
+    link: Option<mcl_runtime::link::Link>,
+    handle: Option<tokio::task::JoinHandle<Result<mcl_runtime::tcp::LinkStats, mcl_runtime::tcp::LinkError>>>,
+    addr: String,
+}
+
+impl TcpAac {
+    /// Why the link closed: the link task's error, if it said.
+    fn closed(&mut self) -> String {
+        let why = match self.handle.take() {
+            Some(h) => match self.rt.block_on(h) {
+                Ok(Err(e)) => e.to_string(),
+                Ok(Ok(_)) => "the link closed".into(),
+                Err(e) => format!("the link task failed: {e}"),
+            },
+            None => "the link closed".into(),
+        };
+        format!("AAC at `{}`: {why}", self.addr)
+    }
+
+    /// Lets the last actions be acknowledged (up to the link's linger time), then closes.
+    fn close(mut self) {
+        if let Some(mcl_runtime::link::Link { actions, inbound }) = self.link.take() {
+            drop(actions);
+            if let Some(h) = self.handle.take() {
+                match self.rt.block_on(h) {
+                    Ok(Err(e)) => eprintln!("warning: AAC at `{}`: {e}", self.addr),
+                    Err(e) => eprintln!("warning: the link task failed: {e}"),
+                    Ok(Ok(_)) => {}
+                }
+            }
+            drop(inbound);
+        }
+    }
+}
+
+impl mcl_plan::run::AacLink for TcpAac {
+    fn send(&mut self, action: mcl_runtime::link::Action) -> Result<(), String> {
+        let sent = self.link.as_ref().is_some_and(|l| l.actions.send(action).is_ok());
+        if sent {
+            Ok(())
+        } else {
+            Err(self.closed())
+        }
+    }
+
+    fn recv(&mut self, timeout: Option<std::time::Duration>) -> Result<Option<mcl_runtime::link::Inbound>, String> {
+        let Some(link) = self.link.as_mut() else { return Err(self.closed()) };
+        let got = self.rt.block_on(async {
+            match timeout {
+                Some(d) => tokio::time::timeout(d, link.inbound.recv()).await.ok(),
+                None => Some(link.inbound.recv().await),
+            }
+        });
+        match got {
+            None => Ok(None),
+            Some(Some(m)) => Ok(Some(m)),
+            Some(None) => Err(self.closed()),
+        }
+    }
+}
+
+/// Connects to the AAC at `addr` and waits for its `welcome` (up to `wait`).
+fn connect_aac(
+    addr: &str,
+    token: Option<String>,
+    mission: String,
+    wait: std::time::Duration,
+) -> Result<TcpAac, String> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the runtime: {e}"))?;
+    let opts = mcl_runtime::tcp::ConnectOptions { token, mission, ..Default::default() };
+    let (link, handle) = rt.block_on(async { mcl_runtime::tcp::connect_with_handle(addr, opts) });
+    let mut aac = TcpAac { rt, link: Some(link), handle: Some(handle), addr: addr.to_string() };
+    let deadline = std::time::Instant::now() + wait;
+    loop {
+        let left = deadline.saturating_duration_since(std::time::Instant::now());
+        match mcl_plan::run::AacLink::recv(&mut aac, Some(left))? {
+            Some(mcl_runtime::link::Inbound::Connected) => return Ok(aac),
+            Some(_) => {}
+            None => {
+                return Err(format!(
+                    "cannot reach the AAC at `{addr}` within {} s (is it running? e.g. `mcl mock-aac --plan FILE.mcl --listen {addr}`)",
+                    wait.as_secs_f64()
+                ))
+            }
+        }
+    }
+}
+
+/// How long `--run --aac` waits for the AAC's `welcome` before giving up.
+const AAC_CONNECT_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
+
+/// `mcl plan FILE.mcl --run --mock|--aac`: plans, executes each step's MCL
+/// mission on the player against the mock vehicle or a vehicle's AAC, and
+/// re-plans on divergence.
 fn execute(
     domain: mcl_plan::Domain,
     problem: mcl_plan::Problem,
@@ -293,8 +395,16 @@ fn execute(
 ) -> u8 {
     use mcl_plan::executor::Executor;
     use mcl_runtime::scenario::Scenario;
-    if !x.mock {
-        eprintln!("error: --run needs --mock (plans run against the in-process mock vehicle; a vehicle's AAC is not supported yet)");
+    if x.mock == x.aac.is_some() {
+        eprintln!("error: --run needs --mock (the in-process mock vehicle) or --aac HOST:PORT (a vehicle's AAC)");
+        return 2;
+    }
+    if x.aac.is_some() && x.virtual_time {
+        eprintln!("error: --virtual-time needs --mock (a vehicle's AAC runs in real time)");
+        return 2;
+    }
+    if x.aac.is_some() && x.scenario.is_some() {
+        eprintln!("error: --scenario configures the in-process mock; use it with --mock (give it to `mcl mock-aac --plan` otherwise)");
         return 2;
     }
     if !(x.speed.is_finite() && x.speed > 0.0) {
@@ -373,7 +483,22 @@ fn execute(
         holding: x.holding.clone(),
         max_plans: x.max_plans.max(1),
     };
-    let report = mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink);
+    let report = match &x.aac {
+        None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
+        Some(addr) => {
+            let stem = ops.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+            let mut aac = match connect_aac(addr, x.token.clone(), format!("plan:{stem}"), AAC_CONNECT_WAIT) {
+                Ok(a) => a,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 2;
+                }
+            };
+            let r = mcl_plan::run::run_planned_aac(ex, world, ops, &mut aac, opts, &mut sink);
+            aac.close();
+            r
+        }
+    };
     if let Some(w) = &mut sink.trace {
         if let Err(e) = w.flush() {
             sink.error.get_or_insert(format!("cannot write the trace: {e}"));
