@@ -217,12 +217,24 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
     index.insert(m0.clone(), 0);
     lts.marks.extend_from_slice(&m0);
     let mut next = 0usize;
+    // Buffers reused from state to state: this loop runs for every marking
+    // of every vehicle, and allocation dominated it.
+    let mut cur: Vec<u8> = Vec::with_capacity(np);
+    let mut m2: Vec<u8> = Vec::with_capacity(np);
     let mut en: Vec<u32> = Vec::new();
+    let mut imm_ng: Vec<u32> = Vec::new();
+    let mut gimm: Vec<u32> = Vec::new();
+    let mut waiting: Vec<u32> = Vec::new();
+    let mut out: Vec<(u32, u32)> = Vec::new(); // (label, local t)
+    let g = |t: u32| gated[(t + t_off) as usize];
+    let v = |t: u32| effect_of[(t + t_off) as usize];
+    let prio = |t: u32| net.transitions()[t as usize].effective_priority();
     while next < index.len() {
         if next % 4096 == 0 {
             crate::interrupt::poll();
         }
-        let cur: Vec<u8> = lts.marks[next * np..(next + 1) * np].to_vec();
+        cur.clear();
+        cur.extend_from_slice(&lts.marks[next * np..(next + 1) * np]);
         lts.fin.push(m.final_places.iter().any(|p| cur[p.index()] > 0));
         en.clear();
         for t in net.transition_ids() {
@@ -230,11 +242,10 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
                 en.push(t.0);
             }
         }
-        let g = |t: u32| gated[(t + t_off) as usize];
-        let v = |t: u32| effect_of[(t + t_off) as usize];
-        let prio = |t: u32| net.transitions()[t as usize].effective_priority();
-        let mut imm_ng: Vec<u32> = en.iter().copied().filter(|&t| imm[t as usize] && !g(t)).collect();
-        let mut gimm: Vec<u32> = en.iter().copied().filter(|&t| imm[t as usize] && g(t)).collect();
+        imm_ng.clear();
+        imm_ng.extend(en.iter().copied().filter(|&t| imm[t as usize] && !g(t)));
+        gimm.clear();
+        gimm.extend(en.iter().copied().filter(|&t| imm[t as usize] && g(t)));
         // Priorities: among the non-gated immediate transitions only the
         // highest are ready, and a gated one below them never is. (A gated
         // transition above them would make them depend on the supervisor:
@@ -244,8 +255,9 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
             imm_ng.retain(|&t| prio(t) == pmax);
             gimm.retain(|&t| prio(t) >= pmax);
         }
-        let waiting: Vec<u32> = en.iter().copied().filter(|&t| imm[t as usize] && g(t)).collect();
-        let mut out: Vec<(u32, u32)> = Vec::new(); // (label, local t)
+        waiting.clear();
+        waiting.extend(en.iter().copied().filter(|&t| imm[t as usize] && g(t)));
+        out.clear();
         for &t in &gimm {
             out.push((lab(v(t), false), t));
         }
@@ -258,8 +270,9 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
                 out.push((lab(v(t), !gimm.is_empty()), t));
             }
         }
-        for (label, t) in out {
-            let mut m2 = cur.clone();
+        for &(label, t) in &out {
+            m2.clear();
+            m2.extend_from_slice(&cur);
             for &(p, d) in net.delta(TransitionId(t)) {
                 let x = i64::from(m2[p.index()]) + d;
                 if x > 200 {
@@ -267,14 +280,18 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
                 }
                 m2[p.index()] = x as u8;
             }
-            let n = index.len() as u32;
-            let to = *index.entry(m2).or_insert_with_key(|k| {
-                lts.marks.extend_from_slice(k);
-                n
-            });
-            if index.len() > max {
-                return Err(LtsError::TooMany);
-            }
+            let to = match index.get(m2.as_slice()) {
+                Some(&to) => to,
+                None => {
+                    let n = index.len() as u32;
+                    lts.marks.extend_from_slice(&m2);
+                    index.insert(m2.clone(), n);
+                    if index.len() > max {
+                        return Err(LtsError::TooMany);
+                    }
+                    n
+                }
+            };
             lts.edges.push(Edge { label, to, t: t + t_off });
         }
         lts.off.push(lts.edges.len() as u32);
@@ -567,7 +584,10 @@ struct ProductGraph {
     states: Vec<u32>,
     parent: Vec<(u32, u32, u32)>, // (parent, vehicle, label)
     dead: Vec<u32>,
-    pess_succ: Vec<Vec<u32>>,
+    /// Pessimistic successors of state `s`: `pess[pess_off[s]..pess_off[s + 1]]`
+    /// (one flat array: millions of states made millions of small vectors).
+    pess_off: Vec<u32>,
+    pess: Vec<u32>,
     over: bool,
     complete: bool,
 }
@@ -586,7 +606,8 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
         states: init.clone(),
         parent: vec![(u32::MAX, 0, 0)],
         dead: Vec::new(),
-        pess_succ: Vec::new(),
+        pess_off: vec![0],
+        pess: Vec::new(),
         over: false,
         complete: true,
     };
@@ -618,7 +639,7 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
         if succ.is_empty() {
             g.dead.push(i as u32);
         }
-        let mut ps = Vec::new();
+        let first = g.pess.len();
         for (x, v, label, pess) in succ.drain(..) {
             let n = index.len() as u32;
             let to = match index.get(&x) {
@@ -635,12 +656,19 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
                 }
             };
             if pess {
-                ps.push(to);
+                g.pess.push(to);
             }
         }
-        ps.sort_unstable();
-        ps.dedup();
-        g.pess_succ.push(ps);
+        g.pess[first..].sort_unstable();
+        let mut kept = first;
+        for k in first..g.pess.len() {
+            if kept == first || g.pess[kept - 1] != g.pess[k] {
+                g.pess[kept] = g.pess[k];
+                kept += 1;
+            }
+        }
+        g.pess.truncate(kept);
+        g.pess_off.push(g.pess.len() as u32);
         i += 1;
     }
     g
@@ -854,21 +882,32 @@ fn verify_group(
         }
         let is_end = |st: &[u32]| (0..nv).all(|v| quots[v].fin[st[v] as usize]);
         let is_target = |st: &[u32]| (0..nv).all(|v| !can_end[v] || quots[v].fin[st[v] as usize]);
-        let n = g.pess_succ.len();
-        // Backward reachability of the targets over pessimistic steps.
-        let mut preds: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for (s, ps) in g.pess_succ.iter().enumerate() {
-            for &t in ps {
-                preds[t as usize].push(s as u32);
+        let n = g.pess_off.len() - 1;
+        // Backward reachability of the targets over pessimistic steps; the
+        // predecessors in one flat array (counting sort).
+        let mut pred_off = vec![0u32; n + 1];
+        for &t in &g.pess {
+            pred_off[t as usize + 1] += 1;
+        }
+        for k in 0..n {
+            pred_off[k + 1] += pred_off[k];
+        }
+        let mut fill = pred_off.clone();
+        let mut pred = vec![0u32; g.pess.len()];
+        for s in 0..n {
+            for &t in &g.pess[g.pess_off[s] as usize..g.pess_off[s + 1] as usize] {
+                pred[fill[t as usize] as usize] = s as u32;
+                fill[t as usize] += 1;
             }
         }
+        let preds = |s: u32| &pred[pred_off[s as usize] as usize..pred_off[s as usize + 1] as usize];
         let mut co = vec![false; n];
         let mut stack: Vec<u32> = (0..n as u32).filter(|&s| is_target(g.state(s))).collect();
         for &s in &stack {
             co[s as usize] = true;
         }
         while let Some(s) = stack.pop() {
-            for &p in &preds[s as usize] {
+            for &p in preds(s) {
                 if !co[p as usize] {
                     co[p as usize] = true;
                     stack.push(p);
@@ -970,7 +1009,8 @@ fn hunt(p: &Product<'_>, init: Vec<u32>, ltss: &[&Lts], replay: &Replay<'_>, bud
             states: init.clone(),
             parent: vec![(u32::MAX, 0, 0)],
             dead: Vec::new(),
-            pess_succ: Vec::new(),
+            pess_off: vec![0],
+            pess: Vec::new(),
             over: false,
             complete: true,
         };
