@@ -15,6 +15,7 @@ use mcl_syntax::ast::Item;
 use mcl_syntax::lexer::Kw;
 use mcl_syntax::{Diagnostic, LineIndex, Parse, Shift, Span};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// The text of one top-level item, and the keyword of the item after it (the
 /// parser reports what follows an unfinished item). Equal texts are one key.
@@ -34,13 +35,40 @@ pub struct Chunk<'db> {
 
 /// The parts of a file: the prelude (what comes before the first item),
 /// then one part per top-level item (`mcl_syntax::split_items`).
+///
+/// After an edit, the cut starts from the file's previous cut
+/// ([`mcl_syntax::split_items_edit`]: only the text around the edit is
+/// lexed again), and unchanged items are interned without copying.
 #[salsa::tracked(returns(ref))]
 pub fn file_items<'db>(db: &'db dyn Db, file: SourceFile) -> Vec<Chunk<'db>> {
-    let text = file.text(db).as_deref().unwrap_or("");
-    mcl_syntax::split_items(text)
-        .into_iter()
-        .map(|b| Chunk { start: b.start as u32, text: ItemText::new(db, text[b.start..b.end].to_string(), b.next) })
+    let Some(text) = file.text(db) else { return vec![Chunk { start: 0, text: ItemText::new(db, "", None) }] };
+    let bounds = split_with_last(file.path(db), text);
+    bounds
+        .iter()
+        .map(|b| Chunk { start: b.start as u32, text: ItemText::new(db, &text[b.start..b.end], b.next) })
         .collect()
+}
+
+/// The last cut of each file path, as a starting point for the next cut of
+/// that path. Any text with its own cut will do as a starting point
+/// (`split_items_edit` gives the cut of the new text, whatever the old one),
+/// so sharing it between databases is harmless.
+type LastSplits = rustc_hash::FxHashMap<PathBuf, (Arc<str>, Arc<[mcl_syntax::ItemBounds]>)>;
+static LAST_SPLIT: std::sync::LazyLock<Mutex<LastSplits>> = std::sync::LazyLock::new(Default::default);
+
+fn split_with_last(path: &Path, text: &Arc<str>) -> Arc<[mcl_syntax::ItemBounds]> {
+    let last = LAST_SPLIT.lock().unwrap_or_else(|e| e.into_inner()).get(path).cloned();
+    let bounds: Arc<[_]> = match last {
+        Some((old, items)) if Arc::ptr_eq(&old, text) => return items,
+        Some((old, items)) => mcl_syntax::split_items_edit(&old, &items, text).into(),
+        None => mcl_syntax::split_items(text).into(),
+    };
+    let mut map = LAST_SPLIT.lock().unwrap_or_else(|e| e.into_inner());
+    if map.len() >= 256 && !map.contains_key(path) {
+        map.clear();
+    }
+    map.insert(path.to_path_buf(), (text.clone(), bounds.clone()));
+    bounds
 }
 
 /// The syntax tree of one item (spans relative to the item's start). Kept

@@ -201,17 +201,52 @@ fn is_ident_continue(c: char) -> bool {
 
 /// Splits `src` into tokens. Never fails: unknown characters become errors.
 pub fn lex(src: &str) -> Lexed<'_> {
+    let mut l = Lexer::new(src);
+    l.out.tokens.reserve(src.len() / 4);
+    while l.step() {}
+    l.out
+}
+
+/// A lexer that runs on demand: [`Lexer::step`] lexes one more token,
+/// comment, error or run of whitespace. Running it to the end gives [`lex`].
+/// Lexing never looks back: started at the first byte of a token of a file,
+/// it gives that file's tokens from there (spans relative to its start).
+#[derive(Debug)]
+pub struct Lexer<'src> {
+    src: &'src str,
+    i: usize,
+    /// What was lexed so far.
+    pub out: Lexed<'src>,
+}
+
+impl<'src> Lexer<'src> {
+    pub fn new(src: &'src str) -> Self {
+        Lexer { src, i: 0, out: Lexed::default() }
+    }
+
+    /// Lexes one more piece of the source; `false` at the end.
+    #[inline]
+    pub fn step(&mut self) -> bool {
+        if self.i >= self.src.len() {
+            return false;
+        }
+        self.i = lex_one(self.src, self.i, &mut self.out);
+        true
+    }
+}
+
+/// Lexes the piece of `src` that starts at `i`; returns where the next starts.
+#[inline]
+fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
     let bytes = src.as_bytes();
-    let mut out = Lexed { tokens: Vec::with_capacity(src.len() / 4), ..Default::default() };
-    let mut i = 0usize;
-    while i < bytes.len() {
+    {
         let b = bytes[i];
         let start = i;
         // ASCII fast path; other characters are decoded below.
         match b {
             b' ' | b'\t' | b'\n' | b'\r' => {
                 i += 1;
-                continue;
+                return i;
             }
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
                 while i < bytes.len() && bytes[i] != b'\n' {
@@ -219,7 +254,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 }
                 let end = if i > start && bytes[i - 1] == b'\r' { i - 1 } else { i };
                 out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(start, end) });
-                continue;
+                return i;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
                 i += 2;
@@ -243,7 +278,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
                     );
                 }
                 out.comments.push(Comment { kind: CommentKind::Block, span: Span::new(start, i) });
-                continue;
+                return i;
             }
             b'"' => {
                 i += 1;
@@ -287,26 +322,26 @@ pub fn lex(src: &str) -> Lexed<'_> {
                     );
                 }
                 out.tokens.push((Token::Str(&src[start..end]), Span::new(start, end)));
-                continue;
+                return i;
             }
             b'0'..=b'9' => {
-                i = lex_number(src, i, &mut out);
-                continue;
+                i = lex_number(src, i, out);
+                return i;
             }
             b'-' if bytes.get(i + 1).is_some_and(u8::is_ascii_digit) => {
-                i = lex_number(src, i + 1, &mut out);
+                i = lex_number(src, i + 1, out);
                 // lex_number pushed a token starting after '-': widen it.
                 if let Some((Token::Num(_), span)) = out.tokens.last_mut() {
                     *span = Span::new(start, span.end as usize);
                     let end = span.end as usize;
                     out.tokens.last_mut().expect("just pushed").0 = Token::Num(&src[start..end]);
                 }
-                continue;
+                return i;
             }
             b'-' if bytes.get(i + 1) == Some(&b'>') => {
                 out.tokens.push((Token::Arrow, Span::new(i, i + 2)));
                 i += 2;
-                continue;
+                return i;
             }
             _ => {}
         }
@@ -327,7 +362,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
         if let Some(t) = punct {
             out.tokens.push((t, Span::new(i, i + 1)));
             i += 1;
-            continue;
+            return i;
         }
         let c = src[i..].chars().next().expect("i is a char boundary inside src");
         if is_ident_start(c) {
@@ -350,16 +385,16 @@ pub fn lex(src: &str) -> Lexed<'_> {
                 None => Token::Ident(text),
             };
             out.tokens.push((tok, Span::new(start, i)));
-            continue;
+            return i;
         }
         if c == '→' {
             out.tokens.push((Token::Arrow, Span::new(i, i + c.len_utf8())));
             i += c.len_utf8();
-            continue;
+            return i;
         }
         if c.is_whitespace() {
             i += c.len_utf8();
-            continue;
+            return i;
         }
         // `#` is a comment in many languages: report it and skip the line.
         if c == '#' {
@@ -373,7 +408,7 @@ pub fn lex(src: &str) -> Lexed<'_> {
             );
             out.comments.push(Comment { kind: CommentKind::Line, span: Span::new(i, end) });
             i = end;
-            continue;
+            return i;
         }
         // Skip a run of unknown characters and report it once.
         let mut end = i + c.len_utf8();
@@ -405,9 +440,8 @@ pub fn lex(src: &str) -> Lexed<'_> {
             d = d.with_help("comments are written `// ...` or `/* ... */`");
         }
         out.errors.push(d);
-        i = end;
+        end
     }
-    out
 }
 
 /// Lexes `[0-9]+(\.[0-9]+)?` starting at `i`; pushes the token; returns the new position.

@@ -16,6 +16,6 @@ pub mod span;
 pub mod visit;
 
 pub use diag::{Diagnostic, Label, Severity};
-pub use parser::{parse, parse_item, split_items, ItemBounds, Parse};
+pub use parser::{parse, parse_item, split_items, split_items_edit, ItemBounds, Parse};
 pub use shift::{parse_by_items, Shift};
 pub use span::{LineCol, LineIndex, Span};

@@ -2,7 +2,7 @@
 //! exactly what parsing the whole file gives: the same tree, comments and
 //! errors, on the corpus, on generated programs and on random damage to them.
 
-use mcl_syntax::{parse, parse_by_items, split_items};
+use mcl_syntax::{parse, parse_by_items, split_items, split_items_edit};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use std::path::Path;
@@ -64,10 +64,9 @@ fn a_missing_brace_is_one_error_item_by_item() {
     assert_eq!(p.errors[0].code, "E0011");
 }
 
-/// Damage: delete, insert or replace a short range with text that matters to
-/// the parser (delimiters, keywords, quotes, comment markers).
-fn damaged() -> impl Strategy<Value = String> {
-    let pieces = prop::sample::select(vec![
+/// Text that matters to the parser (delimiters, keywords, quotes, comment markers).
+fn pieces() -> impl Strategy<Value = &'static str> {
+    prop::sample::select(vec![
         "",
         "{",
         "}",
@@ -95,24 +94,88 @@ fn damaged() -> impl Strategy<Value = String> {
         "constraints {",
         "mcl_plan_op",
         "5",
-    ]);
-    (0u64..40, 50usize..400, prop::collection::vec((any::<prop::sample::Index>(), 0usize..6, pieces), 1..4)).prop_map(
-        |(seed, lines, edits)| {
-            let mut s = mcl_syntax::gen::program(lines, seed);
-            for (at, del, ins) in edits {
-                let mut i = at.index(s.len() + 1);
-                while !s.is_char_boundary(i) {
-                    i -= 1;
-                }
-                let mut j = (i + del).min(s.len());
-                while !s.is_char_boundary(j) {
-                    j += 1;
-                }
-                s.replace_range(i..j, ins);
-            }
-            s
-        },
-    )
+        "#",
+        "import \"a.mcl\"",
+    ])
+}
+
+/// An edit: where (modulo the length plus one, moved back to a char
+/// boundary), how many bytes to delete, what to insert.
+type Edit = (u64, usize, &'static str);
+
+fn edits(n: std::ops::Range<usize>) -> impl Strategy<Value = Vec<Edit>> {
+    prop::collection::vec((any::<u64>(), 0usize..6, pieces()), n)
+}
+
+fn apply(s: &mut String, (at, del, ins): &Edit) {
+    let mut i = (*at % (s.len() as u64 + 1)) as usize;
+    while !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    let mut j = (i + del).min(s.len());
+    while !s.is_char_boundary(j) {
+        j += 1;
+    }
+    s.replace_range(i..j, ins);
+}
+
+/// Damage: a few edits to a generated program.
+fn damaged() -> impl Strategy<Value = String> {
+    (0u64..40, 50usize..400, edits(1..4)).prop_map(|(seed, lines, edits)| {
+        let mut s = mcl_syntax::gen::program(lines, seed);
+        for e in &edits {
+            apply(&mut s, e);
+        }
+        s
+    })
+}
+
+/// Splits `src` after `edits`, one at a time, with `split_items_edit` from
+/// the previous split; every step must equal the split from scratch.
+fn edit_splits_agree(src: &str, edits: &[Edit]) -> Result<(), String> {
+    let mut old = src.to_string();
+    let mut items = split_items(&old);
+    for e in edits {
+        let mut new = old.clone();
+        apply(&mut new, e);
+        let inc = split_items_edit(&old, &items, &new);
+        let fresh = split_items(&new);
+        if inc != fresh {
+            return Err(format!(
+                "edit {e:?}\nincremental: {inc:?}\nfresh: {fresh:?}\n--- old ---\n{old}\n--- new ---\n{new}"
+            ));
+        }
+        (old, items) = (new, inc);
+    }
+    Ok(())
+}
+
+#[test]
+fn an_edit_inside_a_mission_resplits_like_scratch() {
+    let text = mcl_syntax::gen::program(400, 3);
+    let items = split_items(&text);
+    let site = text.find("mission").unwrap();
+    let brace = site + text[site..].find('{').unwrap() + 1;
+    // Inside a mission, across items, at both ends, an unclosed brace, a
+    // quote, a comment opener that swallows the rest of the file.
+    for (at, del, ins) in [
+        (brace, 0, " "),
+        (brace, 0, "{"),
+        (brace, 1, ""),
+        (brace, 0, "\""),
+        (brace, 0, "/*"),
+        (brace, 0, "\nmission : y {"),
+        (site, 7, "missio"),
+        (0, 0, "x"),
+        (text.len(), 0, "}"),
+        (items[items.len() / 2].start - 1, 2, ""),
+    ] {
+        let mut new = text.clone();
+        new.replace_range(at..at + del, ins);
+        assert_eq!(split_items_edit(&text, &items, &new), split_items(&new), "{at} {del} {ins:?}");
+    }
+    // Not the split of the old text: split afresh.
+    assert_eq!(split_items_edit("", &items, &text), items);
 }
 
 proptest! {
@@ -122,6 +185,25 @@ proptest! {
     fn damaged_programs_parse_the_same_item_by_item(src in damaged()) {
         if let Err(e) = same(&src) {
             prop_assert!(false, "{}\n--- source ---\n{}", e, src);
+        }
+    }
+
+    #[test]
+    fn edits_resplit_like_scratch(src in damaged(), edits in edits(1..6)) {
+        if let Err(e) = edit_splits_agree(&src, &edits) {
+            prop_assert!(false, "{}", e);
+        }
+    }
+}
+
+#[test]
+fn corpus_edits_resplit_like_scratch() {
+    // Every file, with a few deterministic edits at spread positions.
+    let ins = ["", "{", "}", "\"", "/*", "\n", "mission", "*/", " "];
+    for (name, text) in corpus() {
+        let edits: Vec<Edit> = (0..12).map(|k| (k as u64 * 7919 * 31, k % 4, ins[k % ins.len()])).collect();
+        if let Err(e) = edit_splits_agree(&text, &edits) {
+            panic!("{name}: {e}");
         }
     }
 }
