@@ -128,6 +128,33 @@ struct RunSink {
     error: Option<String>,
 }
 
+impl RunSink {
+    /// After a run: flushes the trace, reports a failed run, writes the
+    /// chronogram. `Err` holds the exit status.
+    fn finish<T, E: std::fmt::Display>(&mut self, result: Result<T, E>, chronogram: Option<&Path>) -> Result<T, u8> {
+        if let Some(w) = &mut self.trace {
+            if let Err(e) = w.flush() {
+                self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        let end = result.map_err(|e| {
+            eprintln!("error: {e}");
+            2u8
+        })?;
+        if let Some(p) = chronogram {
+            let svg = mcl_runtime::chronogram::render(&self.records, &mcl_runtime::chronogram::Options::default());
+            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+                let _ = std::fs::create_dir_all(dir);
+            }
+            if let Err(e) = std::fs::write(p, svg) {
+                eprintln!("error: cannot write `{}`: {e}", p.display());
+                return Err(2);
+            }
+        }
+        Ok(end)
+    }
+}
+
 impl Sink for RunSink {
     fn record(&mut self, r: &Record) {
         if let Some(w) = &mut self.trace {
@@ -451,28 +478,10 @@ pub fn run(o: Options) -> u8 {
     let fired = session.player.fired_count();
     drop(session);
 
-    if let Some(w) = &mut sink.trace {
-        if let Err(e) = w.flush() {
-            sink.error.get_or_insert(format!("cannot write the trace: {e}"));
-        }
-    }
-    let end = match result {
+    let end = match sink.finish(result, o.chronogram.as_deref()) {
         Ok(end) => end,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 2;
-        }
+        Err(code) => return code,
     };
-    if let Some(p) = &o.chronogram {
-        let svg = mcl_runtime::chronogram::render(&sink.records, &mcl_runtime::chronogram::Options::default());
-        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-            let _ = std::fs::create_dir_all(dir);
-        }
-        if let Err(e) = std::fs::write(p, svg) {
-            eprintln!("error: cannot write `{}`: {e}", p.display());
-            return 2;
-        }
-    }
     if let Some(e) = sink.error {
         eprintln!("error: {e}");
         return 2;
@@ -637,28 +646,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             return 2;
         }
     };
-    if let Some(w) = &mut sink.trace {
-        if let Err(e) = w.flush() {
-            sink.error.get_or_insert(format!("cannot write the trace: {e}"));
-        }
-    }
-    let end = match result {
+    let end = match sink.finish(result, o.chronogram.as_deref()) {
         Ok(end) => end,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 2;
-        }
+        Err(code) => return code,
     };
-    if let Some(p) = &o.chronogram {
-        let svg = mcl_runtime::chronogram::render(&sink.records, &mcl_runtime::chronogram::Options::default());
-        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-            let _ = std::fs::create_dir_all(dir);
-        }
-        if let Err(e) = std::fs::write(p, svg) {
-            eprintln!("error: cannot write `{}`: {e}", p.display());
-            return 2;
-        }
-    }
     if let Some(e) = sink.error.take() {
         eprintln!("error: {e}");
         return 2;
