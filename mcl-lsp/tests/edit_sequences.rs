@@ -14,37 +14,7 @@ type Edit = (prop::sample::Index, usize, &'static str);
 
 /// One edit: replace `del` bytes at a position (a fraction of the text) with a piece.
 fn edits() -> impl Strategy<Value = Vec<Edit>> {
-    let pieces = prop::sample::select(vec![
-        "",
-        "{",
-        "}",
-        "(",
-        ")",
-        "[",
-        "]",
-        ";",
-        "\"",
-        "/*",
-        "*/",
-        "//",
-        "mission",
-        "tasks {",
-        "mission : x {",
-        "import \"v.mcl\";",
-        "events",
-        ",",
-        ":",
-        "->",
-        "x",
-        " ",
-        "\n",
-        "é",
-        "constraints {",
-        "Goto( 1 )",
-        "5",
-        "mutex { a:b, c:d } = 1",
-        "e: ev -> T0;",
-    ]);
+    let pieces = prop::sample::select(mcl_syntax::gen::EDIT_PIECES.to_vec());
     prop::collection::vec((any::<prop::sample::Index>(), 0usize..8, pieces), 1..12)
 }
 

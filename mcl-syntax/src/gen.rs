@@ -507,3 +507,42 @@ mod tests {
         }
     }
 }
+
+/// Text that matters to the parser (delimiters, keywords, quotes, comment
+/// markers, whole small items): what random edits insert in the tests of
+/// incremental parsing and of the language server.
+pub const EDIT_PIECES: &[&str] = &[
+    "",
+    "{",
+    "}",
+    "(",
+    ")",
+    "[",
+    "]",
+    ";",
+    "\"",
+    "/*",
+    "*/",
+    "//",
+    "mission",
+    "tasks {",
+    "mission : x {",
+    "import",
+    "events",
+    ",",
+    ":",
+    "->",
+    "x",
+    " ",
+    "\n",
+    "é",
+    "constraints {",
+    "mcl_plan_op",
+    "5",
+    "#",
+    "import \"a.mcl\"",
+    "import \"v.mcl\";",
+    "Goto( 1 )",
+    "mutex { a:b, c:d } = 1",
+    "e: ev -> T0;",
+];

@@ -66,37 +66,7 @@ fn a_missing_brace_is_one_error_item_by_item() {
 
 /// Text that matters to the parser (delimiters, keywords, quotes, comment markers).
 fn pieces() -> impl Strategy<Value = &'static str> {
-    prop::sample::select(vec![
-        "",
-        "{",
-        "}",
-        "(",
-        ")",
-        "[",
-        "]",
-        ";",
-        "\"",
-        "/*",
-        "*/",
-        "//",
-        "mission",
-        "tasks {",
-        "mission : x {",
-        "import",
-        "events",
-        ",",
-        ":",
-        "->",
-        "x",
-        " ",
-        "\n",
-        "é",
-        "constraints {",
-        "mcl_plan_op",
-        "5",
-        "#",
-        "import \"a.mcl\"",
-    ])
+    prop::sample::select(mcl_syntax::gen::EDIT_PIECES.to_vec())
 }
 
 /// An edit: where (modulo the length plus one, moved back to a char
