@@ -370,6 +370,7 @@ where
         ))
         .ignored()
     })
+    .boxed()
 }
 
 /// `p` repeated inside a braced list of `;`-terminated definitions. A broken
@@ -396,6 +397,7 @@ where
         .repeated()
         .collect::<Vec<Option<T>>>()
         .map(|v| v.into_iter().flatten().collect())
+        .boxed()
 }
 
 /// `{ ... }` whose contents, if they fail to parse, become `fallback`.
@@ -406,12 +408,14 @@ fn braced<'t, 's: 't, I, T: 't>(
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
 {
-    p.delimited_by(just(Token::LBrace), just(Token::RBrace)).recover_with(via_parser(
-        just(Token::LBrace)
-            .ignore_then(token_tree().repeated())
-            .then_ignore(just(Token::RBrace))
-            .map(move |_| fallback()),
-    ))
+    p.delimited_by(just(Token::LBrace), just(Token::RBrace))
+        .recover_with(via_parser(
+            just(Token::LBrace)
+                .ignore_then(token_tree().repeated())
+                .then_ignore(just(Token::RBrace))
+                .map(move |_| fallback()),
+        ))
+        .boxed()
 }
 
 fn value<'t, 's: 't, I>() -> impl Parser<'t, I, Value, Extra<'t, 's>> + Clone
@@ -443,6 +447,7 @@ where
         .map_with(|kind, e| Value { kind, span: Span::from(e.span()) })
         .labelled("value")
     })
+    .boxed()
 }
 
 fn stmt_error(span: Span) -> Stmt {
@@ -513,6 +518,7 @@ where
         }
         Block { stmts, span }
     })
+    .boxed()
 }
 
 fn stmt<'t, 's: 't, I>() -> impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone
@@ -560,13 +566,15 @@ where
             .map_with(|((name, (args, args_span)), label), e| {
                 StmtKind::Call(Call { name, args, args_span, label, span: Span::from(e.span()) })
             })
-            .labelled("task call");
+            .labelled("task call")
+            .boxed();
 
         let while_ = kw(Kw::While)
             .then(cond.clone())
             .then_ignore(kw(Kw::Do).or_not())
             .then(braced_block.clone())
-            .map(|((keyword, cond), body)| StmtKind::While { keyword, cond, body });
+            .map(|((keyword, cond), body)| StmtKind::While { keyword, cond, body })
+            .boxed();
 
         let else_ = kw(Kw::Else).then(braced_block.clone()).map(|(_, b)| (b, None));
         // Table B.4 writes the else branch as `then { C }`: accepted, linted.
@@ -582,7 +590,8 @@ where
                     None => (None, None),
                 };
                 StmtKind::If { keyword, cond, then, otherwise, else_written_then: then_spelling }
-            });
+            })
+            .boxed();
 
         let par_op = kw(Kw::And).map(|s| (ParallelOp::And, s)).or(kw(Kw::Or).map(|s| (ParallelOp::Or, s)));
         let parallel = kw(Kw::Parallel)
@@ -596,17 +605,20 @@ where
                     branches.push(b);
                 }
                 StmtKind::Parallel { keyword, branches, ops }
-            });
+            })
+            .boxed();
 
         let try_ = kw(Kw::Try)
             .then(braced_block.clone())
             .then_ignore(kw(Kw::Catch))
             .then(braced_block.clone())
-            .map(|((keyword, body), catch)| StmtKind::Try { keyword, body, catch });
+            .map(|((keyword, body), catch)| StmtKind::Try { keyword, body, catch })
+            .boxed();
 
         let not = kw(Kw::Not)
             .then(paren_block.clone().or(braced_block.clone()))
-            .map(|(keyword, body)| StmtKind::Not { keyword, body });
+            .map(|(keyword, body)| StmtKind::Not { keyword, body })
+            .boxed();
 
         let handler_kind = kw(Kw::Condition)
             .map(|s| (MonitorKind::Condition, s))
@@ -623,12 +635,14 @@ where
         let monitor = kw(Kw::Monitor)
             .then(braced_block.clone())
             .then(handler.repeated().at_least(1).collect::<Vec<_>>())
-            .map(|((keyword, body), handlers)| StmtKind::Monitor { keyword, body, handlers });
+            .map(|((keyword, body), handlers)| StmtKind::Monitor { keyword, body, handlers })
+            .boxed();
 
         choice((call, while_, if_, parallel, try_, not, monitor))
             .map_with(|kind, e| Stmt { kind, span: Span::from(e.span()) })
             .labelled("statement")
     })
+    .boxed()
 }
 
 /// The grammar of a file; with `Some(limit)`, of one item followed by the
@@ -684,15 +698,18 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
             (command, params)
         })
         .delimited_by(just(Token::LParen), just(Token::RParen));
-    let action = name().then_ignore(just(Token::Eq)).then(name()).then(action_args).map_with(
-        |((name, primitive), (command, params)), e| ActionDef {
+    let action = name()
+        .then_ignore(just(Token::Eq))
+        .then(name())
+        .then(action_args)
+        .map_with(|((name, primitive), (command, params)), e| ActionDef {
             name,
             primitive,
             command,
             params,
             span: Span::from(e.span()),
-        },
-    );
+        })
+        .boxed();
     let actions = kw(Kw::Actions)
         .ignore_then(braced(semi_list(action), Vec::new))
         .map_with(|actions, e| Item::Actions(ActionsBlock { actions, span: Span::from(e.span()) }));
@@ -725,7 +742,8 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .ignore_then(braced(semi_list(place), Vec::new))
         .then(section(Kw::Transitions).ignore_then(braced(semi_list(transition), Vec::new)))
         .then(section(Kw::Arcs).ignore_then(braced(semi_list(arc), Vec::new)))
-        .map(|((places, transitions), arcs)| PatternNet { places, transitions, arcs });
+        .map(|((places, transitions), arcs)| PatternNet { places, transitions, arcs })
+        .boxed();
     let file_name = choice((
         select! { Token::Str(s) => unescape(s) },
         name().then(just(Token::Dot).ignore_then(name()).repeated().collect::<Vec<_>>()).map(|(first, rest)| {
@@ -746,8 +764,10 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
             .map(|(path, path_span)| PatternBody::File { path, path_span }),
         braced(net.map(PatternBody::Net), || PatternBody::Net(PatternNet::default())),
     ));
-    let pattern =
-        name().then(pattern_body).map_with(|(name, body), e| Pattern { name, body, span: Span::from(e.span()) });
+    let pattern = name()
+        .then(pattern_body)
+        .map_with(|(name, body), e| Pattern { name, body, span: Span::from(e.span()) })
+        .boxed();
     let pattern_item = none_of([Token::RBrace])
         .rewind()
         .ignore_then(
@@ -791,7 +811,8 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
             pattern,
             bindings,
             span: Span::from(e.span()),
-        });
+        })
+        .boxed();
     let task_item = none_of([Token::RBrace])
         .rewind()
         .ignore_then(
@@ -850,7 +871,8 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .then(name().or_not())
         .then(params.or_not())
         .then(placement.or_not())
-        .then_ignore(junk.or_not());
+        .then_ignore(junk.or_not())
+        .boxed();
     let mission = kw(Kw::Mission)
         .to(MissionKind::Mission)
         .or(kw(Kw::PlanOp).to(MissionKind::PlanOp))
@@ -951,7 +973,16 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .ignore_then(braced(constraint_item, Vec::new))
         .map_with(|constraints, e| Item::Constraints(ConstraintsBlock { constraints, span: Span::from(e.span()) }));
 
-    let item = choice((import, actions, events, patterns, tasks, mission, constraints)).labelled("item");
+    let item = choice((
+        import.boxed(),
+        actions.boxed(),
+        events.boxed(),
+        patterns.boxed(),
+        tasks.boxed(),
+        mission.boxed(),
+        constraints.boxed(),
+    ))
+    .labelled("item");
     let skip_item = token_tree()
         .then(token_tree().and_is(starts_item.not()).repeated())
         .map_with(|_, e| {
