@@ -3,7 +3,7 @@
 #
 # Usage: benches-scripts/spin-compare.sh [NET ...]
 #   NET defaults to the three large nets of shared/data/mcc. Environment:
-#   MCC_DIR (default ../shared/data/mcc beside the repository), RUNS (runs per
+#   MCC_DIR (default tests/data/mcc, a copy of shared/data/mcc), RUNS (runs per
 #   tool and net, best time kept; default 3), THREADS (mcl-net worker
 #   threads; default 1). Needs spin and gcc (apt-get install -y spin gcc).
 #
@@ -16,7 +16,7 @@
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-MCC_DIR="${MCC_DIR:-$ROOT/../shared/data/mcc}"
+MCC_DIR="${MCC_DIR:-$ROOT/tests/data/mcc}"
 RUNS="${RUNS:-3}"
 THREADS="${THREADS:-1}"
 NETS=("$@")

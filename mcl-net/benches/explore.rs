@@ -1,7 +1,7 @@
 //! State-space exploration throughput on the large MCC nets.
 //!
 //! `cargo bench -p mcl-net --bench explore`; throughput is reported in states
-//! ("elements") per second. The nets are read from `shared/data/mcc` beside
+//! ("elements") per second. The nets are read from `tests/data/mcc` (a copy of `shared/data/mcc`) in
 //! the repository; the benchmark does nothing if that folder is absent.
 
 use std::path::PathBuf;
@@ -13,7 +13,7 @@ use mcl_net::{analyze, read_pnml, Options};
 const NETS: [&str; 3] = ["SharedMemory-PT-000010", "Kanban-PT-00005", "FMS-PT-00005"];
 
 fn explore_large_nets(c: &mut Criterion) {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/mcc");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/data/mcc");
     let mut group = c.benchmark_group("explore");
     group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(20));
     for name in NETS {
