@@ -186,8 +186,9 @@ pub struct CallBinding {
     /// (task parameter, value as JSON text), in header order.
     pub args: Vec<(String, String)>,
     /// Where the call sits when that matters to a mock vehicle:
-    /// `monitor_condition` (inside the condition of a monitor) or
-    /// `while_condition` (inside the condition of a while loop).
+    /// `monitor_condition` (inside the condition of a monitor),
+    /// `while_condition` (inside the condition of a while loop) or
+    /// `negated_while_condition` (there, under an odd number of `not`s).
     pub role: Option<String>,
 }
 

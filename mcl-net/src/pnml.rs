@@ -27,7 +27,7 @@
 //!     <param name="x" value="24"/>
 //!   </action>
 //!   <binding task="Goto" callSite="3" label="first">   <!-- a call's start;
-//!        optional role="monitor_condition" or "while_condition" -->
+//!        optional role="monitor_condition", "while_condition" or "negated_while_condition" -->
 //!     <arg name="way-point" value="[24, 12]"/>
 //!   </binding>
 //!   <provenance task="Goto"/>

@@ -212,6 +212,14 @@ impl Composer<'_> {
             match (&s, i) {
                 (Structure::While, 0) => self.role = Some("while_condition"),
                 (Structure::Monitor(_), i) if i % 2 == 1 => self.role = Some("monitor_condition"),
+                // Under an odd number of `not`s, a call that fails keeps the loop going.
+                (Structure::Not, _) => {
+                    self.role = match self.role {
+                        Some("while_condition") => Some("negated_while_condition"),
+                        Some("negated_while_condition") => Some("while_condition"),
+                        r => r,
+                    }
+                }
                 _ => {}
             }
             self.block(blk, k, &format!("{path}.{i}"));
