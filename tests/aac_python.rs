@@ -26,6 +26,24 @@ fn python_aac(args: &[&str]) -> Option<Proc> {
     Some(Proc::spawn(cmd))
 }
 
+/// The reference client's own unit tests (clients/python/test_mcl_aac.py):
+/// message checks (a JSON `true` is not a version), activations of the
+/// trivial vehicle's answers, and a disabled run staying silent.
+#[test]
+fn python_unit_tests() {
+    let Some(mut cmd) = python() else { return };
+    let out = cmd
+        .args(["-m", "unittest", "discover", "-s"])
+        .arg(at_root("clients/python"))
+        .args(["-p", "test_*.py"])
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("OK"), "{err}");
+}
+
 #[test]
 fn python_aac_conforms_to_the_protocol() {
     let Some(aac) = python_aac(&["--token", "s3cret"]) else { return };

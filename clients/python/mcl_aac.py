@@ -13,8 +13,11 @@ Use it as a library::
     def on_action(server, action):
         # action: dict with seq, action, primitive, command, params, task, call_site
         if action["command"] == "enable" and action["primitive"] == "GotoPrimitive":
+            # activation: the seq of the action that started this run of the
+            # primitive, so that the player can drop an answer that crossed
+            # a `disable` on the wire (docs/aac-protocol.md, section 6).
             start_goto(action["params"]["way-point"],
-                       done=lambda: server.send_event("eventGotoOk"))
+                       done=lambda: server.send_event("eventGotoOk", activation=action["seq"]))
 
     server = AacServer(host="127.0.0.1", port=7010, token="s3cret", on_action=on_action)
     server.serve_forever()
@@ -66,6 +69,11 @@ class ProtocolError(Exception):
         self.seq = seq
 
 
+def _is_int(v):
+    """A JSON integer (bool is a subclass of int in Python: not one)."""
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
 def parse_line(line):
     """Parses one line (bytes, without its newline) into a dict, or raises ProtocolError."""
     try:
@@ -74,7 +82,7 @@ def parse_line(line):
         raise ProtocolError("malformed", "invalid JSON: %s" % e)
     if not isinstance(msg, dict):
         raise ProtocolError("malformed", "a message must be a JSON object")
-    seq = msg.get("seq") if isinstance(msg.get("seq"), int) and not isinstance(msg.get("seq"), bool) else None
+    seq = msg.get("seq") if _is_int(msg.get("seq")) else None
     ty = msg.get("type")
     if not isinstance(ty, str):
         raise ProtocolError("malformed", "missing or non-string field `type`", seq)
@@ -95,8 +103,18 @@ def parse_line(line):
         msg.setdefault("task", None)
         msg.setdefault("call_site", None)
     elif ty == "hello":
-        if not isinstance(msg.get("version"), int):
+        if not _is_int(msg.get("version")) or msg["version"] < 0:
             raise ProtocolError("malformed", "bad `hello` message: missing integer field `version`")
+        for field in ("last_event",):
+            if msg.get(field) is not None and (not _is_int(msg[field]) or msg[field] < 0):
+                raise ProtocolError("malformed", "bad `hello` message: `%s` must be a non-negative integer" % field)
+        for field in ("token", "player", "mission", "run", "session"):
+            if msg.get(field) is not None and not isinstance(msg[field], str):
+                raise ProtocolError("malformed", "bad `hello` message: `%s` must be a string" % field)
+    elif ty == "ping":
+        last = msg.get("last_event")
+        if last is not None and (not _is_int(last) or last < 0):
+            raise ProtocolError("malformed", "bad `ping` message: `last_event` must be a non-negative integer")
     return msg
 
 
@@ -174,9 +192,17 @@ class AacServer(object):
 
     # -- the vehicle side's API -------------------------------------------
 
-    def send_event(self, name, session=None):
-        """Sends event `name` to the player of `session` (default: the latest session)."""
-        self._push(session, {"type": "event", "event": name})
+    def send_event(self, name, session=None, activation=None):
+        """Sends event `name` to the player of `session` (default: the latest session).
+
+        `activation` is the `seq` of the action that started the primitive run
+        raising the event: give it, so that the player ignores an answer of a
+        run it has disabled meanwhile (it crossed the `disable` on the wire).
+        """
+        msg = {"type": "event", "event": name}
+        if activation is not None:
+            msg["activation"] = activation
+        self._push(session, msg)
 
     def send_perception(self, name, value, session=None):
         """Sends perception `name` with a JSON value."""
@@ -312,7 +338,7 @@ class AacServer(object):
                 elif ty == "ping":
                     with self._lock:
                         last = msg.get("last_event")
-                        if isinstance(last, int):
+                        if _is_int(last):
                             session.outbox = [(n, l) for (n, l) in session.outbox if n > last]
                     self._reply(conn, {"type": "pong"})
                 elif ty == "pong":
@@ -359,7 +385,7 @@ class AacServer(object):
                        "last_event": s.last_event, "session": s.id, "aac": self.name}
             self._reply(conn, welcome)
             last = msg.get("last_event")
-            if isinstance(last, int):
+            if _is_int(last):
                 start = 0 if (msg.get("session") not in (None, s.id)) else last
                 if start > 0:
                     s.outbox = [(n, l) for (n, l) in s.outbox if n > start]
@@ -406,12 +432,16 @@ def default_event(primitive):
 
 
 class TrivialVehicle(object):
-    """Every enable ends ok after `delay` seconds; a disable before then cancels it."""
+    """Every enable ends ok after `delay` seconds; a disable before then cancels it.
+
+    Each answer names its activation (the seq of the enable), and a run that
+    was disabled never answers, even if its timer was already firing.
+    """
 
     def __init__(self, mapping, delay):
         self.mapping = mapping
         self.delay = delay
-        self.timers = {}
+        self.timers = {}  # key -> (timer, activation seq)
         self.lock = threading.Lock()
 
     def __call__(self, server, action):
@@ -419,22 +449,27 @@ class TrivialVehicle(object):
         with self.lock:
             old = self.timers.pop(key, None)
         if old is not None:
-            old.cancel()
+            old[0].cancel()
         if action["command"] != "enable":
             return
         event = self.mapping.get(action["primitive"], default_event(action["primitive"]))
         if not event:
             return  # mapped to nothing: this primitive never answers
-        timer = threading.Timer(self.delay, self._fire, args=(server, key, event))
+        timer = threading.Timer(self.delay, self._fire, args=(server, key, event, action["seq"]))
         timer.daemon = True
         with self.lock:
-            self.timers[key] = timer
+            self.timers[key] = (timer, action["seq"])
         timer.start()
 
-    def _fire(self, server, key, event):
+    def _fire(self, server, key, event, activation):
         with self.lock:
-            self.timers.pop(key, None)
-        server.send_event(event)
+            current = self.timers.get(key)
+            if current is None or current[1] != activation:
+                return  # disabled (or restarted) since: say nothing
+            del self.timers[key]
+            # Sent under the lock: a disable handled after this point comes
+            # after the event, as on the wire.
+            server.send_event(event, activation=activation)
 
 
 def _split_addr(addr):

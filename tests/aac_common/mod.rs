@@ -232,6 +232,9 @@ pub fn conformance(aac: &Proc, token: &str, run: &str) {
     }
     // Before hello: errors, connection kept.
     let mut c = Raw::connect(addr);
+    // A version that is not an integer (JSON `true` is no 1).
+    c.send(json!({"type":"hello","version":true,"token":token,"run":run}));
+    assert_error(&c.recv(), "malformed", "hello with version true");
     c.send_raw(b"{\"type\":\"action\",\"seq\":1,\"action\":\"a\",\"primitive\":\"P\",\"command\":\"enable\"}\n");
     assert_error(&c.recv(), "unexpected", "action before hello");
     let w = c.hello(json!({"token": token, "run": run}));
