@@ -124,7 +124,7 @@ enum Command {
         /// Give a symbolic argument a value, e.g. --set timeout=60 (repeatable).
         #[arg(long, value_name = "NAME=VALUE")]
         set: Vec<String>,
-        /// Stop (exit status 3) when mission time passes SECONDS.
+        /// Stop (exit status 3) when mission time passes SECONDS (virtual time: 86400 unless given; `inf`: no limit).
         #[arg(long, value_name = "SECONDS")]
         time_limit: Option<f64>,
         /// Run only this mission of a file that defines several (default: all of them

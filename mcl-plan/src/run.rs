@@ -541,7 +541,7 @@ impl Run<'_> {
     /// Aborts the running mission through its abort hook.
     fn abort_running(&mut self) {
         if self.running.as_ref().is_some_and(|r| r.player.outcome().is_none()) {
-            self.apply(Input::Event(self.t, ABORT_EVENT.to_string()));
+            self.apply(Input::Event(self.t, ABORT_EVENT.to_string(), None));
         }
     }
 
@@ -618,13 +618,16 @@ impl Run<'_> {
 
     fn deliver(&mut self, m: Inbound) {
         match m {
-            Inbound::Event { event } => match &self.running {
-                Some(_) => self.apply(Input::Event(self.t, event)),
+            // The activation ids are in this run's numbering of actions, not
+            // in each step's player's: not checked here.
+            Inbound::Event { event, .. } => match &self.running {
+                Some(_) => self.apply(Input::Event(self.t, event, None)),
                 None => self.emit("unexpected_event", json!({ "event": event, "reason": "no mission is running" })),
             },
             Inbound::Perception { name, value } => self.perceive(name, value),
             Inbound::Disconnected => self.emit("warning", json!({ "message": "link to the AAC lost; reconnecting" })),
             Inbound::Connected => self.emit("warning", json!({ "message": "link to the AAC up" })),
+            Inbound::Notice { message } => self.emit("link", json!({ "message": message })),
             Inbound::Ack { .. } => {}
         }
     }

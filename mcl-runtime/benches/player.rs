@@ -278,7 +278,7 @@ fn run_naive(net: &Arc<Net>, mut mock: MockVehicle) -> u64 {
             }
             (_, Some(b)) => {
                 p.now = p.now.max(b);
-                if let Some((_, Inbound::Event { event })) = mock.pop_due(b) {
+                if let Some((_, Inbound::Event { event, .. })) = mock.pop_due(b) {
                     p.receive_event(&event, &mut out);
                 }
             }
@@ -340,7 +340,7 @@ fn player_latency(net: &Arc<Net>) -> Vec<Duration> {
     feed(&mut mock, &out, 0.0);
     while p.outcome().is_none() {
         let Some(t) = mock.next_deadline() else { break };
-        let Some((t, Inbound::Event { event })) = mock.pop_due(t) else { continue };
+        let Some((t, Inbound::Event { event, .. })) = mock.pop_due(t) else { continue };
         let start = Instant::now();
         let out = p.on_event(t, &event);
         let took = start.elapsed();
@@ -389,7 +389,7 @@ fn link_latency(net: &Arc<Net>) -> Vec<Duration> {
             if end.actions.is_empty() {
                 if let Some(ev) = pending.pop() {
                     sent_at = Some(Instant::now());
-                    if end.inbound.send(Inbound::Event { event: ev }).is_err() {
+                    if end.inbound.send(Inbound::Event { event: ev, activation: None }).is_err() {
                         break;
                     }
                 }

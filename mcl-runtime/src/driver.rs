@@ -64,6 +64,9 @@ pub enum End {
     },
     /// The time limit passed.
     TimeLimit(f64),
+    /// Virtual time: [`ZERO_TIME_INPUTS`] inputs in a row at one instant
+    /// (a loop whose tasks all answer at once): stopped as stuck.
+    ZeroTimeLoop(f64),
 }
 
 impl End {
@@ -80,8 +83,17 @@ impl End {
     pub fn result(&self) -> &'static str {
         match self {
             End::Outcome(o) => o.as_str(),
-            End::Quiescent { .. } => "stuck",
+            End::Quiescent { .. } | End::ZeroTimeLoop(_) => "stuck",
             End::TimeLimit(_) => "time_limit",
+        }
+    }
+
+    /// The mission time of the end when the driver decided it (the time
+    /// limit, the instant of a zero-time loop), else None (the player's time).
+    pub fn driver_time(&self) -> Option<f64> {
+        match self {
+            End::TimeLimit(t) | End::ZeroTimeLoop(t) => Some(*t),
+            _ => None,
         }
     }
 }
@@ -99,13 +111,16 @@ pub struct Session<'a> {
     /// Test hook: abort the process (as `kill -9` would) right after the
     /// n-th journal sync of this process, before that input's actions are sent.
     pub crash_after: Option<u64>,
+    /// The link to the AAC is down (or not yet up): actions are queued, and
+    /// their records say so (`queued`).
+    pub link_down: bool,
     syncs: u64,
 }
 
 impl<'a> Session<'a> {
     /// A session without journal.
     pub fn new(player: Player, tracer: Tracer, sink: &'a mut (dyn Sink + Send)) -> Self {
-        Session { player, tracer, sink, journal: None, crash_after: None, syncs: 0 }
+        Session { player, tracer, sink, journal: None, crash_after: None, link_down: false, syncs: 0 }
     }
 
     /// Records one output (used for replayed outputs too).
@@ -113,7 +128,10 @@ impl<'a> Session<'a> {
         if !self.sink.wants_records() {
             return;
         }
-        let r = self.tracer.record(o);
+        let mut r = self.tracer.record(o);
+        if self.link_down && matches!(o, Output::Send { .. }) {
+            r.queued = Some(true);
+        }
         self.sink.record(&r);
     }
 
@@ -169,6 +187,13 @@ impl<'a> Session<'a> {
         r.message = Some(message);
         self.emit_record(r);
     }
+
+    /// Records a notice of the link to the AAC.
+    pub fn link_notice(&mut self, t: f64, message: String) {
+        let mut r = Record::new(t, "link");
+        r.message = Some(message);
+        self.emit_record(r);
+    }
 }
 
 /// The actions among outputs.
@@ -179,16 +204,82 @@ pub fn actions(out: &[Output]) -> impl Iterator<Item = &Action> {
     })
 }
 
+/// The mission-time limit of a virtual-time run when none is given: one
+/// day. A mission that loops forever then ends (exit status 3) instead of
+/// filling the disk with its trace; `--time-limit` changes it.
+pub const DEFAULT_VIRTUAL_TIME_LIMIT: f64 = 86_400.0;
+
+/// Inputs in a row at one instant of virtual time after which a run is
+/// stopped as a zero-time loop (tasks that answer at once, in a loop).
+pub const ZERO_TIME_INPUTS: u64 = 10_000;
+
 /// Limits of a run.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Limits {
     /// Stop when mission time passes this.
     pub time_limit: Option<f64>,
+    /// The time limit is [`DEFAULT_VIRTUAL_TIME_LIMIT`], not one the user gave
+    /// (the message says how to change it).
+    pub default_limit: bool,
+}
+
+impl Limits {
+    /// The limits of a virtual-time run: `given`, else the default limit.
+    /// An infinite `given` means no limit.
+    pub fn virtual_time(given: Option<f64>) -> Limits {
+        match given {
+            Some(t) if t.is_infinite() => Limits { time_limit: None, default_limit: false },
+            Some(t) => Limits { time_limit: Some(t), default_limit: false },
+            None => Limits { time_limit: Some(DEFAULT_VIRTUAL_TIME_LIMIT), default_limit: true },
+        }
+    }
+
+    /// The limits of a real-time run (no limit unless given).
+    pub fn real_time(given: Option<f64>) -> Limits {
+        Limits { time_limit: given.filter(|t| t.is_finite()), default_limit: false }
+    }
+
+    /// Why a run stopped at the time limit `limit`.
+    pub fn passed(&self, limit: f64) -> String {
+        if self.default_limit {
+            format!(
+                "the default time limit of virtual-time runs ({limit} s of mission time) passed: the mission may loop forever (--time-limit SECONDS to change it, --time-limit inf for none)"
+            )
+        } else {
+            format!("the time limit of {limit} s passed")
+        }
+    }
+}
+
+/// Counts the inputs of a virtual-time run at one instant.
+#[derive(Debug, Default)]
+pub(crate) struct SameInstant {
+    t: f64,
+    n: u64,
+}
+
+impl SameInstant {
+    /// One more input at `t`; true when there were too many at that instant.
+    pub(crate) fn tick(&mut self, t: f64) -> bool {
+        if t > self.t {
+            self.t = t;
+            self.n = 0;
+        }
+        self.n += 1;
+        self.n > ZERO_TIME_INPUTS
+    }
+
+    /// The message of a zero-time loop at `t`.
+    pub(crate) fn message(t: f64) -> String {
+        format!(
+            "zero-time loop: {ZERO_TIME_INPUTS} inputs at t={t} s without mission time advancing (a loop whose tasks answer at once?)"
+        )
+    }
 }
 
 pub(crate) fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
     match m {
-        Inbound::Event { event } => Some(Input::Event(t, event)),
+        Inbound::Event { event, activation } => Some(Input::Event(t, event, activation)),
         Inbound::Perception { name, value } => Some(Input::Perception(t, name, value)),
         _ => None,
     }
@@ -211,6 +302,7 @@ pub fn run_virtual(s: &mut Session, mock: &mut MockVehicle, limits: Limits) -> R
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, mock, 0.0, &actions);
     }
+    let mut same = SameInstant::default();
     loop {
         if let Some(o) = s.player.outcome() {
             return Ok(End::Outcome(o));
@@ -237,9 +329,13 @@ pub fn run_virtual(s: &mut Session, mock: &mut MockVehicle, limits: Limits) -> R
         };
         if let Some(limit) = limits.time_limit {
             if next > limit {
-                s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                s.end_by_driver(limit, "time_limit", limits.passed(limit));
                 return Ok(End::TimeLimit(limit));
             }
+        }
+        if same.tick(next) {
+            s.end_by_driver(next, "stuck", SameInstant::message(next));
+            return Ok(End::ZeroTimeLoop(next));
         }
         let actions = if tp.is_some_and(|a| a <= next) {
             s.step(Input::Timer(next))?
@@ -307,8 +403,13 @@ pub async fn run_real_time(
                 match m {
                     None => return Err("the link to the AAC closed".into()),
                     Some(Inbound::Ack { seq }) => { s.ack(seq); Vec::new() }
-                    Some(Inbound::Disconnected) => { s.warn(now, "link to the AAC lost; reconnecting".into()); Vec::new() }
-                    Some(Inbound::Connected) => { s.warn(now, "link to the AAC up".into()); Vec::new() }
+                    Some(Inbound::Disconnected) => {
+                        s.link_down = true;
+                        s.warn(now, "link to the AAC lost; reconnecting (actions are queued meanwhile)".into());
+                        Vec::new()
+                    }
+                    Some(Inbound::Connected) => { s.link_down = false; s.warn(now, "link to the AAC up".into()); Vec::new() }
+                    Some(Inbound::Notice { message }) => { s.link_notice(now, message); Vec::new() }
                     Some(m) => match perception_or_event(now, m) {
                         Some(input) => s.step(input)?,
                         None => Vec::new(),
@@ -321,7 +422,7 @@ pub async fn run_real_time(
                     Some(d) if d <= w => s.step(Input::Timer(d.max(s.player.now())))?,
                     _ => {
                         let limit = limits.time_limit.unwrap_or(w);
-                        s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                        s.end_by_driver(limit, "time_limit", limits.passed(limit));
                         if let Some(j) = &mut s.journal {
                             j.sync()?;
                         }
@@ -337,10 +438,45 @@ pub async fn run_real_time(
 /// Serves `mock` on `end` in real time: answers actions (with an `Ack`) and
 /// sends its scheduled messages when they are due. Ends when the player's
 /// end of the link is dropped. Warnings go to `warn`.
+///
+/// Inputs first, one answer at a time: every action already received is
+/// executed before the next due message is sent (so a primitive disabled
+/// before its answer was due never answers), and after each message the
+/// task yields, so that an in-process player reacts (and its `disable`
+/// actions arrive) before the next message due at the same time is taken,
+/// as in virtual time.
 pub async fn serve_mock(mut mock: MockVehicle, mut end: AacEnd, clock: Clock, mut warn: impl FnMut(String)) {
+    use tokio::sync::mpsc::error::TryRecvError;
     mock.initial();
+    let mut execute = |mock: &mut MockVehicle, end: &AacEnd, a: Action| -> bool {
+        mock.on_action(clock.now(), &a);
+        for w in mock.take_warnings() {
+            warn(w);
+        }
+        end.inbound.send(Inbound::Ack { seq: a.seq }).is_ok()
+    };
     loop {
+        loop {
+            match end.actions.try_recv() {
+                Ok(a) => {
+                    if !execute(&mut mock, &end, a) {
+                        return;
+                    }
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return,
+            }
+        }
         let wake = mock.next_deadline();
+        if let Some(d) = wake.filter(|&d| clock.instant_at(d) <= tokio::time::Instant::now()) {
+            if let Some((_, m)) = mock.pop_due(d.max(clock.now())) {
+                if end.inbound.send(m).is_err() {
+                    return;
+                }
+            }
+            tokio::task::yield_now().await;
+            continue;
+        }
         let sleep = async {
             match wake {
                 Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
@@ -351,17 +487,12 @@ pub async fn serve_mock(mut mock: MockVehicle, mut end: AacEnd, clock: Clock, mu
             a = end.actions.recv() => match a {
                 None => return,
                 Some(a) => {
-                    mock.on_action(clock.now(), &a);
-                    for w in mock.take_warnings() { warn(w); }
-                    if end.inbound.send(Inbound::Ack { seq: a.seq }).is_err() { return; }
+                    if !execute(&mut mock, &end, a) {
+                        return;
+                    }
                 }
             },
-            _ = sleep => {
-                let now = clock.now().max(wake.unwrap_or_default());
-                while let Some((_, m)) = mock.pop_due(now) {
-                    if end.inbound.send(m).is_err() { return; }
-                }
-            }
+            _ = sleep => {}
         }
     }
 }
@@ -467,6 +598,9 @@ mod tests {
         let mut s = Session::new(Player::new(net.clone(), PlayerOptions::seeded(3)), tracer, &mut sink);
         let mut mock = MockVehicle::from_net(&net, Scenario::from_toml("[tasks.X]\ndelay = 50", "s").unwrap(), 3);
         mock.initial();
-        assert_eq!(run_virtual(&mut s, &mut mock, Limits { time_limit: Some(10.0) }).unwrap(), End::TimeLimit(10.0));
+        assert_eq!(
+            run_virtual(&mut s, &mut mock, Limits { time_limit: Some(10.0), default_limit: false }).unwrap(),
+            End::TimeLimit(10.0)
+        );
     }
 }

@@ -78,6 +78,9 @@ pub enum Entry {
         t: f64,
         /// Event name.
         event: String,
+        /// The activation it named, if any.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        activation: Option<u64>,
     },
     /// A perception was received.
     Perception {
@@ -112,8 +115,9 @@ pub enum Entry {
 pub enum Input {
     /// Start the mission.
     Start(f64),
-    /// An event.
-    Event(f64, String),
+    /// An event, with the activation it names (the `seq` of the action
+    /// that started the primitive run that raised it), if any.
+    Event(f64, String, Option<u64>),
     /// A perception.
     Perception(f64, String, Value),
     /// Timers.
@@ -125,7 +129,7 @@ impl Input {
     pub fn entry(&self) -> Entry {
         match self {
             Input::Start(t) => Entry::Start { t: *t },
-            Input::Event(t, e) => Entry::Event { t: *t, event: e.clone() },
+            Input::Event(t, e, a) => Entry::Event { t: *t, event: e.clone(), activation: *a },
             Input::Perception(t, n, v) => Entry::Perception { t: *t, name: n.clone(), value: v.clone() },
             Input::Timer(t) => Entry::Timer { t: *t },
         }
@@ -135,7 +139,7 @@ impl Input {
     pub fn of_entry(e: &Entry) -> Option<Input> {
         Some(match e {
             Entry::Start { t } => Input::Start(*t),
-            Entry::Event { t, event } => Input::Event(*t, event.clone()),
+            Entry::Event { t, event, activation } => Input::Event(*t, event.clone(), *activation),
             Entry::Perception { t, name, value } => Input::Perception(*t, name.clone(), value.clone()),
             Entry::Timer { t } => Input::Timer(*t),
             _ => return None,
@@ -146,7 +150,7 @@ impl Input {
     pub fn apply(&self, p: &mut Player) -> Vec<Output> {
         match self {
             Input::Start(t) => p.start(*t),
-            Input::Event(t, e) => p.on_event(*t, e),
+            Input::Event(t, e, a) => p.on_event_from(*t, e, *a),
             Input::Perception(t, n, v) => p.on_perception(*t, n, v.clone()),
             Input::Timer(t) => p.on_timer(*t),
         }
@@ -155,7 +159,7 @@ impl Input {
     /// The message a vehicle sent for this input, if it is one.
     pub fn message(&self) -> Option<Inbound> {
         match self {
-            Input::Event(_, e) => Some(Inbound::Event { event: e.clone() }),
+            Input::Event(_, e, a) => Some(Inbound::Event { event: e.clone(), activation: *a }),
             Input::Perception(_, n, v) => Some(Inbound::Perception { name: n.clone(), value: v.clone() }),
             _ => None,
         }
@@ -164,7 +168,7 @@ impl Input {
     /// Its time.
     pub fn time(&self) -> f64 {
         match self {
-            Input::Start(t) | Input::Event(t, _) | Input::Perception(t, _, _) | Input::Timer(t) => *t,
+            Input::Start(t) | Input::Event(t, _, _) | Input::Perception(t, _, _) | Input::Timer(t) => *t,
         }
     }
 }
@@ -375,7 +379,7 @@ mod tests {
         let path = dir.join("j.jsonl");
         let mut w = JournalWriter::create(&path, &header()).unwrap();
         w.append(&Entry::Start { t: 0.0 });
-        w.append(&Entry::Event { t: 2.0, event: "e".into() });
+        w.append(&Entry::Event { t: 2.0, event: "e".into(), activation: None });
         w.append(&Entry::Fire { t: 2.0, transition: "a".into() });
         w.append(&Entry::Ack { seq: 1 });
         w.sync().unwrap();
@@ -390,14 +394,14 @@ mod tests {
         assert_eq!((r.inputs, seen, r.last_time, r.acked.len()), (2, 2, 2.0, 1));
         assert_eq!(p.marking().0, vec![0, 1, 0]);
         let mut w = JournalWriter::append_to(&path).unwrap();
-        w.append(&Entry::Event { t: 3.0, event: "e".into() });
+        w.append(&Entry::Event { t: 3.0, event: "e".into(), activation: None });
         w.sync().unwrap();
         assert_eq!(read_journal(&path).unwrap().len(), 6);
 
         // A journal that disagrees with the net is refused.
         let mut bad = entries.clone();
         bad[3] = Entry::Fire { t: 2.0, transition: "c".into() };
-        bad.push(Entry::Event { t: 3.0, event: "e".into() });
+        bad.push(Entry::Event { t: 3.0, event: "e".into(), activation: None });
         let mut p = Player::new(net(), PlayerOptions::default());
         let e = replay(&mut p, &bad, |_, _| {}).unwrap_err();
         assert!(e.contains("the journal fired `c` where the player fires `a`"), "{e}");

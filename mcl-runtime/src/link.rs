@@ -27,7 +27,13 @@ pub struct Action {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Inbound {
     /// A primitive raised an event (seed 5.2: `events { ... }`).
-    Event { event: String },
+    Event {
+        /// Event name.
+        event: String,
+        /// The `seq` of the action that started the primitive run that
+        /// raised it, when the AAC says (`docs/aac-protocol.md` §6).
+        activation: Option<u64>,
+    },
     /// A named perception value (for the world modeler of the planner).
     Perception { name: String, value: serde_json::Value },
     /// The AAC acknowledged action `seq`.
@@ -36,6 +42,13 @@ pub enum Inbound {
     Disconnected,
     /// The link is up again.
     Connected,
+    /// Something about the link worth telling the operator (a reconnection
+    /// attempt, an error reported by the AAC, a malformed message, a gap in
+    /// the event numbers...). Changes nothing.
+    Notice {
+        /// One line.
+        message: String,
+    },
 }
 
 /// The player's end of a link to an AAC.

@@ -22,11 +22,17 @@
 //!   `[tasks.T.label.l]`, then `[tasks.T]`, field by field. Without a rule,
 //!   the outcome depends on the role: a call inside a `monitor` condition
 //!   (`monitor_condition`) never answers, a call inside a `while` condition
-//!   (`while_condition`) fails, so that loops end; any other call ends ok.
+//!   (`while_condition`) fails, so that loops end, unless it is under an odd
+//!   number of `not`s (`negated_while_condition`: it ends ok, and the
+//!   negated condition fails); any other call ends ok.
 //!   The delay defaults to the scenario's `default_duration`, else
 //!   [`DEFAULT_DURATION`]. The event sent is the first ok (or fail) event of
 //!   the task, from the net property `task_events:T`, unless the rule names
 //!   one (`event = "..."`).
+//! * **Activation ids.** Every answer names its activation: the `seq` of
+//!   the action that activated the task (`docs/aac-protocol.md` §6), so
+//!   that the player can drop an answer that crossed the `disable` of its
+//!   run on the wire. Scripted events name none.
 //! * **Duplicates.** An action whose `seq` is not above the last one seen is
 //!   dropped (the link contract: a re-sent action is executed once).
 //! * Messages due at the same time leave in the order they were scheduled.
@@ -176,7 +182,7 @@ impl MockVehicle {
         self.initialised = true;
         let mut out: Vec<(f64, Inbound)> = Vec::new();
         for e in &self.scenario.events {
-            out.push((e.at, Inbound::Event { event: e.event.clone() }));
+            out.push((e.at, Inbound::Event { event: e.event.clone(), activation: None }));
         }
         for p in &self.scenario.perceptions {
             if let Some(at) = p.at {
@@ -236,6 +242,8 @@ impl MockVehicle {
             (None, None) => match role {
                 Some("monitor_condition") => OutcomeRule::Never,
                 Some("while_condition") => OutcomeRule::Fail,
+                // `while ( not ( C() ) )`: C ends ok, so that the loop ends.
+                Some("negated_while_condition") => OutcomeRule::Ok,
                 _ => OutcomeRule::Ok,
             },
         };
@@ -261,7 +269,7 @@ impl MockVehicle {
         let mut out = Vec::new();
         let at = event.map(|event| {
             let t = now + delay;
-            let msg = Inbound::Event { event };
+            let msg = Inbound::Event { event, activation: Some(a.seq) };
             out.push((t, msg.clone()));
             (t, self.schedule(t, msg, Some(task.to_string())))
         });
@@ -319,9 +327,17 @@ impl MockVehicle {
     }
 
     /// Removes the earliest scheduled message equal to `msg` (it was
-    /// delivered before a restart). False if there is none.
+    /// delivered before a restart; an event journaled without its
+    /// activation, by an older version, matches by name). False if there
+    /// is none.
     pub fn take_delivered(&mut self, msg: &Inbound) -> bool {
-        let Some(k) = self.agenda.iter().find(|(_, p)| &p.msg == msg).map(|(k, _)| *k) else { return false };
+        let same = |p: &Inbound| match (p, msg) {
+            (Inbound::Event { event: a, activation: x }, Inbound::Event { event: b, activation: y }) => {
+                a == b && (y.is_none() || x == y)
+            }
+            _ => p == msg,
+        };
+        let Some(k) = self.agenda.iter().find(|(_, p)| same(&p.msg)).map(|(k, _)| *k) else { return false };
         if let Some(p) = self.agenda.remove(&k) {
             self.delivered(k, &p);
         }
@@ -330,7 +346,7 @@ impl MockVehicle {
 
     fn delivered(&mut self, k: Key, p: &Pending) {
         // Perceptions scripted `after` this event.
-        if let Inbound::Event { event } = &p.msg {
+        if let Inbound::Event { event, .. } = &p.msg {
             let n = self.sent.entry(event.clone()).or_insert(0);
             *n += 1;
             let n = *n;
@@ -394,17 +410,22 @@ mod tests {
     }
 
     fn ev(e: &str) -> Inbound {
-        Inbound::Event { event: e.into() }
+        Inbound::Event { event: e.into(), activation: None }
+    }
+
+    /// The answer to the action `seq`.
+    fn ans(e: &str, seq: u64) -> Inbound {
+        Inbound::Event { event: e.into(), activation: Some(seq) }
     }
 
     #[test]
     fn default_rules_by_role() {
         let mut m = mock("");
-        assert_eq!(m.on_action(0.0, &action(1, "Goto", "enable", 1)), vec![(5.0, ev("evGotoOk"))]);
+        assert_eq!(m.on_action(0.0, &action(1, "Goto", "enable", 1)), vec![(5.0, ans("evGotoOk", 1))]);
         assert!(m.on_action(0.0, &action(2, "Alarm", "enable", 2)).is_empty());
-        assert_eq!(m.on_action(1.0, &action(3, "Cond", "enable", 3)), vec![(6.0, ev("evCondFail"))]);
+        assert_eq!(m.on_action(1.0, &action(3, "Cond", "enable", 3)), vec![(6.0, ans("evCondFail", 3))]);
         assert_eq!(m.pop_due(4.0), None);
-        assert_eq!(m.pop_due(5.0), Some((5.0, ev("evGotoOk"))));
+        assert_eq!(m.pop_due(5.0), Some((5.0, ans("evGotoOk", 1))));
         // A duplicate is dropped; a disable cancels the pending answer.
         assert!(m.on_action(6.0, &action(3, "Cond", "disable", 3)).is_empty());
         assert!(m.on_action(6.0, &action(4, "Cond", "disable", 3)).is_empty());
@@ -428,9 +449,9 @@ event = "evAlarmOk"
 "#,
         );
         assert_eq!(m.initial(), vec![(7.0, ev("evAlarmOk"))]);
-        assert_eq!(m.on_action(0.0, &action(1, "Goto", "enable", 1)), vec![(10.0, ev("evGotoFail"))]);
+        assert_eq!(m.on_action(0.0, &action(1, "Goto", "enable", 1)), vec![(10.0, ans("evGotoFail", 1))]);
         m.on_action(1.0, &action(2, "Goto", "disable", 1));
-        assert_eq!(m.on_action(1.0, &action(3, "Goto", "enable", 4)), vec![(11.0, ev("evGotoOk"))]);
+        assert_eq!(m.on_action(1.0, &action(3, "Goto", "enable", 4)), vec![(11.0, ans("evGotoOk", 3))]);
         m.on_action(2.0, &action(4, "Goto", "disable", 4));
         assert!(m.on_action(2.0, &action(5, "Goto", "enable", 4)).is_empty());
         assert_eq!(m.pop_due(100.0), Some((7.0, ev("evAlarmOk"))));
@@ -458,12 +479,12 @@ value = 2
         let p = |n: &str, v: serde_json::Value| Inbound::Perception { name: n.into(), value: v };
         assert!(m.initial().is_empty());
         m.on_action(0.0, &action(1, "Goto", "enable", 4));
-        assert_eq!(m.pop_due(10.0), Some((10.0, ev("evGotoOk"))));
+        assert_eq!(m.pop_due(10.0), Some((10.0, ans("evGotoOk", 1))));
         assert_eq!(m.pop_due(10.0), Some((10.0, p("moved", serde_json::json!(true)))));
         assert_eq!(m.pop_due(100.0), None);
         m.on_action(10.0, &action(2, "Goto", "disable", 4));
         m.on_action(10.0, &action(3, "Goto", "enable", 4));
-        assert_eq!(m.pop_due(20.0), Some((20.0, ev("evGotoOk"))));
+        assert_eq!(m.pop_due(20.0), Some((20.0, ans("evGotoOk", 3))));
         assert_eq!(m.pop_due(20.0), Some((20.0, p("moved", serde_json::json!(true)))));
         assert_eq!(m.pop_due(21.0), None);
         assert_eq!(m.pop_due(21.5), Some((21.5, p("second", serde_json::json!(2)))));
@@ -489,7 +510,7 @@ value = 2
         };
         let a = draw(3);
         assert_eq!(a, draw(3));
-        let oks = a.iter().filter(|e| **e == ev("evGotoOk")).count();
+        let oks = a.iter().filter(|e| matches!(e, Inbound::Event { event, .. } if event == "evGotoOk")).count();
         assert!((8..32).contains(&oks), "{oks}");
     }
 }

@@ -32,7 +32,7 @@
 //!   missions are stuck), or at the time limit.
 //!
 //! Every record names its mission; the last one, `coord_summary`, gives
-//! the number of messages sent.
+//! the number of messages sent and names every mission as `"*"`.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
@@ -40,7 +40,7 @@ use std::time::Duration;
 
 use crate::clock::Clock;
 use crate::coord::{send_table, CoordMessage, CoordTransport};
-use crate::driver::{feed_mock, perception_or_event, End, Limits, Session, Sink};
+use crate::driver::{feed_mock, perception_or_event, End, Limits, SameInstant, Session, Sink};
 use crate::journal::Input;
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player, PlayerOptions};
@@ -306,8 +306,12 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
         .collect()
 }
 
+/// The `mission` of the records that concern every mission of a run.
+pub const ALL_MISSIONS: &str = "*";
+
 fn summary(sink: &SharedSink, t: f64, end: &MultiEnd) {
     let mut r = Record::new(t, "coord_summary");
+    r.mission = Some(ALL_MISSIONS.to_string());
     r.messages = Some(end.messages);
     r.result = Some(end.result().to_string());
     if let Ok(mut s) = sink.lock() {
@@ -321,7 +325,8 @@ fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
             .iter()
             .map(|v| {
                 let end = v.end.clone().unwrap_or(End::Outcome(v.s.player.outcome().unwrap_or(Outcome::Stuck)));
-                (v.name.clone(), end, v.s.player.now())
+                let t = end.driver_time().unwrap_or(v.s.player.now());
+                (v.name.clone(), end, t)
             })
             .collect(),
         fired: vs.iter().map(|v| v.s.player.fired_count()).collect(),
@@ -341,6 +346,7 @@ pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limit
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings.
     let mut to_start = 0;
+    let mut same = SameInstant::default();
     loop {
         // Settle the consequences of the last input, messages included, at `now`.
         while let Some((i, outs)) = work.pop_front() {
@@ -399,11 +405,19 @@ pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limit
         if let Some(limit) = limits.time_limit {
             if t > limit {
                 for v in vs.iter_mut().filter(|v| v.end.is_none()) {
-                    v.s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                    v.s.end_by_driver(limit, "time_limit", limits.passed(limit));
                     v.end = Some(End::TimeLimit(limit));
                 }
+                now = now.max(limit);
                 break;
             }
+        }
+        if same.tick(t) {
+            for v in vs.iter_mut().filter(|v| v.end.is_none()) {
+                v.s.end_by_driver(t, "stuck", SameInstant::message(t));
+                v.end = Some(End::ZeroTimeLoop(t));
+            }
+            break;
         }
         now = now.max(t);
         let v = &mut vs[i];
@@ -513,14 +527,15 @@ pub async fn run_real_time(
                             if tp.is_some_and(|d| d <= now) {
                                 outs = v.s.step(Input::Timer(now))?;
                             } else if tm.is_some_and(|d| d <= now) {
-                                while let Some((_, m)) = v.mock.pop_due(now) {
+                                // One message at a time: the mock learns the
+                                // actions it causes before it sends the next.
+                                if let Some((_, m)) = v.mock.pop_due(now) {
                                     if let Some(input) = perception_or_event(now, m) {
-                                        let o = v.s.step(input)?;
-                                        outs.extend(o);
+                                        outs = v.s.step(input)?;
                                     }
                                 }
                             } else if let Some(limit) = limits.time_limit.filter(|&l| l <= now) {
-                                v.s.end_by_driver(limit, "time_limit", format!("the time limit of {limit} s passed"));
+                                v.s.end_by_driver(limit, "time_limit", limits.passed(limit));
                                 break Ok(End::TimeLimit(limit));
                             }
                         }

@@ -32,6 +32,16 @@
 //! 3. **Events**: an event fires one enabled transition bound to it (random
 //!    among several). An event that enables nothing is reported as an
 //!    [`Output::Unexpected`] and changes nothing; it is never fatal.
+//! 4. **Activations**: an event may name its *activation*, the `seq` of the
+//!    action that started the primitive run that raised it
+//!    ([`Player::on_event_from`], `docs/aac-protocol.md` §6). The player
+//!    keeps, per primitive, the actions sent to it since it was last
+//!    disabled (an action whose command is `disable`), or that `disable`
+//!    while it stays disabled; an event whose activation is not one of them
+//!    comes from a run that was disabled since (a late answer that crossed
+//!    the `disable` on the wire): it is reported as [`Output::Stale`] and
+//!    changes nothing, so that it is never credited to a later call of the
+//!    same task.
 //!
 //! Before an event or a perception is handled, every timer due at or before
 //! its time fires (at its own deadline), so a time-out and an answer that
@@ -46,7 +56,7 @@
 //! never rescans the whole net after a firing (compare the seed's Extract 5.8,
 //! benchmarked in `benches/player.rs`).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::sync::Arc;
 
 use mcl_net::semantics::{select_ready, uniform_index};
@@ -149,6 +159,20 @@ pub enum Output {
         transition: TransitionId,
         /// The current call of the transition's task.
         call_site: Option<u32>,
+        /// The activation the event named, if any.
+        activation: Option<u64>,
+    },
+    /// An event named an activation that is no longer current (its
+    /// primitive was disabled since): ignored.
+    Stale {
+        /// Time of reception.
+        t: f64,
+        /// Event name.
+        event: String,
+        /// The activation it named (the `seq` of an action).
+        activation: u64,
+        /// Why it is stale.
+        reason: String,
     },
     /// An event was received while no transition bound to it was enabled.
     Unexpected {
@@ -202,6 +226,7 @@ impl Output {
             Output::Send { t, .. }
             | Output::Fired { t, .. }
             | Output::Event { t, .. }
+            | Output::Stale { t, .. }
             | Output::Unexpected { t, .. }
             | Output::Timer { t, .. }
             | Output::Perception { t, .. }
@@ -223,6 +248,10 @@ enum ParamSrc {
 struct ActionTemplate {
     action: String,
     primitive: String,
+    /// Index of the primitive in [`Player::live`].
+    prim: u32,
+    /// The command is `disable`: the primitive's runs end.
+    stops: bool,
     command: String,
     params: Vec<(String, ParamSrc)>,
 }
@@ -284,6 +313,13 @@ pub struct Player {
     fired: u64,
     /// Delay warnings already given (each is given once).
     warned: BTreeSet<String>,
+    /// Per primitive: its current activations, the seqs of the actions sent
+    /// to it since it was last disabled, or the seq of that `disable` while
+    /// it stays disabled (`stopped`).
+    live: Vec<Vec<u64>>,
+    stopped: Vec<bool>,
+    /// Every seq of `live`.
+    live_seqs: HashSet<u64>,
 }
 
 impl Player {
@@ -294,6 +330,7 @@ impl Player {
         let mut tasks: Vec<TaskState> = Vec::new();
         let mut task_index: BTreeMap<String, u32> = BTreeMap::new();
         let mut info = Vec::with_capacity(net.transition_count());
+        let mut prims: HashMap<String, u32> = HashMap::new();
         for tr in net.transitions() {
             let task = tr.provenance.task.as_ref().or(tr.binding.as_ref().map(|b| &b.task)).map(|name| {
                 *task_index.entry(name.clone()).or_insert_with(|| {
@@ -320,6 +357,11 @@ impl Player {
                 .map(|a| ActionTemplate {
                     action: a.action.clone(),
                     primitive: a.primitive.clone(),
+                    prim: {
+                        let n = prims.len() as u32;
+                        *prims.entry(a.primitive.clone()).or_insert(n)
+                    },
+                    stops: a.command == "disable",
                     command: a.command.clone(),
                     params: a
                         .params
@@ -368,6 +410,9 @@ impl Player {
             outcome: None,
             fired: 0,
             warned: BTreeSet::new(),
+            live: vec![Vec::new(); prims.len()],
+            stopped: vec![false; prims.len()],
+            live_seqs: HashSet::new(),
         }
     }
 
@@ -465,17 +510,41 @@ impl Player {
         out
     }
 
-    /// An event arrived at time `now`.
+    /// An event arrived at time `now` (without an activation).
     pub fn on_event(&mut self, now: f64, event: &str) -> Vec<Output> {
+        self.on_event_from(now, event, None)
+    }
+
+    /// True when `seq` is a current activation: an action sent to a
+    /// primitive that has not been disabled since, or the `disable` of a
+    /// primitive not enabled again since.
+    pub fn is_live_activation(&self, seq: u64) -> bool {
+        self.live_seqs.contains(&seq)
+    }
+
+    /// An event arrived at time `now`, raised by the primitive run that the
+    /// action `activation` started (when the AAC says so). An event whose
+    /// activation is not current is reported as [`Output::Stale`] and
+    /// changes nothing.
+    pub fn on_event_from(&mut self, now: f64, event: &str, activation: Option<u64>) -> Vec<Output> {
         let mut out = Vec::new();
         self.advance_to(now, &mut out);
         let t = self.now;
-        if self.outcome.is_some() {
-            out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has ended" });
-            return out;
-        }
         if !self.started {
             out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has not started" });
+            return out;
+        }
+        if let Some(a) = activation.filter(|a| !self.live_seqs.contains(a)) {
+            let reason = if a == 0 || a > self.seq {
+                format!("its activation, action #{a}, was never sent")
+            } else {
+                format!("its activation, action #{a}, is over: its primitive was disabled since")
+            };
+            out.push(Output::Stale { t, event: event.to_string(), activation: a, reason });
+            return out;
+        }
+        if self.outcome.is_some() {
+            out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has ended" });
             return out;
         }
         let net = self.net.clone();
@@ -488,7 +557,7 @@ impl Player {
         let k = uniform_index(&mut self.rng, n);
         let tr = waiting.iter().copied().filter(|&c| self.tracker.is_enabled(c)).nth(k).expect("k < n");
         let call_site = self.call_site_of(tr);
-        out.push(Output::Event { t, event: event.to_string(), transition: tr, call_site });
+        out.push(Output::Event { t, event: event.to_string(), transition: tr, call_site, activation });
         self.fire(tr, &mut out);
         self.stabilize(&mut out);
         out
@@ -525,7 +594,7 @@ impl Player {
                 let k = uniform_index(&mut self.rng, n);
                 let tr = waiting.iter().copied().filter(|&c| self.tracker.is_enabled(c)).nth(k).expect("k < n");
                 let call_site = self.call_site_of(tr);
-                out.push(Output::Event { t, event, transition: tr, call_site });
+                out.push(Output::Event { t, event, transition: tr, call_site, activation: None });
                 self.fire(tr, &mut out);
                 fired = true;
             }
@@ -725,6 +794,18 @@ impl Player {
             };
             params.insert(name.clone(), v);
         }
+        let prim = tmpl.prim as usize;
+        // A disable ends the primitive's runs: their answers are stale from
+        // now on (but an event about the disable itself is not); the next
+        // action starts a new run.
+        if tmpl.stops || self.stopped[prim] {
+            for s in self.live[prim].drain(..) {
+                self.live_seqs.remove(&s);
+            }
+        }
+        self.stopped[prim] = tmpl.stops;
+        self.live[prim].push(self.seq);
+        self.live_seqs.insert(self.seq);
         Action {
             seq: self.seq,
             action: tmpl.action.clone(),
@@ -818,6 +899,7 @@ mod tests {
                 Output::Send { action, .. } => format!("send {}", action.action),
                 Output::Fired { transition, .. } => format!("fire {}", transition.0),
                 Output::Event { event, .. } => format!("event {event}"),
+                Output::Stale { event, activation, .. } => format!("stale {event} #{activation}"),
                 Output::Unexpected { event, .. } => format!("unexpected {event}"),
                 Output::Timer { deadline, .. } => format!("timer {deadline}"),
                 Output::Perception { name, .. } => format!("perception {name}"),
@@ -863,6 +945,95 @@ mod tests {
         assert_eq!(kinds(&out), ["fire 2", "outcome ok"]);
         assert_eq!(out[0].time(), 7.0);
         assert_eq!(p.outcome(), Some(Outcome::Ok));
+    }
+
+    /// begin -> t0 (enable X) -> w1 -> te1 (event e: disable X, enable X) -> w2 -> te2 (event e) -> mission.ok
+    fn twice() -> Arc<Net> {
+        let x = |cmd: &str| mcl_net::ActionRef {
+            action: format!("{cmd}X"),
+            primitive: "XPrimitive".into(),
+            command: cmd.into(),
+            params: vec![],
+        };
+        let mut b = NetBuilder::new("m");
+        let begin = b.add_place(Place::new("mission.begin").with_tokens(1));
+        let w1 = b.add_place(Place::new("w1"));
+        let w2 = b.add_place(Place::new("w2"));
+        let ok = b.add_place(Place::new("mission.ok"));
+        let t0 = b.add_transition(Transition::new("t0").with_action(x("enable")));
+        let te1 = b.add_transition(
+            Transition::new("te1")
+                .with_kind(TransitionKind::Event("e".into()))
+                .with_action(x("disable"))
+                .with_action(x("enable")),
+        );
+        let te2 = b.add_transition(Transition::new("te2").with_kind(TransitionKind::Event("e".into())));
+        b.add_input(begin, t0, 1).add_output(t0, w1, 1);
+        b.add_input(w1, te1, 1).add_output(te1, w2, 1);
+        b.add_input(w2, te2, 1).add_output(te2, ok, 1);
+        Arc::new(b.build().unwrap())
+    }
+
+    #[test]
+    fn answers_of_a_disabled_activation_are_stale() {
+        let mut p = Player::new(twice(), PlayerOptions::seeded(1));
+        assert_eq!(kinds(&p.start(0.0)), ["fire 0", "send enableX"]);
+        assert!(p.is_live_activation(1));
+        let out = p.on_event_from(1.0, "e", Some(1));
+        assert_eq!(kinds(&out), ["event e", "fire 1", "send disableX", "send enableX"]);
+        assert!(!p.is_live_activation(1) && p.is_live_activation(3));
+        // A second answer of the first run (it crossed the disable): ignored.
+        let out = p.on_event_from(1.0, "e", Some(1));
+        assert_eq!(kinds(&out), ["stale e #1"]);
+        let Output::Stale { reason, .. } = &out[0] else { panic!() };
+        assert!(reason.contains("action #1") && reason.contains("disabled since"), "{reason}");
+        // Nor does an activation never sent, nor the disable itself.
+        assert_eq!(kinds(&p.on_event_from(1.0, "e", Some(9))), ["stale e #9"]);
+        assert_eq!(kinds(&p.on_event_from(1.0, "e", Some(2))), ["stale e #2"]);
+        assert_eq!(p.outcome(), None);
+        assert!(!p.is_live_activation(2), "the primitive was enabled again since its disable");
+        // The current run's answer ends the mission.
+        let out = p.on_event_from(2.0, "e", Some(3));
+        assert_eq!(kinds(&out), ["event e", "fire 2", "outcome ok"]);
+        assert!(matches!(out[0], Output::Event { activation: Some(3), .. }));
+    }
+
+    /// An event about a disable (a primitive confirming it stopped) names
+    /// the disable: current until the primitive is enabled again.
+    #[test]
+    fn an_event_may_answer_a_disable() {
+        let x = |cmd: &str| mcl_net::ActionRef {
+            action: format!("{cmd}X"),
+            primitive: "XPrimitive".into(),
+            command: cmd.into(),
+            params: vec![],
+        };
+        let mut b = NetBuilder::new("m");
+        let begin = b.add_place(Place::new("mission.begin").with_tokens(1));
+        let w1 = b.add_place(Place::new("w1"));
+        let w2 = b.add_place(Place::new("w2"));
+        let ok = b.add_place(Place::new("mission.ok"));
+        let t0 = b.add_transition(Transition::new("t0").with_action(x("enable")));
+        let te1 = b.add_transition(
+            Transition::new("te1").with_kind(TransitionKind::Event("e".into())).with_action(x("disable")),
+        );
+        let te2 = b.add_transition(Transition::new("te2").with_kind(TransitionKind::Event("stopped".into())));
+        b.add_input(begin, t0, 1).add_output(t0, w1, 1);
+        b.add_input(w1, te1, 1).add_output(te1, w2, 1);
+        b.add_input(w2, te2, 1).add_output(te2, ok, 1);
+        let mut p = Player::new(Arc::new(b.build().unwrap()), PlayerOptions::seeded(1));
+        p.start(0.0);
+        p.on_event_from(1.0, "e", Some(1));
+        assert_eq!(kinds(&p.on_event_from(1.0, "stopped", Some(1))), ["stale stopped #1"]);
+        assert_eq!(kinds(&p.on_event_from(1.0, "stopped", Some(2))), ["event stopped", "fire 2", "outcome ok"]);
+    }
+
+    #[test]
+    fn events_without_activation_are_taken_as_before() {
+        let mut p = Player::new(twice(), PlayerOptions::seeded(1));
+        p.start(0.0);
+        p.on_event(1.0, "e");
+        assert_eq!(kinds(&p.on_event(1.0, "e")), ["event e", "fire 2", "outcome ok"]);
     }
 
     #[test]

@@ -134,6 +134,11 @@ pub struct EventMsg {
     /// Event number in the session (1, 2, 3…; shared with perceptions).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n: Option<u64>,
+    /// The `seq` of the action that started the primitive run that raised
+    /// the event (optional: the player then cannot tell a late answer of
+    /// a disabled run from an answer of the current one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub activation: Option<u64>,
 }
 
 /// `perception`: a named value for the mission layer.
@@ -200,7 +205,7 @@ impl Message {
     pub fn to_inbound(&self) -> Option<Inbound> {
         match self {
             Message::Ack { seq } => Some(Inbound::Ack { seq: *seq }),
-            Message::Event(e) => Some(Inbound::Event { event: e.event.clone() }),
+            Message::Event(e) => Some(Inbound::Event { event: e.event.clone(), activation: e.activation }),
             Message::Perception(p) => Some(Inbound::Perception { name: p.name.clone(), value: p.value.clone() }),
             _ => None,
         }
@@ -465,7 +470,7 @@ mod tests {
             }),
             Message::Ping(Ping { last_event: Some(3) }),
             Message::Ack { seq: 1 },
-            Message::Event(EventMsg { event: "eventGotoOk".into(), n: Some(1) }),
+            Message::Event(EventMsg { event: "eventGotoOk".into(), n: Some(1), activation: Some(3) }),
             Message::Perception(PerceptionMsg { name: "depth".into(), value: 14.5.into(), n: Some(2) }),
             Message::Pong {},
             Message::error(ErrorCode::Malformed, "bad", Some(3)),
@@ -490,8 +495,18 @@ mod tests {
         assert_eq!(parse(br#"{"type":"ping"}"#).unwrap(), Message::Ping(Ping { last_event: None }));
         assert_eq!(
             parse(br#"{"type":"event","event":"e","extra":1}"#).unwrap(),
-            Message::Event(EventMsg { event: "e".into(), n: None })
+            Message::Event(EventMsg { event: "e".into(), n: None, activation: None })
         );
+        // The activation is optional, and must be a number when present.
+        assert_eq!(
+            parse(br#"{"type":"event","event":"e","n":4,"activation":7}"#).unwrap(),
+            Message::Event(EventMsg { event: "e".into(), n: Some(4), activation: Some(7) })
+        );
+        assert_eq!(
+            parse(br#"{"type":"event","event":"e","activation":null}"#).unwrap(),
+            Message::Event(EventMsg { event: "e".into(), n: None, activation: None })
+        );
+        assert_eq!(parse(br#"{"type":"event","event":"e","activation":"x"}"#).unwrap_err().code, ErrorCode::Malformed);
     }
 
     #[test]

@@ -158,6 +158,10 @@ pub enum LinkError {
     /// The player closed its action sender but these actions were never
     /// acknowledged within the linger time.
     Unacknowledged(Vec<u64>),
+    /// The player closed its action sender before the link ever reached the
+    /// AAC: these actions were never sent (no linger then: a vehicle that
+    /// never saw the run has nothing to stop).
+    NeverConnected(Vec<u64>),
 }
 
 impl std::fmt::Display for LinkError {
@@ -166,6 +170,8 @@ impl std::fmt::Display for LinkError {
             LinkError::Refused { code, message } => write!(f, "the AAC refused the connection ({code}): {message}"),
             LinkError::Replaced => write!(f, "another player took over this session"),
             LinkError::Unacknowledged(seqs) => write!(f, "actions never acknowledged: {seqs:?}"),
+            LinkError::NeverConnected(seqs) if seqs.is_empty() => write!(f, "the AAC was never reached"),
+            LinkError::NeverConnected(seqs) => write!(f, "the AAC was never reached: actions {seqs:?} were never sent"),
         }
     }
 }
@@ -209,6 +215,8 @@ pub fn connect_with_handle(
         session,
         received,
         resumed,
+        resuming: resumed,
+        attempts: 0,
         linger_deadline: None,
         stats: LinkStats { run, ..LinkStats::default() },
     };
@@ -228,6 +236,11 @@ struct Player {
     received: u64,
     /// Whether `received` is meaningful (a welcome was received, or resuming).
     resumed: bool,
+    /// This link continues an interrupted run (the AAC may have executed
+    /// its actions before).
+    resuming: bool,
+    /// Failed connection attempts since the last connection.
+    attempts: u32,
     linger_deadline: Option<Instant>,
     stats: LinkStats,
 }
@@ -254,6 +267,17 @@ impl Player {
         log(self.opts.log, need, WHO, msg);
     }
 
+    /// Logs `msg` and tells the player ([`Inbound::Notice`]).
+    fn notice(&self, msg: String) {
+        self.log(LogLevel::Info, format_args!("{msg}"));
+        let _ = self.inbound.send(Inbound::Notice { message: msg });
+    }
+
+    /// The link never reached the AAC (and does not continue a run it may know).
+    fn never_connected(&self) -> bool {
+        self.stats.connections == 0 && !self.resuming
+    }
+
     fn finished(&self) -> bool {
         !self.actions_open && self.pending.is_empty()
     }
@@ -274,7 +298,9 @@ impl Player {
             }
             None => {
                 self.actions_open = false;
-                self.linger_deadline = Some(Instant::now() + self.opts.linger);
+                // No linger for a vehicle that never saw the run.
+                let linger = if self.never_connected() { Duration::ZERO } else { self.opts.linger };
+                self.linger_deadline = Some(Instant::now() + linger);
                 None
             }
         }
@@ -299,18 +325,26 @@ impl Player {
                 End::Done | End::PlayerGone => return Ok(self.stats()),
                 End::Linger => return self.give_up(),
                 End::Fatal(e) => {
-                    self.log(LogLevel::Info, format_args!("{e}; giving up"));
+                    self.notice(format!("{e}; giving up"));
                     return Err(e);
                 }
                 End::Lost { welcomed, why } => {
                     if welcomed {
                         backoff = self.opts.backoff_min;
-                        self.log(LogLevel::Info, format_args!("disconnected: {why}"));
+                        self.attempts = 0;
+                        self.notice(format!("disconnected: {why}"));
                         if self.inbound.send(Inbound::Disconnected).is_err() {
                             return Ok(self.stats());
                         }
                     } else {
-                        self.log(LogLevel::Info, format_args!("{why}; retrying in {:.1} s", backoff.as_secs_f64()));
+                        self.attempts += 1;
+                        let queued = self.pending.len();
+                        self.notice(format!(
+                            "{why}; retrying in {:.1} s (attempt {}{})",
+                            backoff.as_secs_f64(),
+                            self.attempts,
+                            if queued == 0 { String::new() } else { format!(", {queued} actions queued") }
+                        ));
                     }
                     if !self.pause(backoff).await {
                         return Ok(self.stats());
@@ -323,7 +357,12 @@ impl Player {
 
     fn give_up(&mut self) -> Result<LinkStats, LinkError> {
         let seqs: Vec<u64> = self.pending.keys().copied().collect();
-        self.log(LogLevel::Info, format_args!("linger time over; actions never acknowledged: {seqs:?}"));
+        if self.never_connected() {
+            let e = LinkError::NeverConnected(seqs);
+            self.notice(format!("{e}"));
+            return Err(e);
+        }
+        self.notice(format!("linger time over; actions never acknowledged: {seqs:?}"));
         Err(LinkError::Unacknowledged(seqs))
     }
 
@@ -390,6 +429,7 @@ impl Player {
                 Ok(Message::Welcome(w)) => break w,
                 Ok(Message::Error(e)) => {
                     self.stats.errors += 1;
+                    self.notice(format!("the AAC reports an error ({}): {}", e.code, truncate(&e.message, 200)));
                     return match ErrorCode::parse(&e.code) {
                         Some(ErrorCode::Unauthorized | ErrorCode::Version) => {
                             End::Fatal(LinkError::Refused { code: e.code, message: e.message })
@@ -400,11 +440,14 @@ impl Player {
                 }
                 Ok(other) => {
                     let m = format!("expected `welcome`, got `{}`", other.type_name());
-                    self.log(LogLevel::Info, format_args!("{peer}: {m}"));
+                    self.notice(format!("{peer}: {m}"));
                     let _ = self.write(&mut wr, &Message::error(ErrorCode::Unexpected, m, None)).await;
                 }
                 Err(pe) => {
-                    self.log(LogLevel::Info, format_args!("{peer}: {pe}"));
+                    self.notice(format!(
+                        "{peer} sent a bad message ({pe}): {}",
+                        truncate(&String::from_utf8_lossy(&line), 120)
+                    ));
                     let _ = self.write(&mut wr, &pe.to_message()).await;
                 }
             }
@@ -417,10 +460,7 @@ impl Player {
         }
         match &self.session {
             Some(s) if *s != welcome.session => {
-                self.log(
-                    LogLevel::Info,
-                    format_args!("{peer} started a new session (it lost its state?): event numbers restart"),
-                );
+                self.notice(format!("{peer} started a new session (it lost its state?): event numbers restart"));
                 self.received = 0;
             }
             _ => {}
@@ -435,15 +475,13 @@ impl Player {
             }
         }
         self.stats.connections += 1;
-        self.log(
-            LogLevel::Info,
-            format_args!(
-                "connected to {peer} (session {}, last seq {}, {} to re-send)",
-                welcome.session,
-                welcome.last_seq,
-                self.pending.len()
-            ),
-        );
+        self.attempts = 0;
+        self.notice(format!(
+            "connected to {peer} (session {}, last seq {}, {} actions to send)",
+            welcome.session,
+            welcome.last_seq,
+            self.pending.len()
+        ));
         if self.inbound.send(Inbound::Connected).is_err() {
             return End::PlayerGone;
         }
@@ -513,7 +551,7 @@ impl Player {
 
     async fn reply_too_long(&self, wr: &mut OwnedWriteHalf, n: usize) -> io::Result<()> {
         let m = format!("line of {n} bytes exceeds the limit of {} bytes; discarded", self.opts.max_line);
-        self.log(LogLevel::Info, format_args!("{m}"));
+        self.notice(format!("the AAC sent a {m}"));
         self.write(wr, &Message::error(ErrorCode::TooLong, m, None)).await
     }
 
@@ -536,18 +574,15 @@ impl Player {
                 if let Some(n) = n {
                     if n <= self.received {
                         self.stats.duplicates += 1;
-                        self.log(LogLevel::Info, format_args!("dropped {} #{n}: already received", m.type_name()));
+                        self.notice(format!("dropped {} #{n}: already received", m.type_name()));
                         return None;
                     }
                     if n > self.received + 1 {
-                        self.log(
-                            LogLevel::Info,
-                            format_args!(
-                                "events #{}..#{} never arrived (forgotten by the AAC)",
-                                self.received + 1,
-                                n - 1
-                            ),
-                        );
+                        self.notice(format!(
+                            "gap in the event numbers: events #{}..#{} never arrived (forgotten by the AAC?)",
+                            self.received + 1,
+                            n - 1
+                        ));
                     }
                     self.received = n;
                 }
@@ -562,15 +597,12 @@ impl Player {
             Ok(Message::Ping(_)) => Some(Message::Pong {}),
             Ok(Message::Error(e)) => {
                 self.stats.errors += 1;
-                self.log(
-                    LogLevel::Info,
-                    format_args!(
-                        "{peer} reports an error ({}{}): {}",
-                        e.code,
-                        e.seq.map(|s| format!(", seq {s}")).unwrap_or_default(),
-                        e.message
-                    ),
-                );
+                self.notice(format!(
+                    "the AAC reports an error ({}{}): {}",
+                    e.code,
+                    e.seq.map(|s| format!(", seq {s}")).unwrap_or_default(),
+                    truncate(&e.message, 200)
+                ));
                 return match ErrorCode::parse(&e.code) {
                     Some(ErrorCode::Unauthorized | ErrorCode::Version) => {
                         Some(End::Fatal(LinkError::Refused { code: e.code, message: e.message }))
@@ -582,11 +614,14 @@ impl Player {
             }
             Ok(other) => {
                 let m = format!("a player does not accept `{}`", other.type_name());
-                self.log(LogLevel::Info, format_args!("{peer}: {m}"));
+                self.notice(format!("the AAC sent an unexpected message: {m}"));
                 Some(Message::error(ErrorCode::Unexpected, m, None))
             }
             Err(pe) => {
-                self.log(LogLevel::Info, format_args!("{peer}: {pe}"));
+                self.notice(format!(
+                    "the AAC sent a bad message ({pe}): {}",
+                    truncate(&String::from_utf8_lossy(line), 120)
+                ));
                 Some(pe.to_message())
             }
         };
@@ -702,6 +737,9 @@ struct SessionInner {
     last_event: u64,
     /// Events not yet confirmed by the player: (number, encoded line).
     outbox: VecDeque<(u64, String)>,
+    /// Duplicates of actions still being executed: each is acknowledged
+    /// once its action is (protocol §5).
+    owed: Vec<u64>,
     conn: Option<ConnHandle>,
     handler_gone: bool,
     touched: Instant,
@@ -799,6 +837,7 @@ fn new_session(inner: &Arc<ServerInner>, id: String, last_seq: u64) -> (Arc<Sess
             last_acked: last_seq,
             last_event: 0,
             outbox: VecDeque::new(),
+            owed: Vec::new(),
             conn: None,
             handler_gone: false,
             touched: Instant::now(),
@@ -814,10 +853,10 @@ async fn pump(session: Weak<SessionState>, mut rx: mpsc::UnboundedReceiver<Inbou
         let Some(s) = session.upgrade() else { return };
         let mut g = lock(&s.inner);
         match item {
-            Inbound::Event { event } => {
+            Inbound::Event { event, activation } => {
                 g.last_event += 1;
                 let n = g.last_event;
-                let line = encode(&Message::Event(EventMsg { event, n: Some(n) }));
+                let line = encode(&Message::Event(EventMsg { event, n: Some(n), activation }));
                 g.send(line.clone());
                 g.outbox.push_back((n, line));
             }
@@ -832,9 +871,16 @@ async fn pump(session: Weak<SessionState>, mut rx: mpsc::UnboundedReceiver<Inbou
                 if opts.ack == AckMode::ByHandler {
                     g.last_acked = g.last_acked.max(seq);
                     g.send(encode(&Message::Ack { seq }));
+                    // Duplicates received while it was being executed.
+                    let last = g.last_acked;
+                    let owed: Vec<u64> = g.owed.iter().copied().filter(|&s| s <= last).collect();
+                    g.owed.retain(|&s| s > last);
+                    for s in owed {
+                        g.send(encode(&Message::Ack { seq: s }));
+                    }
                 }
             }
-            Inbound::Connected | Inbound::Disconnected => {}
+            Inbound::Connected | Inbound::Disconnected | Inbound::Notice { .. } => {}
         }
         if g.outbox.len() > opts.max_outbox {
             let excess = g.outbox.len() - opts.max_outbox;
@@ -1093,7 +1139,11 @@ fn on_action(
         return Some(Message::Ack { seq });
     }
     if seq <= g.last_forwarded {
-        lg(LogLevel::Info, format_args!("duplicate action seq {seq} (being executed): not executed again"));
+        lg(
+            LogLevel::Info,
+            format_args!("duplicate action seq {seq} (being executed): not executed again, acknowledged once executed"),
+        );
+        g.owed.push(seq);
         return None;
     }
     if g.handler_gone || session.actions.send(a.into()).is_err() {
@@ -1211,6 +1261,11 @@ impl Default for VehicleOptions {
 pub struct Executed {
     /// Mission time of execution.
     pub t: f64,
+    /// How many messages the vehicle had sent in the session before it
+    /// executed the action (absent in older state files: then every
+    /// message due at `t` was).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sent_before: Option<u64>,
     pub action: Action,
 }
 
@@ -1376,10 +1431,16 @@ where
 
 /// Runs one session's vehicle in real time.
 ///
-/// Determinism across restarts: before an action executed at time `t`, every
-/// message due at or before `t` is sent; replaying the saved actions with
-/// the same rule therefore sends the same messages in the same order (the
-/// transport numbers them identically and the player drops the ones it has).
+/// Inputs first, one message at a time: every action already received is
+/// executed before the next due message is sent (a primitive disabled
+/// before its answer is sent never answers), and the task yields after each
+/// message.
+///
+/// Determinism across restarts: each executed action is saved with the
+/// number of messages sent before it; replaying the saved actions after as
+/// many messages (always the first of the agenda) rebuilds the same agenda
+/// and sends the same messages in the same order (the transport numbers
+/// them identically and the player drops the ones it has).
 async fn run_vehicle(
     mut v: Box<dyn Vehicle>,
     mut end: AacEnd,
@@ -1387,26 +1448,38 @@ async fn run_vehicle(
     store: Option<Store>,
     level: LogLevel,
 ) {
+    use tokio::sync::mpsc::error::TryRecvError;
     let who = format!("vehicle {}", saved.session);
     let clock = |s: &SavedSession| ((unix_now() - s.epoch_unix) * s.speed).max(0.0);
-    // Sends every message due at or before `now`; false when the session is gone.
-    let flush = |v: &mut Box<dyn Vehicle>, end: &AacEnd, now: f64| -> bool {
-        while let Some((t, item)) = v.pop_due(now) {
-            log(level, LogLevel::Messages, &who, format_args!("t={t:.3} sends {item:?}"));
-            if end.inbound.send(item).is_err() {
-                return false;
-            }
-        }
+    // Messages sent in this session (by this process and, replayed, by the previous ones).
+    let mut sent: u64 = 0;
+    let send = |v: &mut Box<dyn Vehicle>, end: &AacEnd, sent: &mut u64, (t, item): (f64, Inbound)| -> bool {
+        log(level, LogLevel::Messages, &who, format_args!("t={t:.3} sends {item:?}"));
+        *sent += 1;
         for w in v.take_warnings() {
             log(level, LogLevel::Info, &who, format_args!("{w}"));
         }
-        true
+        end.inbound.send(item).is_ok()
     };
     v.initial();
     // Replay what a previous process executed: same messages, same order.
     for ex in &saved.executed {
-        if !flush(&mut v, &end, ex.t) {
-            return;
+        match ex.sent_before {
+            Some(k) => {
+                while sent < k {
+                    let Some(m) = v.pop_due(f64::INFINITY) else { break };
+                    if !send(&mut v, &end, &mut sent, m) {
+                        return;
+                    }
+                }
+            }
+            None => {
+                while let Some(m) = v.pop_due(ex.t) {
+                    if !send(&mut v, &end, &mut sent, m) {
+                        return;
+                    }
+                }
+            }
         }
         log(
             level,
@@ -1416,35 +1489,54 @@ async fn run_vehicle(
         );
         v.on_action(ex.t, &ex.action);
     }
+    let _ = v.take_warnings();
+    let execute = |v: &mut Box<dyn Vehicle>, saved: &mut SavedSession, sent: u64, a: Action| -> bool {
+        let now = clock(saved).max(saved.executed.last().map_or(0.0, |e| e.t));
+        v.on_action(now, &a);
+        saved.executed.push(Executed { t: now, sent_before: Some(sent), action: a.clone() });
+        if let Some(store) = &store {
+            if let Err(e) = store.put(saved) {
+                // Acknowledged anyway: the player must go on; only a
+                // restart of this process could now repeat it.
+                log(LogLevel::Info, LogLevel::Info, &who, format_args!("cannot save state: {e}"));
+            }
+        }
+        log(
+            level,
+            LogLevel::Info,
+            &who,
+            format_args!("executed seq={} t={now:.3} {} ({} {})", a.seq, a.action, a.primitive, a.command),
+        );
+        for w in v.take_warnings() {
+            log(level, LogLevel::Info, &who, format_args!("{w}"));
+        }
+        end.inbound.send(Inbound::Ack { seq: a.seq }).is_ok()
+    };
     loop {
+        loop {
+            match end.actions.try_recv() {
+                Ok(a) => {
+                    if !execute(&mut v, &mut saved, sent, a) {
+                        return;
+                    }
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return,
+            }
+        }
         let now = clock(&saved);
-        if !flush(&mut v, &end, now) {
-            return;
+        if let Some(m) = v.pop_due(now) {
+            if !send(&mut v, &end, &mut sent, m) {
+                return;
+            }
+            tokio::task::yield_now().await;
+            continue;
         }
         let wait = v.next_deadline().map(|d| Duration::from_secs_f64(((d - now) / saved.speed).clamp(0.0, 1e9)));
         tokio::select! {
             a = end.actions.recv() => {
                 let Some(a) = a else { return };
-                let now = clock(&saved).max(saved.executed.last().map_or(0.0, |e| e.t));
-                if !flush(&mut v, &end, now) {
-                    return;
-                }
-                v.on_action(now, &a);
-                saved.executed.push(Executed { t: now, action: a.clone() });
-                if let Some(store) = &store {
-                    if let Err(e) = store.put(&saved) {
-                        // Acknowledged anyway: the player must go on; only a
-                        // restart of this process could now repeat it.
-                        log(LogLevel::Info, LogLevel::Info, &who, format_args!("cannot save state: {e}"));
-                    }
-                }
-                log(
-                    level,
-                    LogLevel::Info,
-                    &who,
-                    format_args!("executed seq={} t={now:.3} {} ({} {})", a.seq, a.action, a.primitive, a.command),
-                );
-                if end.inbound.send(Inbound::Ack { seq: a.seq }).is_err() {
+                if !execute(&mut v, &mut saved, sent, a) {
                     return;
                 }
             }

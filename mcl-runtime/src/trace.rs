@@ -2,21 +2,24 @@
 //!
 //! Every record has `t` (seconds from the start of the mission) and `kind`;
 //! `mission` is present when the mission is named (or when the file holds
-//! several missions). Kinds and their fields:
+//! several missions: then on every record, `"*"` on the `coord_summary`
+//! that concerns them all). Kinds and their fields:
 //!
 //! | kind | fields |
 //! |---|---|
-//! | `action` | `seq`, `action`, `primitive`, `command`, `params`, `task`, `call_site`, `label`, `src` |
-//! | `event` | `event`, `task` (whose transition it fired), `transition`, `call_site`, `src` |
+//! | `action` | `seq`, `action`, `primitive`, `command`, `params`, `task`, `call_site`, `label`, `src`; `queued: true` when the link to the AAC was down (sent once it is up) |
+//! | `event` | `event`, `task` (whose transition it fired), `transition`, `call_site`, `label`, `src`, `activation` (when the AAC named it) |
 //! | `fire` | `transition`, `task`, `call_site`, `label` |
 //! | `unexpected_event` | `event`, `reason` |
+//! | `stale_event` | `event`, `activation`, `reason`: an answer of a primitive run that was disabled since (ignored) |
+//! | `link` | `message`: the link to the AAC (connection attempts, errors the AAC reports, malformed messages, gaps in event numbers) |
 //! | `timer` | `transition`, `task`, `deadline` (a timer of a positive delay started) |
 //! | `perception` | `name`, `value` |
 //! | `warning` | `message` |
 //! | `outcome` | `result` (`ok`, `fail`, `stuck`, `time_limit`), `reason` |
 //! | `coord_send` | `to`, `transition` (own, just fired), `seq`: a coordination message sent |
 //! | `coord_receive` | `from`, `transition` (the sender's), `seq`, `event` (the event it becomes) |
-//! | `coord_summary` | `messages` (sent), `result` (of the whole run); no `mission`: the last record of a coordinated run |
+//! | `coord_summary` | `messages` (sent), `result` (of the whole run), `mission: "*"`: the last record of a coordinated run |
 //!
 //! `src` is `file:line` of the call that sent the action or received the
 //! event (from the net's provenance; the line is computed from the source
@@ -40,8 +43,8 @@ pub struct Record {
     /// The mission's name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<String>,
-    /// `action`, `event`, `fire`, `unexpected_event`, `timer`, `perception`, `warning`, `outcome`,
-    /// `coord_send`, `coord_receive`, `coord_summary`.
+    /// `action`, `event`, `fire`, `unexpected_event`, `stale_event`, `timer`, `perception`,
+    /// `warning`, `link`, `outcome`, `coord_send`, `coord_receive`, `coord_summary`.
     pub kind: String,
     /// Action sequence number.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -103,6 +106,14 @@ pub struct Record {
     /// Coordination: number of messages sent in the run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub messages: Option<u64>,
+    /// The activation an event named (the `seq` of the action that started
+    /// the primitive run that raised it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub activation: Option<u64>,
+    /// An action produced while the link to the AAC was down: queued, sent
+    /// when the link is up again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub queued: Option<bool>,
 }
 
 impl Record {
@@ -222,12 +233,20 @@ impl Tracer {
                 r.label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
                 r
             }
-            Output::Event { t, event, transition, call_site } => {
+            Output::Event { t, event, transition, call_site, activation } => {
                 let mut r = Record::new(*t, "event");
                 r.event = Some(event.clone());
                 r.task = self.tasks[transition.index()].clone();
                 r.transition = Some(self.ids[transition.index()].clone());
+                r.activation = *activation;
                 self.call(&mut r, *call_site);
+                r
+            }
+            Output::Stale { t, event, activation, reason } => {
+                let mut r = Record::new(*t, "stale_event");
+                r.event = Some(event.clone());
+                r.activation = Some(*activation);
+                r.reason = Some(reason.clone());
                 r
             }
             Output::Unexpected { t, event, reason } => {
@@ -278,12 +297,16 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
                 r.command.as_deref().unwrap_or("?"),
                 params.join(", "),
                 r.action.as_ref().map(|a| format!("  [{a}]")).unwrap_or_default()
-            )
+            ) + if r.queued == Some(true) { "  (queued: the AAC is not connected)" } else { "" }
         }
         "event" => format!("event    {}", r.event.as_deref().unwrap_or("?")),
         "unexpected_event" => {
             format!("UNEXPECTED event {} ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
         }
+        "stale_event" => {
+            format!("stale    {} ignored ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
+        }
+        "link" => format!("link     {}", r.message.as_deref().unwrap_or("")),
         "perception" => format!(
             "percept  {} = {}",
             r.name.as_deref().unwrap_or("?"),
@@ -321,7 +344,7 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
         _ => return None,
     };
     let mut line = format!("[{:>10.3}] ", r.t);
-    if let Some(m) = &r.mission {
+    if let Some(m) = r.mission.as_deref().filter(|m| *m != "*") {
         line.push_str(&format!("{m}: "));
     }
     line.push_str(&what);

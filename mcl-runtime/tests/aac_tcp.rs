@@ -71,6 +71,17 @@ impl Raw {
     }
 }
 
+/// The next inbound item of a player link that is not a notice; the
+/// notices skipped are pushed on `notices`.
+async fn next_item(link: &mut mcl_runtime::link::Link, notices: &mut Vec<String>) -> Option<Inbound> {
+    loop {
+        match timeout(T, link.inbound.recv()).await.expect("nothing from the link within 10 s") {
+            Some(Inbound::Notice { message }) => notices.push(message),
+            other => return other,
+        }
+    }
+}
+
 /// A server whose handler forwards every session to the test.
 async fn server(opts: ServeOptions) -> (std::net::SocketAddr, mpsc::UnboundedReceiver<Session>) {
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
@@ -125,9 +136,12 @@ async fn token_refusal() {
         addr.to_string(),
         ConnectOptions { token: Some("nope".into()), ..ConnectOptions::default() },
     );
-    assert_eq!(timeout(T, link.inbound.recv()).await.unwrap(), None);
+    let mut notices = Vec::new();
+    assert_eq!(next_item(&mut link, &mut notices).await, None);
     let r = timeout(T, handle).await.unwrap().unwrap();
     assert!(matches!(&r, Err(LinkError::Refused { code, .. }) if code == "unauthorized"), "{r:?}");
+    // The player was told why.
+    assert!(notices.iter().any(|n| n.contains("unauthorized") && n.contains("giving up")), "{notices:?}");
 }
 
 #[tokio::test]
@@ -233,20 +247,23 @@ async fn ack_by_handler_and_events_numbered_and_replayed() {
     let mut s = timeout(T, sessions.recv()).await.unwrap().unwrap();
     c.send(json!({"type":"action","seq":1,"action":"a","primitive":"p","command":"enable"})).await;
     let a = timeout(T, s.end.actions.recv()).await.unwrap().unwrap();
-    // In progress: a duplicate gets no ack yet.
+    // In progress: a duplicate is not executed again, and gets its ack once
+    // the action is executed (protocol §5: dropped but acknowledged).
     c.send(json!({"type":"action","seq":1,"action":"a","primitive":"p","command":"enable"})).await;
     c.send(json!({"type":"ping"})).await;
     assert_eq!(c.recv().await.unwrap(), json!({"type":"pong"}));
-    s.end.inbound.send(Inbound::Event { event: "e1".into() }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e1".into(), activation: Some(1) }).unwrap();
     s.end.inbound.send(Inbound::Ack { seq: a.seq }).unwrap();
     s.end.inbound.send(Inbound::Perception { name: "depth".into(), value: json!(3.5) }).unwrap();
-    assert_eq!(c.recv().await.unwrap(), json!({"type":"event","event":"e1","n":1}));
+    assert_eq!(c.recv().await.unwrap(), json!({"type":"event","event":"e1","n":1,"activation":1}));
     assert_eq!(c.recv().await.unwrap(), json!({"type":"ack","seq":1}));
+    assert_eq!(c.recv().await.unwrap(), json!({"type":"ack","seq":1}), "the duplicate's ack");
     assert_eq!(c.recv().await.unwrap(), json!({"type":"perception","name":"depth","value":3.5,"n":2}));
+    assert!(s.end.actions.try_recv().is_err(), "executed once");
     drop(c);
     // Events while nobody is connected are kept…
     tokio::time::sleep(Duration::from_millis(50)).await;
-    s.end.inbound.send(Inbound::Event { event: "e3".into() }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e3".into(), activation: None }).unwrap();
     // …and re-sent to a player naming the session, after its last event.
     let mut c = Raw::connect(addr).await;
     let w = c.hello(json!({"session": sid, "last_event": 1})).await;
@@ -265,11 +282,11 @@ async fn ack_by_handler_and_events_numbered_and_replayed() {
     assert_eq!(c.recv().await, None);
     c2.send(json!({"type":"ping"})).await;
     assert_eq!(c2.recv().await.unwrap(), json!({"type":"pong"}), "nothing re-sent");
-    s.end.inbound.send(Inbound::Event { event: "e4".into() }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e4".into(), activation: None }).unwrap();
     assert_eq!(c2.recv().await.unwrap()["n"], 4);
     drop(c2);
     tokio::time::sleep(Duration::from_millis(50)).await;
-    s.end.inbound.send(Inbound::Event { event: "e5".into() }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e5".into(), activation: None }).unwrap();
     // Without `last_event`, nothing is re-sent…
     let mut c3 = Raw::connect(addr).await;
     assert_eq!(c3.hello(json!({})).await["last_event"], 5);
@@ -323,10 +340,12 @@ async fn silent_player_is_dropped_and_player_detects_silent_aac() {
     };
     let (mut link, _h) = connect_with_handle(addr.to_string(), opts);
     let mut seen = Vec::new();
+    let mut notices = Vec::new();
     while seen.len() < 3 {
-        seen.push(timeout(T, link.inbound.recv()).await.unwrap().unwrap());
+        seen.push(next_item(&mut link, &mut notices).await.unwrap());
     }
     assert_eq!(seen, [Inbound::Connected, Inbound::Disconnected, Inbound::Connected]);
+    assert!(notices.iter().any(|n| n.starts_with("disconnected:") && n.contains("no message for")), "{notices:?}");
 }
 
 /// A TCP proxy that can cut every connection through it.
@@ -378,7 +397,8 @@ async fn cut_connections_lose_and_repeat_nothing() {
             tokio::spawn(async move {
                 while let Some(a) = s.end.actions.recv().await {
                     ex.lock().unwrap().push(a.seq);
-                    let _ = s.end.inbound.send(Inbound::Event { event: format!("done{}", a.seq) });
+                    let _ =
+                        s.end.inbound.send(Inbound::Event { event: format!("done{}", a.seq), activation: Some(a.seq) });
                 }
             });
         }
@@ -410,7 +430,15 @@ async fn cut_connections_lose_and_repeat_nothing() {
             proxy.cut();
         }
         match timeout(Duration::from_millis(20), link.inbound.recv()).await {
-            Ok(Some(Inbound::Event { event })) => events.push(event),
+            Ok(Some(Inbound::Event { event, activation })) => {
+                assert_eq!(
+                    Some(format!("done{}", activation.unwrap())),
+                    Some(event.clone()),
+                    "the activation crosses the wire"
+                );
+                events.push(event)
+            }
+            Ok(Some(Inbound::Notice { .. })) => {}
             Ok(Some(Inbound::Ack { seq })) => assert!(acks.insert(seq), "ack {seq} twice"),
             Ok(Some(Inbound::Connected)) => connected += 1,
             Ok(Some(Inbound::Disconnected)) => disconnected += 1,
@@ -460,15 +488,47 @@ async fn actions_wait_for_a_late_aac() {
     tokio::spawn(tcp::serve(listener, ServeOptions::default(), move |s| {
         let _ = tx.send(s);
     }));
-    assert_eq!(timeout(T, link.inbound.recv()).await.unwrap(), Some(Inbound::Connected));
+    let mut notices = Vec::new();
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Connected));
+    // Each failed attempt was told, with its backoff and the queued actions.
+    let attempts: Vec<&String> = notices.iter().filter(|n| n.contains("cannot connect")).collect();
+    assert!(attempts.len() >= 2, "{notices:?}");
+    assert!(attempts.iter().all(|n| n.contains("retrying in")), "{notices:?}");
+    assert!(attempts.last().unwrap().contains("3 actions queued"), "{notices:?}");
+    assert!(notices.last().unwrap().contains("3 actions to send"), "{notices:?}");
     let mut s = timeout(T, sessions.recv()).await.unwrap().unwrap();
     for i in 1..=3 {
         assert_eq!(timeout(T, s.end.actions.recv()).await.unwrap().unwrap().seq, i);
-        assert_eq!(timeout(T, link.inbound.recv()).await.unwrap(), Some(Inbound::Ack { seq: i }));
+        assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Ack { seq: i }));
     }
     drop(link.actions);
     let stats = timeout(T, handle).await.unwrap().unwrap().unwrap();
     assert_eq!(stats.connections, 1);
+}
+
+/// A player that never reached its AAC does not linger when it stops: its
+/// actions were never sent, and it says so at once.
+#[tokio::test]
+async fn no_linger_when_the_aac_was_never_reached() {
+    let probe = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = probe.local_addr().unwrap();
+    drop(probe);
+    let opts = ConnectOptions {
+        backoff_min: Duration::from_millis(10),
+        backoff_max: Duration::from_millis(20),
+        linger: Duration::from_secs(3600),
+        ..ConnectOptions::default()
+    };
+    let (link, handle) = connect_with_handle(addr.to_string(), opts);
+    link.actions.send(action(1, "a")).unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let mcl_runtime::link::Link { actions, inbound } = link;
+    drop(actions);
+    // Within T, not the hour of linger.
+    let r = timeout(T, handle).await.expect("the link lingered").unwrap();
+    assert_eq!(r, Err(LinkError::NeverConnected(vec![1])));
+    assert!(r.unwrap_err().to_string().contains("never sent"));
+    drop(inbound);
 }
 
 /// The player side answers garbage from the AAC with errors, never crashes,
@@ -497,6 +557,7 @@ async fn player_side_survives_a_garbage_aac() {
             .await
             .unwrap();
         wr.write_all(b"{\"type\":\"perception\",\"name\":\"depth\",\"value\":[1,2],\"n\":2}\n").await.unwrap();
+        wr.write_all(b"{\"type\":\"event\",\"event\":\"e9\",\"n\":5,\"activation\":4}\n").await.unwrap();
         while let Line::Text(t) = rd.next_line().await.unwrap() {
             let v: Value = serde_json::from_slice(&t).unwrap();
             if v["type"] != "ping" {
@@ -505,12 +566,24 @@ async fn player_side_survives_a_garbage_aac() {
         }
     });
     let (mut link, _h) = connect_with_handle(addr.to_string(), ConnectOptions::default());
-    assert_eq!(timeout(T, link.inbound.recv()).await.unwrap(), Some(Inbound::Connected));
-    assert_eq!(timeout(T, link.inbound.recv()).await.unwrap(), Some(Inbound::Event { event: "e1".into() }));
+    let mut notices = Vec::new();
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Connected));
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Event { event: "e1".into(), activation: None }));
     assert_eq!(
-        timeout(T, link.inbound.recv()).await.unwrap(),
+        next_item(&mut link, &mut notices).await,
         Some(Inbound::Perception { name: "depth".into(), value: json!([1, 2]) })
     );
+    assert_eq!(
+        next_item(&mut link, &mut notices).await,
+        Some(Inbound::Event { event: "e9".into(), activation: Some(4) })
+    );
+    // The player is told of every bad message, the duplicate, the gap and the AAC's error.
+    let told = |what: &str| notices.iter().filter(|n| n.contains(what)).count();
+    assert_eq!(told("sent a bad message"), 4, "{notices:?}");
+    assert_eq!(told("gap in the event numbers: events #3..#4 never arrived"), 1, "{notices:?}");
+    assert_eq!(told("exceeds the limit"), 1, "{notices:?}");
+    assert_eq!(told("dropped event #1: already received"), 1, "{notices:?}");
+    assert_eq!(told("the AAC reports an error (malformed): x"), 1, "{notices:?}");
     let mut codes = Vec::new();
     while codes.len() < 6 {
         let v = timeout(T, replies.recv()).await.unwrap().unwrap();

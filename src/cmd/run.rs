@@ -168,6 +168,9 @@ impl Sink for RunSink {
                 let _ = writeln!(out, "{line}");
                 let _ = out.flush();
             }
+        } else if !self.live && r.kind == "link" {
+            // Even a quiet run says when it cannot reach the vehicle.
+            eprintln!("link: {}", r.message.as_deref().unwrap_or(""));
         }
         self.records.push(r.clone());
     }
@@ -197,8 +200,8 @@ pub fn run(o: Options) -> u8 {
     if o.journal.is_some() && o.resume.is_some() {
         return usage("--resume FILE continues the journal FILE; do not give --journal as well");
     }
-    if o.time_limit.is_some_and(|t| !(t.is_finite() && t >= 0.0)) {
-        return usage("--time-limit must be a number of seconds ≥ 0");
+    if o.time_limit.is_some_and(|t| t.is_nan() || t < 0.0) {
+        return usage("--time-limit must be a number of seconds ≥ 0 (or `inf`: no limit)");
     }
     let mut symbols: BTreeMap<String, Value> = BTreeMap::new();
     let mut sets = Vec::new();
@@ -425,10 +428,12 @@ pub fn run(o: Options) -> u8 {
         }
     }
 
-    let limits = Limits { time_limit: o.time_limit };
+    let limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
     let mut session = Session::new(player, tracer, &mut sink);
     session.journal = journal_writer;
     session.crash_after = o.crash_after;
+    // Until the AAC welcomes the player, actions are queued.
+    session.link_down = o.aac.is_some();
     let result: Result<End, String> = if o.virtual_time {
         driver::run_virtual(&mut session, &mut mock, limits)
     } else {
@@ -474,7 +479,7 @@ pub fn run(o: Options) -> u8 {
             }
         })
     };
-    let end_time = session.player.now();
+    let player_time = session.player.now();
     let fired = session.player.fired_count();
     drop(session);
 
@@ -482,6 +487,7 @@ pub fn run(o: Options) -> u8 {
         Ok(end) => end,
         Err(code) => return code,
     };
+    let end_time = end.driver_time().unwrap_or(player_time);
     if let Some(e) = sink.error {
         eprintln!("error: {e}");
         return 2;
@@ -609,7 +615,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(rt) => rt,
         Err(e) => return usage(&format!("cannot start the runtime: {e}")),
     };
-    let limits = Limits { time_limit: o.time_limit };
+    let limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
     let shared: mcl_runtime::multi::SharedSink = sink.clone();
     let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
         let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = match o.transport {
