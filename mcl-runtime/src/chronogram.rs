@@ -5,12 +5,15 @@
 //! the order the primitives were first used. A bar spans each interval in
 //! which the primitive was enabled (from the action that activated it to its
 //! `disable`); a bar still open at the end is drawn to the end with a dashed
-//! edge. Events are marks on the row of the primitive whose task they
-//! concern (green: an ok event, red: a fail event, grey: any other), a
-//! time-out (a timed transition that fired) is an orange mark, unexpected
-//! events have a row of their own, and a vertical line gives the mission's
-//! outcome. Hovering a mark shows its details (`<title>`). Hand-written SVG,
-//! no dependencies.
+//! edge. Every action is a mark (a blue tick) and every event a mark (green:
+//! an ok event, red: a fail event, grey: any other) on the row of its
+//! primitive, a time-out (a timed transition that fired) is an orange mark,
+//! an event of a disabled run (`stale_event`) a hollow grey one; each mark
+//! carries its name (the action's, the event's) above the bar, in as many
+//! lines as needed so that no two names overlap. Unexpected events have a
+//! row of their own, and a vertical line gives the mission's outcome.
+//! Hovering a mark shows its details with the source line of its call
+//! (`<title>`). Hand-written SVG, no dependencies.
 
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -57,7 +60,7 @@ struct Bar {
 struct Row {
     label: String,
     bars: Vec<Bar>,
-    /// (time, kind, short label, details)
+    /// (time, kind, name, details)
     marks: Vec<(f64, MarkKind, String, String)>,
 }
 
@@ -68,7 +71,45 @@ enum MarkKind {
     Other,
     Timeout,
     Unexpected,
+    Stale,
     Action,
+}
+
+/// Height of one line of mark names.
+const LANE_H: f64 = 12.0;
+/// Lines of mark names per row at most; names that would need more are
+/// left out (their marks keep their tooltips) and counted under the row.
+pub const MAX_LANES: usize = 8;
+/// Font size of mark names, and the width allowed per character (generous,
+/// so that names never touch in a browser).
+const NAME_FONT: f64 = 10.0;
+const NAME_CHAR_W: f64 = 6.4;
+
+/// Width of a mark name on the page.
+fn name_width(name: &str) -> f64 {
+    name.chars().count() as f64 * NAME_CHAR_W + 4.0
+}
+
+/// Assigns each mark name (at its x, in time order) the first line where it
+/// does not overlap the previous name of that line. Returns the line of
+/// each (None: left out) and the number of lines used.
+fn lanes(xs: &[(f64, f64)]) -> (Vec<Option<usize>>, usize) {
+    let mut ends: Vec<f64> = Vec::new();
+    let mut out = Vec::with_capacity(xs.len());
+    for &(x, w) in xs {
+        match ends.iter().position(|&e| e + 3.0 <= x) {
+            Some(k) => {
+                ends[k] = x + w;
+                out.push(Some(k));
+            }
+            None if ends.len() < MAX_LANES => {
+                ends.push(x + w);
+                out.push(Some(ends.len() - 1));
+            }
+            None => out.push(None),
+        }
+    }
+    (out, ends.len())
 }
 
 fn esc(s: &str) -> String {
@@ -105,9 +146,12 @@ pub fn render(records: &[Record], opts: &Options) -> String {
     let mut timers: HashMap<(Option<String>, String), f64> = HashMap::new();
     let mut unexpected: Vec<(f64, String, String)> = Vec::new();
     let mut outcomes: Vec<(f64, Option<String>, String, Option<String>)> = Vec::new();
+    // The row of each action, by (mission, seq).
+    let mut seq_row: HashMap<(Option<String>, u64), usize> = HashMap::new();
     let missions: Vec<Option<String>> = {
         let mut v: Vec<Option<String>> = Vec::new();
-        for r in records {
+        // `"*"`: a record about every mission (coord_summary).
+        for r in records.iter().filter(|r| r.mission.as_deref() != Some("*")) {
             if !v.contains(&r.mission) {
                 v.push(r.mission.clone());
             }
@@ -138,12 +182,26 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                 let i = row_for(&mut rows, &mut row_of, &r.mission, &prim);
                 let cmd = r.command.clone().unwrap_or_default();
                 let details = format!(
-                    "t={} {} {}({})",
+                    "t={} action #{} {} = {prim} {}({}){}{}",
                     fmt_time(r.t),
+                    r.seq.unwrap_or_default(),
                     r.action.as_deref().unwrap_or(""),
                     cmd,
-                    r.params.iter().flatten().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", ")
+                    r.params.iter().flatten().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", "),
+                    r.task
+                        .as_ref()
+                        .map(|t| format!(
+                            " (task {t}{})",
+                            r.label.as_ref().map(|l| format!(":{l}")).unwrap_or_default()
+                        ))
+                        .unwrap_or_default(),
+                    r.src.as_ref().map(|s| format!(" at {s}")).unwrap_or_default()
                 );
+                if let Some(seq) = r.seq {
+                    seq_row.insert((r.mission.clone(), seq), i);
+                }
+                let name = r.action.clone().unwrap_or_else(|| cmd.clone());
+                rows[i].marks.push((r.t, MarkKind::Action, name, details));
                 if cmd == "disable" {
                     if let Some(b) = open.remove(&i) {
                         rows[i].bars[b].end = Some(r.t);
@@ -161,10 +219,7 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                         .join(", ");
                     rows[i].bars.push(Bar { start: r.t, end: None, ending: Ending::Aborted, text });
                     e.insert(rows[i].bars.len() - 1);
-                } else {
-                    rows[i].marks.push((r.t, MarkKind::Action, cmd.clone(), details.clone()));
                 }
-                let _ = details;
             }
             "event" => {
                 let ev = r.event.clone().unwrap_or_default();
@@ -175,17 +230,23 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                     .or_else(|| r.task.clone())
                     .unwrap_or_else(|| "events".into());
                 let i = row_for(&mut rows, &mut row_of, &r.mission, &prim);
-                let (kind, short) = if ev.ends_with("Ok") || ev.ends_with("_ok") {
-                    (MarkKind::Ok, "ok".to_string())
+                let kind = if ev.ends_with("Ok") || ev.ends_with("_ok") {
+                    MarkKind::Ok
                 } else if ev.ends_with("Fail") || ev.ends_with("_fail") {
-                    (MarkKind::Fail, "fail".to_string())
+                    MarkKind::Fail
                 } else {
-                    (MarkKind::Other, ev.clone())
+                    MarkKind::Other
                 };
                 let details = format!(
                     "t={} event {ev}{}{}",
                     fmt_time(r.t),
-                    r.task.as_ref().map(|t| format!(" (task {t})")).unwrap_or_default(),
+                    r.task
+                        .as_ref()
+                        .map(|t| format!(
+                            " (task {t}{})",
+                            r.label.as_ref().map(|l| format!(":{l}")).unwrap_or_default()
+                        ))
+                        .unwrap_or_default(),
                     r.src.as_ref().map(|s| format!(" at {s}")).unwrap_or_default()
                 );
                 if let Some(&b) = open.get(&i) {
@@ -197,7 +258,21 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                         };
                     }
                 }
-                rows[i].marks.push((r.t, kind, short, details));
+                rows[i].marks.push((r.t, kind, ev, details));
+            }
+            "stale_event" => {
+                let ev = r.event.clone().unwrap_or_default();
+                let details = format!(
+                    "t={} event {ev} of a disabled run, ignored: {}",
+                    fmt_time(r.t),
+                    r.reason.as_deref().unwrap_or("stale")
+                );
+                let row = r.activation.and_then(|a| seq_row.get(&(r.mission.clone(), a)).copied());
+                let i = match row {
+                    Some(i) => i,
+                    None => row_for(&mut rows, &mut row_of, &r.mission, "events"),
+                };
+                rows[i].marks.push((r.t, MarkKind::Stale, format!("{ev} (stale)"), details));
             }
             "timer" => {
                 if let (Some(tr), Some(d)) = (&r.transition, r.deadline) {
@@ -253,14 +328,32 @@ pub fn render(records: &[Record], opts: &Options) -> String {
     // Geometry.
     let label_w = rows.iter().map(|r| r.label.chars().count()).max().unwrap_or(10).clamp(10, 48) as f64 * 7.4 + 24.0;
     let left = label_w;
-    let top = 64.0;
+    // Room above the plot for the outcomes' names.
+    let top = 64.0 + 14.0 * outcomes.len() as f64;
     let rh = opts.row_height;
     let pw = opts.plot_width;
     let span = if end_time > 0.0 { end_time } else { 1.0 };
-    // Leave room after the end for the outcome label.
     let x = |t: f64| left + t / span * pw;
-    let plot_h = rows.len().max(1) as f64 * rh;
-    let width = left + pw + 150.0;
+    // Names of the marks, in lines above each row's bars.
+    for row in rows.iter_mut() {
+        row.marks.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let layouts: Vec<(Vec<Option<usize>>, usize)> = rows
+        .iter()
+        .map(|row| lanes(&row.marks.iter().map(|(t, _, name, _)| (x(*t) + 2.0, name_width(name))).collect::<Vec<_>>()))
+        .collect();
+    let heights: Vec<f64> = layouts.iter().map(|(_, n)| 4.0 + *n as f64 * LANE_H + rh).collect();
+    let tops: Vec<f64> = heights
+        .iter()
+        .scan(top, |y, h| {
+            let y0 = *y;
+            *y += h;
+            Some(y0)
+        })
+        .collect();
+    let plot_h = heights.iter().sum::<f64>().max(rh);
+    // Room after the end for the names of the last marks.
+    let width = left + pw + 230.0;
     let height = top + plot_h + 80.0;
 
     let title = opts.title.clone().unwrap_or_else(|| {
@@ -327,11 +420,15 @@ pub fn render(records: &[Record], opts: &Options) -> String {
 
     // Rows.
     for (i, row) in rows.iter().enumerate() {
-        let y0 = top + i as f64 * rh;
-        let yc = y0 + rh / 2.0;
+        let (lane_of, n_lanes) = &layouts[i];
+        let y0 = tops[i];
+        let h = heights[i];
+        // The bars' part of the row, under the lines of names.
+        let yb = y0 + 4.0 + *n_lanes as f64 * LANE_H;
+        let yc = yb + rh / 2.0;
         if i % 2 == 1 {
             let _ =
-                writeln!(s, r##"<rect x="0" y="{y0:.1}" width="{:.1}" height="{rh:.1}" fill="#f6f8fa"/>"##, left + pw);
+                writeln!(s, r##"<rect x="0" y="{y0:.1}" width="{:.1}" height="{h:.1}" fill="#f6f8fa"/>"##, left + pw);
         }
         let _ = writeln!(
             s,
@@ -356,7 +453,7 @@ pub fn render(records: &[Record], opts: &Options) -> String {
             let _ = writeln!(
                 s,
                 r##"<rect x="{xa:.1}" y="{:.1}" width="{w:.1}" height="{:.1}" rx="3" fill="{fill}" stroke="{stroke}" stroke-width="1"{}><title>{}</title></rect>"##,
-                y0 + 6.0,
+                yb + 6.0,
                 rh - 12.0,
                 if b.is_none() { r#" stroke-dasharray="4 3""# } else { "" },
                 esc(&format!(
@@ -385,24 +482,50 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                 );
             }
         }
-        // Marks, with labels that do not overlap the previous one.
-        let mut last_label_end = f64::NEG_INFINITY;
-        for (t, kind, short, details) in &row.marks {
+        // Marks, each with its name in the line the layout gave it.
+        let mut hidden = 0;
+        for ((t, kind, name, details), lane) in row.marks.iter().zip(lane_of) {
             let xm = x(*t);
             let (color, shape) = match kind {
                 MarkKind::Ok => ("#1f9d3a", "circle"),
                 MarkKind::Fail => ("#d02a2a", "circle"),
                 MarkKind::Other => ("#777777", "circle"),
+                MarkKind::Stale => ("#999999", "ring"),
                 MarkKind::Timeout => ("#e08a00", "diamond"),
                 MarkKind::Unexpected => ("#e08a00", "triangle"),
                 MarkKind::Action => ("#3a6ea5", "tick"),
             };
             let tip = format!("<title>{}</title>", esc(details));
+            match lane {
+                Some(k) => {
+                    // The name, and a faint line down to its mark.
+                    let base = yb - 3.0 - *k as f64 * LANE_H;
+                    let _ = writeln!(
+                        s,
+                        r##"<line x1="{xm:.1}" y1="{:.1}" x2="{xm:.1}" y2="{:.1}" stroke="{color}" stroke-opacity="0.35" stroke-width="0.8"/>"##,
+                        base - 8.0,
+                        yc - 6.0
+                    );
+                    let _ = writeln!(
+                        s,
+                        r##"<text class="mark-name" x="{:.1}" y="{base:.1}" font-size="{NAME_FONT}" fill="{color}">{}{tip}</text>"##,
+                        xm + 2.0,
+                        esc(name)
+                    );
+                }
+                None => hidden += 1,
+            }
             match shape {
                 "circle" => {
                     let _ = writeln!(
                         s,
                         r##"<circle cx="{xm:.1}" cy="{yc:.1}" r="5" fill="{color}" stroke="#fff" stroke-width="1.5">{tip}</circle>"##
+                    );
+                }
+                "ring" => {
+                    let _ = writeln!(
+                        s,
+                        r##"<circle cx="{xm:.1}" cy="{yc:.1}" r="4" fill="#fff" stroke="{color}" stroke-width="1.5">{tip}</circle>"##
                     );
                 }
                 "diamond" => {
@@ -423,21 +546,19 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                     let _ = writeln!(
                         s,
                         r##"<line x1="{xm:.1}" y1="{:.1}" x2="{xm:.1}" y2="{:.1}" stroke="{color}" stroke-width="2">{tip}</line>"##,
-                        y0 + 4.0,
-                        y0 + rh - 4.0
+                        yb + 2.0,
+                        yb + rh - 2.0
                     );
                 }
             }
-            let lx = xm + 8.0;
-            if lx > last_label_end + 2.0 {
-                let _ = writeln!(
-                    s,
-                    r##"<text x="{lx:.1}" y="{:.1}" font-size="10" fill="{color}">{}</text>"##,
-                    yc - 6.0,
-                    esc(short)
-                );
-                last_label_end = lx + short.chars().count() as f64 * 6.0;
-            }
+        }
+        if hidden > 0 {
+            let _ = writeln!(
+                s,
+                r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="#777">+{hidden} names not shown (hover the marks)</text>"##,
+                left + pw + 8.0,
+                yc + 4.0
+            );
         }
     }
 
@@ -456,7 +577,7 @@ pub fn render(records: &[Record], opts: &Options) -> String {
         let _ = writeln!(
             s,
             r##"<line x1="{xo:.1}" y1="{:.1}" x2="{xo:.1}" y2="{:.1}" stroke="{color}" stroke-width="2" stroke-dasharray="6 3"><title>{}</title></line>"##,
-            top - 6.0,
+            top - 14.0 * (outcomes.len() - k) as f64 + 2.0,
             top + plot_h,
             esc(&format!(
                 "t={} {label}{}",
@@ -468,7 +589,7 @@ pub fn render(records: &[Record], opts: &Options) -> String {
             s,
             r##"<text x="{:.1}" y="{:.1}" font-size="12" font-weight="bold" fill="{color}">{}</text>"##,
             xo + 5.0,
-            top + 12.0 + k as f64 * 14.0,
+            top - 14.0 * (outcomes.len() - k - 1) as f64 - 4.0,
             esc(&label)
         );
     }
@@ -509,14 +630,33 @@ fn legend(s: &mut String, x0: f64, y: f64) {
         text(s, &mut x, t);
     }
     for (shape, color, t) in [
+        ("tick", "#3a6ea5", "action"),
         ("circle", "#1f9d3a", "ok event"),
         ("circle", "#d02a2a", "fail event"),
         ("diamond", "#e08a00", "time-out"),
+        ("ring", "#999999", "event of a disabled run"),
         ("triangle", "#e08a00", "unexpected event"),
     ] {
         match shape {
+            "tick" => {
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{color}" stroke-width="2"/>"##,
+                    x + 5.0,
+                    y - 6.0,
+                    x + 5.0,
+                    y + 6.0
+                );
+            }
             "circle" => {
                 let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{color}"/>"##, x + 5.0);
+            }
+            "ring" => {
+                let _ = writeln!(
+                    s,
+                    r##"<circle cx="{:.1}" cy="{y:.1}" r="4" fill="#fff" stroke="{color}" stroke-width="1.5"/>"##,
+                    x + 5.0
+                );
             }
             "diamond" => {
                 let _ = writeln!(
@@ -567,6 +707,117 @@ mod tests {
         assert!(svg.contains("unexpected events"));
         assert!(svg.contains("mission OK"));
         assert!(svg.trim_end().ends_with("</svg>"));
+    }
+
+    fn action(t: f64, seq: u64, prim: &str, task: &str, command: &str) -> Record {
+        let mut a = rec(t, "action");
+        a.seq = Some(seq);
+        a.action = Some(format!("{command}{task}"));
+        a.primitive = Some(prim.into());
+        a.command = Some(command.into());
+        a.task = Some(task.into());
+        a.src = Some(format!("m.mcl:{}", 10 + seq));
+        a
+    }
+
+    fn event(t: f64, ev: &str, task: &str) -> Record {
+        let mut e = rec(t, "event");
+        e.event = Some(ev.into());
+        e.task = Some(task.into());
+        e.src = Some("m.mcl:3".into());
+        e
+    }
+
+    /// The names of the marks: (x, y, text) of every `mark-name` element.
+    fn names(svg: &str) -> Vec<(f64, f64, String)> {
+        svg.lines()
+            .filter(|l| l.contains(r#"class="mark-name""#))
+            .map(|l| {
+                let attr = |k: &str| -> f64 {
+                    let i = l.find(&format!(" {k}=\"")).unwrap() + k.len() + 3;
+                    l[i..i + l[i..].find('"').unwrap()].parse().unwrap()
+                };
+                let i = l.find('>').unwrap() + 1;
+                let text = l[i..i + l[i..].find('<').unwrap()].to_string();
+                (attr("x"), attr("y"), text)
+            })
+            .collect()
+    }
+
+    /// Every action and event is a mark with its name; at one instant the
+    /// names go on separate lines; names never overlap; tooltips give the
+    /// source line of the call.
+    #[test]
+    fn actions_and_events_are_named_without_overlap() {
+        let mut recs = vec![
+            action(0.0, 1, "GotoPrimitive", "Goto", "enable"),
+            action(0.0, 2, "DepthPrimitive", "Depth", "enable"),
+            event(5.0, "eventGotoOk", "Goto"),
+            action(5.0, 3, "GotoPrimitive", "Goto", "disable"),
+            action(5.0, 4, "GotoPrimitive", "Goto", "enable"),
+            event(5.5, "eventGotoFail", "Goto"),
+            action(5.5, 5, "GotoPrimitive", "Goto", "disable"),
+            action(6.0, 6, "DepthPrimitive", "Depth", "disable"),
+        ];
+        let mut st = rec(6.0, "stale_event");
+        st.event = Some("eventDepthOk".into());
+        st.activation = Some(2);
+        st.reason = Some("its activation, action #2, is over".into());
+        recs.push(st);
+        let mut o = rec(100.0, "outcome");
+        o.result = Some("ok".into());
+        recs.push(o);
+        let svg = render(&recs, &Options::default());
+        let got = names(&svg);
+        let texts: Vec<&str> = got.iter().map(|(_, _, t)| t.as_str()).collect();
+        for want in [
+            "enableGoto",
+            "eventGotoOk",
+            "disableGoto",
+            "eventGotoFail",
+            "enableDepth",
+            "disableDepth",
+            "eventDepthOk (stale)",
+        ] {
+            assert!(texts.contains(&want), "{want} in {texts:?}");
+        }
+        assert_eq!(texts.iter().filter(|t| **t == "enableGoto").count(), 2);
+        assert_eq!(got.len(), 9, "{texts:?}");
+        // No two names overlap (same line, intersecting extents).
+        for (i, a) in got.iter().enumerate() {
+            for b in &got[i + 1..] {
+                if (a.1 - b.1).abs() < LANE_H - 0.5 {
+                    let (a0, a1) = (a.0, a.0 + name_width(&a.2));
+                    let (b0, b1) = (b.0, b.0 + name_width(&b.2));
+                    assert!(a1 <= b0 || b1 <= a0, "{a:?} overlaps {b:?}");
+                }
+            }
+        }
+        // The four names of Goto at t = 5 and 5.5 stand on four lines.
+        let goto_ys: std::collections::BTreeSet<i64> =
+            got.iter().filter(|(_, _, t)| t.contains("Goto")).map(|(_, y, _)| *y as i64).collect();
+        assert!(goto_ys.len() >= 4, "{got:?}");
+        // Tooltips name the call's source line.
+        assert!(svg.contains("action #1 enableGoto = GotoPrimitive enable() (task Goto) at m.mcl:11"), "{svg}");
+        assert!(svg.contains("event eventGotoOk (task Goto) at m.mcl:3"));
+        // The stale event is drawn on the row of its activation's primitive, hollow.
+        assert!(svg.contains(r##"fill="#fff" stroke="#999999""##));
+    }
+
+    #[test]
+    fn lanes_are_bounded() {
+        // 30 names at one instant: MAX_LANES lines, the others counted.
+        let mut recs = Vec::new();
+        for k in 0..30 {
+            let mut e = event(1.0, &format!("ev{k}"), "Goto");
+            e.task = None;
+            recs.push(e);
+        }
+        let svg = render(&recs, &Options::default());
+        assert_eq!(names(&svg).len(), MAX_LANES);
+        assert!(svg.contains(&format!("+{} names not shown", 30 - MAX_LANES)));
+        let (l, n) = lanes(&[(0.0, 50.0), (10.0, 50.0), (60.0, 10.0), (53.0, 5.0)]);
+        assert_eq!((l, n), (vec![Some(0), Some(1), Some(0), Some(2)], 3));
     }
 
     #[test]
