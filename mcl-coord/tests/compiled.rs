@@ -46,10 +46,7 @@ fn labelled_calls_map_to_their_adapter_nodes() {
     let pid = |p: mcl_net::PlaceId| auv.net.place(p).unwrap().id.clone();
     let n = deploy.call_site;
     assert_eq!(a.started.iter().map(|&t| id(t)).collect::<Vec<_>>(), vec![format!("call{n}.start")]);
-    assert_eq!(
-        a.ended.iter().map(|&t| id(t)).collect::<Vec<_>>(),
-        vec![format!("call{n}.ok"), format!("call{n}.fail"), format!("call{n}.release")]
-    );
+    assert_eq!(a.ended.iter().map(|&t| id(t)).collect::<Vec<_>>(), vec![format!("call{n}.release")]);
     assert_eq!(
         a.running.iter().map(|&p| pid(p)).collect::<Vec<_>>(),
         vec![format!("call{n}.run"), format!("call{n}.stopping")]

@@ -157,6 +157,13 @@ impl TransitionKind {
     pub fn is_immediate(&self) -> bool {
         matches!(self, TransitionKind::Immediate)
     }
+
+    /// True for a *deferred* transition: timed with a fixed delay of 0. It
+    /// fires as soon as the marking is tangible, before any event or
+    /// positive delay (see [`crate::semantics::select_ready`]).
+    pub fn is_deferred(&self) -> bool {
+        matches!(self, TransitionKind::Timed(Delay::Fixed(d)) if *d <= 0.0)
+    }
 }
 
 /// An action sent to the vehicle when a transition fires.
