@@ -570,6 +570,24 @@ mod tests {
     }
 
     #[test]
+    fn deferred_transitions_fire_before_events_and_timers() {
+        let mut b = NetBuilder::new("deferred");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let ev = b.add_transition(Transition::new("ev").with_kind(TransitionKind::Event("e".into())));
+        let late = b.add_transition(Transition::new("late").with_kind(TransitionKind::Timed(Delay::Fixed(3.0))));
+        let d0 = b.add_transition(Transition::new("d0").with_kind(TransitionKind::Timed(Delay::Fixed(0.0))));
+        let d1 = b
+            .add_transition(Transition::new("d1").with_kind(TransitionKind::Timed(Delay::Fixed(0.0))).with_priority(2));
+        for t in [ev, late, d0, d1] {
+            b.add_input(p, t, 1);
+        }
+        let net = b.build().unwrap();
+        let (class, r) = ready(&net, &net.initial_marking());
+        assert_eq!(class, MarkingClass::Tangible);
+        assert_eq!(r, vec![d1], "deferred first, highest priority first");
+    }
+
+    #[test]
     fn tracker_matches_full_scan_and_reports_changes() {
         let net = figure_a1();
         let mut m = net.initial_marking();
