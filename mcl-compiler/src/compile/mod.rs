@@ -332,8 +332,11 @@ impl Composer<'_> {
 ///   transitions (the disable of its primitive, with this call's binding);
 /// * `abort` forwards an abort to the running task (`run` → `stopping`);
 ///   `cancel` withdraws a call aborted while it waits for the lock;
-/// * `release` (deferred) gives the lock back from `stopping` once the
-///   marking is tangible, i.e. once the task net is at rest.
+/// * `release` (deferred, priority 0: after every other deferred
+///   transition) gives the lock back from `stopping` once the marking is
+///   tangible, i.e. once the task net is at rest, and once the structures
+///   have aborted what they decided to abort (so that a call they abort
+///   while it waits for this task is cancelled, never started).
 pub fn adapter(
     b: &mut Builder,
     prefix: &[builder::Part],
@@ -367,7 +370,7 @@ pub fn adapter(
     let node = name(b, ".abort");
     b.imm(node, &[ext.abort, run], &[task.abort, stopping]);
     let node = name(b, ".release");
-    b.deferred(node, &[stopping], &[lock]);
+    b.deferred_last(node, &[stopping], &[lock]);
     start
 }
 
