@@ -45,7 +45,7 @@ pub const INTERFACE_NONE: u32 = 0;
 pub const INTERFACE_EXTERNAL: u32 = 1;
 
 /// Where a node of the compiled net comes from in the user's MCL source.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 pub struct Provenance {
     /// Task whose net this node belongs to.
     pub task: Option<String>,
@@ -73,7 +73,7 @@ impl Provenance {
 }
 
 /// A byte range `start..end` in a source file.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct SourceSpan {
     /// Source file path as given to the compiler.
     pub file: String,

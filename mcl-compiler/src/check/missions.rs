@@ -123,17 +123,17 @@ fn check_delay_arguments(cx: &mut Cx<'_>, c: &Call, id: scope::DefId, task: &Tas
     let Some(Ok(net)) = scope::pattern_net(cx.db, pid) else {
         return;
     };
-    let mut params: Vec<&str> = net
-        .transitions
-        .iter()
-        .filter_map(|t| match &t.delay {
+    // Most patterns have no parameter delay: no allocation for them.
+    fn delay_param(t: &TransitionDef) -> Option<&str> {
+        match &t.delay {
             Some(Delay::Param(p)) => Some(p.text.as_str()),
             _ => None,
-        })
-        .collect();
-    params.sort_unstable();
-    params.dedup();
-    for p in params {
+        }
+    }
+    for (k, p) in net.transitions.iter().enumerate().filter_map(|(k, t)| Some((k, delay_param(t)?))) {
+        if net.transitions[..k].iter().any(|t| delay_param(t) == Some(p)) {
+            continue;
+        }
         let Some(i) = task.params.iter().position(|x| x.text == p) else { continue };
         let Some(arg) = c.args.get(i) else { continue };
         let problem = match &arg.kind {
