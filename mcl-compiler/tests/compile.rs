@@ -81,7 +81,9 @@ fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Optio
     use std::collections::HashMap;
     let mut ex = Executor::new(net, seed);
     let mut sent: Vec<String> = Vec::new();
-    let mut args: HashMap<String, (Vec<(String, String)>, Option<String>)> = HashMap::new();
+    // Per task: the arguments and the label of the call holding it.
+    type Binding = (Vec<(String, String)>, Option<String>);
+    let mut args: HashMap<String, Binding> = HashMap::new();
     let mut log = |t: mcl_net::TransitionId, sent: &mut Vec<String>| {
         let tr = net.transition(t).unwrap();
         if let Some(b) = &tr.binding {

@@ -648,8 +648,8 @@ fn reference(m: &Mission) -> Result<BTreeSet<Trace>, Skip> {
         let (trace, seen) = Sim::new(m, prefix.clone()).run()?;
         out.insert(trace);
         // Branch on every choice after the prefix.
-        for i in prefix.len()..seen.len() {
-            for alt in 1..seen[i] {
+        for (i, &n) in seen.iter().enumerate().skip(prefix.len()) {
+            for alt in 1..n {
                 let mut p: Vec<usize> = prefix.clone();
                 p.extend(std::iter::repeat_n(0, i - prefix.len()));
                 p.push(alt);
