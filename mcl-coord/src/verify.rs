@@ -2,7 +2,7 @@
 //! time and then together.
 //!
 //! The plain product of two compiled missions is too large to explore (the
-//! AUV of `examples/auv-asc.mcl` alone has 32,000 markings, its product with
+//! AUV of `examples/auv-asc.mcl` alone has 7,000 markings, its product with
 //! the ASC tens of millions), and the counters of order and sync supervisors
 //! are unbounded when calls sit in loops. The verification therefore works
 //! in three steps, each exact or a sound over-approximation:
