@@ -54,9 +54,10 @@ enum Command {
         /// Write the PNML here (default: standard output).
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// Also write a Graphviz drawing (with --out-dir: one `<mission>.dot` per mission).
-        #[arg(long, num_args = 0..=1, default_missing_value = "")]
-        dot: Option<PathBuf>,
+        /// Also write a Graphviz drawing to OUT.dot; with --out-dir, give no
+        /// path: one `<mission>.dot` per mission is written into the folder.
+        #[arg(long, num_args = 0..=1, value_name = "OUT.dot")]
+        dot: Option<Option<PathBuf>>,
         /// Write one `<mission>.pnml` per mission into this folder.
         #[arg(long)]
         out_dir: Option<PathBuf>,
@@ -439,14 +440,26 @@ fn main() -> ExitCode {
             cmd::analyze::run(&net, format, max_states, semantics, threads)
         }
         Command::Compile { file, output, dot, out_dir } => {
-            if dot.as_ref().is_some_and(|d| d.as_os_str().is_empty()) && out_dir.is_none() {
-                eprintln!("error: --dot needs a path unless --out-dir is given");
-                return ExitCode::from(2);
-            }
+            let dot = match (dot, &out_dir) {
+                (Some(None), None) => {
+                    eprintln!("error: --dot needs a path (--dot OUT.dot) unless --out-dir is given");
+                    return ExitCode::from(2);
+                }
+                (Some(Some(p)), Some(_)) => {
+                    eprintln!(
+                        "error: with --out-dir, --dot takes no path: it writes one `<mission>.dot` per mission into the folder (got `{}`)",
+                        p.display()
+                    );
+                    return ExitCode::from(2);
+                }
+                (Some(Some(p)), None) => cmd::compile::Dot::File(p),
+                (Some(None), Some(_)) => cmd::compile::Dot::PerMission,
+                (None, _) => cmd::compile::Dot::No,
+            };
             cmd::compile::run(cmd::compile::Options {
                 file: &file,
                 output: output.as_deref(),
-                dot: dot.as_deref(),
+                dot,
                 out_dir: out_dir.as_deref(),
             })
         }

@@ -50,7 +50,7 @@ fn run(file: &str, extra: &[&str], name: &str) -> (i32, Vec<Value>, Output) {
 }
 
 /// A call's starts and ends in the trace: line indices and times of the
-/// firings of `callN.start` and of `callN.ok` / `callN.fail` / `callN.release`
+/// firings of `callN.start` and of `callN.release` (a call ends, ok, failed or aborted, by giving its task back)
 /// for the calls labelled `label` in `mission`.
 #[derive(Debug, Default)]
 struct Call {
@@ -72,7 +72,8 @@ fn call(tr: &[Value], mission: &str, label: &str) -> Call {
         }
         match tail {
             "start" => c.starts.push((i, t)),
-            "ok" | "fail" | "release" => c.ends.push((i, t)),
+            // A call that completes or is aborted gives its task back once, at `release`.
+            "release" => c.ends.push((i, t)),
             _ => {}
         }
     }

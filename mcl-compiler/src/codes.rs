@@ -30,6 +30,7 @@ pub const INTERFACE_MISMATCH: &str = "E0212";
 
 // Missions.
 pub const MIXED_PARALLEL: &str = "E0301";
+pub const BAD_DELAY_ARGUMENT: &str = "E0302";
 
 // Building blocks.
 pub const BLOCK_PROPERTY: &str = "E0601";
@@ -106,6 +107,7 @@ registry! {
     "E0211" => "transition both timed and bound to an event",
     "E0212" => "interface id of an arc end does not match its declaration",
     "E0301" => "`and` and `or` mixed in one parallel",
+    "E0302" => "a delay argument that is not a positive number of seconds",
     "E0401" => "constraint names an unknown mission",
     "E0402" => "constraint names an unknown label",
     "E0403" => "ambiguous label in a constraint",

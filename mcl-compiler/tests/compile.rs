@@ -81,11 +81,13 @@ fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Optio
     use std::collections::HashMap;
     let mut ex = Executor::new(net, seed);
     let mut sent: Vec<String> = Vec::new();
-    let mut args: HashMap<String, Vec<(String, String)>> = HashMap::new();
+    // Per task: the arguments and the label of the call holding it.
+    type Binding = (Vec<(String, String)>, Option<String>);
+    let mut args: HashMap<String, Binding> = HashMap::new();
     let mut log = |t: mcl_net::TransitionId, sent: &mut Vec<String>| {
         let tr = net.transition(t).unwrap();
         if let Some(b) = &tr.binding {
-            args.insert(b.task.clone(), b.args.clone());
+            args.insert(b.task.clone(), (b.args.clone(), b.label.clone()));
         }
         let task = tr.provenance.task.clone().unwrap_or_default();
         for a in &tr.actions {
@@ -94,13 +96,14 @@ fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Optio
                 .iter()
                 .map(|(name, v)| {
                     if v.contains("\"param\"") {
-                        args[&task].iter().find(|(p, _)| p == name).unwrap().1.clone()
+                        args[&task].0.iter().find(|(p, _)| p == name).unwrap().1.clone()
                     } else {
                         v.clone()
                     }
                 })
                 .collect();
-            sent.push(format!("{}({})", a.action, params.join(",")));
+            let label = args.get(&task).and_then(|(_, l)| l.clone()).map(|l| format!("@{l}")).unwrap_or_default();
+            sent.push(format!("{}({}){label}", a.action, params.join(",")));
         }
     };
     for _ in 0..1000 {
@@ -138,7 +141,8 @@ fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Optio
 
 /// SEED-NOTES item 3: two call sites of one task active at once each get
 /// their own parameters and their own outcome, one failing while the other
-/// succeeds.
+/// succeeds; the disable of each call is sent with that call's parameter and
+/// label, before the other call's enable.
 #[test]
 fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
     let mut db = Database::new();
@@ -146,7 +150,7 @@ fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
     db.set_text(
         &dir.join("v.mcl"),
         r#"
-        actions { enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
+        actions { enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable, v: x );
                   enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable ); }
         events { aOk; aFail; bOk; bFail; }
         tasks { A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
@@ -155,7 +159,7 @@ fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
     );
     let f = db.set_text(
         &dir.join("m.mcl"),
-        "import \"v.mcl\";\nmission { parallel { try { A( 1 ) } catch { B() } } and { A( 2 ) } }\n",
+        "import \"v.mcl\";\nmission { parallel { try { A( 1 ) : one } catch { B() } } and { A( 2 ) : two } }\n",
     );
     let net = compile_file(&db, f).unwrap().remove(0).net;
     let mut seen = std::collections::HashSet::new();
@@ -175,30 +179,21 @@ fn parallel_calls_of_one_task_get_their_own_parameters_and_outcomes() {
             seen_actions = sent.len();
             pending.pop_front()
         });
-        let first = sent.iter().find(|s| s.starts_with("enableA")).unwrap().clone();
-        let enables: Vec<&String> = sent.iter().filter(|s| s.starts_with("enable")).collect();
-        if first == "enableA(1)" {
-            // A(1) failed: its catch ran B; A(2) then ran with its own parameter and succeeded.
-            assert_eq!(enables[0], "enableA(1)");
-            assert!(enables.iter().any(|e| *e == "enableB()"), "{sent:?}");
-            assert!(enables.iter().any(|e| *e == "enableA(2)"), "{sent:?}");
+        let first = sent[0].clone();
+        if first == "enableA(1)@one" {
+            // A(1) failed: its catch ran B (whose enable may come before or
+            // after A(1)'s disable: another primitive); A(2) ran after A(1)'s
+            // disable, with its own parameter, and succeeded.
+            let disable_first =
+                ["enableA(1)@one", "disableA(1)@one", "enableB()", "enableA(2)@two", "disableB()", "disableA(2)@two"];
+            let enable_b_first =
+                ["enableA(1)@one", "enableB()", "disableA(1)@one", "enableA(2)@two", "disableB()", "disableA(2)@two"];
+            assert!(sent == disable_first || sent == enable_b_first, "seed {seed}: {sent:?}");
             assert_eq!(result, "ok", "{sent:?}");
         } else {
-            // A(2) failed: no catch for it, A(1) succeeded, the parallel-and fails.
-            assert_eq!(first, "enableA(2)");
-            assert!(!enables.iter().any(|e| *e == "enableB()"), "{sent:?}");
-            assert!(enables.iter().any(|e| *e == "enableA(1)"), "{sent:?}");
+            // A(2) failed: no catch for it; A(1) then succeeded; the parallel-and fails.
+            assert_eq!(sent, ["enableA(2)@two", "disableA(2)@two", "enableA(1)@one", "disableA(1)@one"], "seed {seed}");
             assert_eq!(result, "fail", "{sent:?}");
-        }
-        // Never two enables of A without a disable in between (the task is not replicated).
-        let mut running = false;
-        for s in &sent {
-            if s.starts_with("enableA") {
-                assert!(!running, "{sent:?}");
-                running = true;
-            } else if s.starts_with("disableA") {
-                running = false;
-            }
         }
         seen.insert(first);
     }

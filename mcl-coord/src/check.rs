@@ -264,7 +264,7 @@ impl<'a> Calls<'a> {
             } else if tid == c.fail {
                 "fails"
             } else if tid == c.release {
-                "is stopped"
+                "releases its task"
             } else if tid == c.cancel {
                 "is withdrawn"
             } else if c.label.is_some() && c.arrived(&mission.net).contains(&tid) {

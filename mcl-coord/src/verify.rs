@@ -2,7 +2,7 @@
 //! time and then together.
 //!
 //! The plain product of two compiled missions is too large to explore (the
-//! AUV of `examples/auv-asc.mcl` alone has 32,000 markings, its product with
+//! AUV of `examples/auv-asc.mcl` alone has 7,000 markings, its product with
 //! the ASC tens of millions), and the counters of order and sync supervisors
 //! are unbounded when calls sit in loops. The verification therefore works
 //! in three steps, each exact or a sound over-approximation:
@@ -266,7 +266,11 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
                 out.push((lab(v(t), false), t));
             }
         } else {
-            for &t in en.iter().filter(|&&t| !imm[t as usize]) {
+            // Deferred transitions (delay 0) fire before any event or timer,
+            // as in the player (`mcl_net::semantics::select_ready`).
+            let deferred = |t: u32| net.transitions()[t as usize].kind.is_deferred();
+            let any_deferred = en.iter().any(|&t| deferred(t));
+            for &t in en.iter().filter(|&&t| !imm[t as usize] && (!any_deferred || deferred(t))) {
                 out.push((lab(v(t), !gimm.is_empty()), t));
             }
         }

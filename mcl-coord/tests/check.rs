@@ -129,13 +129,13 @@ fn a_cap_reached_is_a_warning_on_the_constraints_block() {
     let d = &diags[0].diag;
     assert_eq!((d.code, d.severity), (codes::COORDINATION_INCONCLUSIVE, Severity::Warning));
     assert_eq!(text_at(&src, &diags[0]), "constraints");
-    assert!(d.notes.iter().any(|n| n.contains("more than 2000 states")), "{:?}", d.notes);
+    assert!(d.notes.iter().any(|n| n.contains("more than 25000 states")), "{:?}", d.notes);
 }
 
 /// Caps small enough for the W0407 example to reach them.
 fn small_caps() -> AnalyzeOptions {
     AnalyzeOptions {
-        verify: VerifyOptions { max_product_states: 2_000, ..VerifyOptions::default() },
+        verify: VerifyOptions { max_product_states: 25_000, ..VerifyOptions::default() },
         structure: false,
         ..AnalyzeOptions::default()
     }

@@ -45,7 +45,7 @@ pub const INTERFACE_NONE: u32 = 0;
 pub const INTERFACE_EXTERNAL: u32 = 1;
 
 /// Where a node of the compiled net comes from in the user's MCL source.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 pub struct Provenance {
     /// Task whose net this node belongs to.
     pub task: Option<String>,
@@ -73,7 +73,7 @@ impl Provenance {
 }
 
 /// A byte range `start..end` in a source file.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct SourceSpan {
     /// Source file path as given to the compiler.
     pub file: String,
@@ -156,6 +156,13 @@ impl TransitionKind {
     #[inline]
     pub fn is_immediate(&self) -> bool {
         matches!(self, TransitionKind::Immediate)
+    }
+
+    /// True for a *deferred* transition: timed with a fixed delay of 0. It
+    /// fires as soon as the marking is tangible, before any event or
+    /// positive delay (see [`crate::semantics::select_ready`]).
+    pub fn is_deferred(&self) -> bool {
+        matches!(self, TransitionKind::Timed(Delay::Fixed(d)) if *d <= 0.0)
     }
 }
 

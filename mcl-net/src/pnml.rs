@@ -8,16 +8,20 @@
 //! `referenceTransition`) are rejected.
 //!
 //! MCL data lives in `<toolspecific tool="mcl" version="1">` inside `net`,
-//! `place` and `transition`:
+//! `place` and `transition`. Provenance records are shared by many nodes
+//! (the nodes of one structure or call have the same): the net holds each
+//! record once with the indices of its places and transitions (0-based, in
+//! document order, as ranges); a node may also hold a record itself, as
+//! files written before the table do, or refer to a record by its `key`:
 //!
 //! ```xml
 //! <toolspecific tool="mcl" version="1">          <!-- in a net -->
 //!   <property key="mission" value="auv"/>
+//!   <provenance task="Goto" callSite="3" structure="sequence" path="0.1"
+//!               file="m.mcl" start="10" end="42" places="4-5" transitions="7-12"/>
 //! </toolspecific>
 //! <toolspecific tool="mcl" version="1">          <!-- in a place -->
 //!   <interface id="1"/>
-//!   <provenance task="Goto" callSite="3" structure="sequence" path="0.1"
-//!               file="m.mcl" start="10" end="42"/>
 //! </toolspecific>
 //! <toolspecific tool="mcl" version="1">          <!-- in a transition -->
 //!   <kind type="event" event="ok"/>   <!-- or type="immediate", or
@@ -30,12 +34,13 @@
 //!        optional role="monitor_condition", "while_condition" or "negated_while_condition" -->
 //!     <arg name="way-point" value="[24, 12]"/>
 //!   </binding>
-//!   <provenance task="Goto"/>
 //! </toolspecific>
 //! ```
 //!
-//! A net without MCL data has only immediate transitions. [`write_pnml`]
-//! followed by [`read_pnml`] gives back an equal [`Net`].
+//! A node's `<name>` is written only when it differs from its id (PNML
+//! makes names optional; a node without one is named by its id). A net
+//! without MCL data has only immediate transitions. [`write_pnml`] followed
+//! by [`read_pnml`] gives back an equal [`Net`].
 
 use std::borrow::Cow;
 use std::collections::HashSet;
@@ -51,6 +56,9 @@ use crate::model::{
     TransitionKind,
 };
 use crate::xml::{self, Element};
+
+/// The provenance records of a net, by key.
+type ProvenanceTable<'a> = std::collections::HashMap<&'a str, std::sync::Arc<Provenance>>;
 
 /// The PNML 2009 P/T net type.
 pub const PTNET_TYPE: &str = "http://www.pnml.org/version-2009/grammar/ptnet";
@@ -213,11 +221,31 @@ impl<'a> Ctx<'a> {
         if let Some(name) = self.label_text(el, "name")? {
             b.name(name);
         }
+        let mut table: ProvenanceTable<'_> = Default::default();
+        // (places?, first, last, record, element): the nodes of a record, by index.
+        let mut ranges: Vec<(bool, u32, u32, std::sync::Arc<Provenance>, &Element)> = Vec::new();
         if let Some(ts) = self.mcl_block(el)? {
             for c in &ts.children {
                 match c.name.as_str() {
                     "property" => {
                         b.property(self.required(c, "key")?, self.required(c, "value")?);
+                    }
+                    "provenance" => {
+                        let prov = std::sync::Arc::new(self.provenance(c)?);
+                        for (attr, places) in [("places", true), ("transitions", false)] {
+                            if let Some(list) = c.attr(attr) {
+                                for r in list.split_whitespace() {
+                                    let (a, z) = r.split_once('-').unwrap_or((r, r));
+                                    let (Ok(a), Ok(z)) = (a.parse::<u32>(), z.parse::<u32>()) else {
+                                        return Err(self.err(c, format!("bad node range `{r}` in `{attr}`")));
+                                    };
+                                    ranges.push((places, a, z, prov.clone(), c));
+                                }
+                            }
+                        }
+                        if let Some(key) = c.attr("key") {
+                            table.insert(key, prov);
+                        }
                     }
                     other => return Err(self.err(c, format!("unknown MCL net data <{other}>"))),
                 }
@@ -237,11 +265,11 @@ impl<'a> Ctx<'a> {
             for c in &page.children {
                 match c.name.as_str() {
                     "place" => {
-                        b.add_place(self.place(c)?);
+                        b.add_place(self.place(c, &table)?);
                         place_els.push(c);
                     }
                     "transition" => {
-                        b.add_transition(self.transition(c)?);
+                        b.add_transition(self.transition(c, &table)?);
                         trans_els.push(c);
                     }
                     "arc" => arcs.push(self.arc(c)?),
@@ -254,6 +282,25 @@ impl<'a> Ctx<'a> {
                 }
             }
             pages.extend(nested.into_iter().rev());
+        }
+        for (places, a, z, prov, c) in ranges {
+            if z < a {
+                return Err(self.err(c, format!("empty node range `{a}-{z}`")));
+            }
+            for i in a..=z {
+                let slot = if places {
+                    b.place_mut(crate::PlaceId(i)).map(|p| &mut p.provenance)
+                } else {
+                    b.transition_mut(crate::TransitionId(i)).map(|t| &mut t.provenance)
+                };
+                match slot {
+                    Some(slot) => *slot = prov.clone(),
+                    None => {
+                        let what = if places { "place" } else { "transition" };
+                        return Err(self.err(c, format!("<provenance> names {what} #{i}, which the net does not have")));
+                    }
+                }
+            }
         }
         self.resolve(b, arcs, &place_els, &trans_els)
     }
@@ -304,7 +351,7 @@ impl<'a> Ctx<'a> {
         b.build().map_err(|e| PnmlError::nowhere(e.to_string()))
     }
 
-    fn place(&self, el: &Element) -> Result<Place, PnmlError> {
+    fn place(&self, el: &Element, table: &ProvenanceTable<'_>) -> Result<Place, PnmlError> {
         let id = self.required(el, "id")?;
         let mut p = Place::new(id);
         if let Some(name) = self.label_text(el, "name")? {
@@ -318,7 +365,7 @@ impl<'a> Ctx<'a> {
                         p.interface =
                             self.number(c, "id")?.ok_or_else(|| self.err(c, "<interface> has no `id` attribute"))?
                     }
-                    "provenance" => p.provenance = self.provenance(c)?.into(),
+                    "provenance" => p.provenance = self.node_provenance(c, table)?,
                     other => return Err(self.err(c, format!("unknown MCL place data <{other}>"))),
                 }
             }
@@ -326,7 +373,7 @@ impl<'a> Ctx<'a> {
         Ok(p)
     }
 
-    fn transition(&self, el: &Element) -> Result<Transition, PnmlError> {
+    fn transition(&self, el: &Element, table: &ProvenanceTable<'_>) -> Result<Transition, PnmlError> {
         let id = self.required(el, "id")?;
         let mut t = Transition::new(id);
         if let Some(name) = self.label_text(el, "name")? {
@@ -349,7 +396,7 @@ impl<'a> Ctx<'a> {
                         }
                         t.binding = Some(self.binding(c)?.into());
                     }
-                    "provenance" => t.provenance = self.provenance(c)?.into(),
+                    "provenance" => t.provenance = self.node_provenance(c, table)?,
                     other => return Err(self.err(c, format!("unknown MCL transition data <{other}>"))),
                 }
             }
@@ -412,6 +459,21 @@ impl<'a> Ctx<'a> {
             b.args.push((self.required(c, "name")?.to_string(), self.required(c, "value")?.to_string()));
         }
         Ok(b)
+    }
+
+    /// A node's provenance: a reference into the net's table, or the record itself.
+    fn node_provenance(
+        &self,
+        el: &Element,
+        table: &ProvenanceTable<'_>,
+    ) -> Result<std::sync::Arc<Provenance>, PnmlError> {
+        match el.attr("ref") {
+            Some(key) => table
+                .get(key)
+                .cloned()
+                .ok_or_else(|| self.err(el, format!("<provenance ref=\"{key}\"> names no provenance of the net"))),
+            None => Ok(self.provenance(el)?.into()),
+        }
     }
 
     fn provenance(&self, el: &Element) -> Result<Provenance, PnmlError> {
@@ -499,13 +561,13 @@ impl Out {
         self.start("toolspecific", &[("tool", MCL_TOOL), ("version", MCL_TOOL_VERSION)])
     }
 
-    fn provenance(&mut self, p: &Provenance) -> Result<(), PnmlError> {
+    fn provenance(&mut self, p: &Provenance, extra: &[(&str, &str)]) -> Result<(), PnmlError> {
         let call_site = p.call_site.map(|c| c.to_string());
         let (start, end) = match &p.span {
             Some(s) => (Some(s.start.to_string()), Some(s.end.to_string())),
             None => (None, None),
         };
-        let mut attrs: Vec<(&str, &str)> = Vec::new();
+        let mut attrs: Vec<(&str, &str)> = extra.to_vec();
         let pairs = [
             ("task", p.task.as_deref()),
             ("callSite", call_site.as_deref()),
@@ -521,6 +583,29 @@ impl Out {
             }
         }
         self.empty("provenance", &attrs)
+    }
+}
+
+/// Adds node index `i` to a list of ranges `a-b c d-e` whose last range
+/// started at `*open` (indices arrive in increasing order).
+fn push_index(list: &mut String, open: &mut Option<(usize, usize)>, i: usize) {
+    match open {
+        Some((_, end)) if *end + 1 == i => *end = i,
+        _ => {
+            close_range(list, *open);
+            *open = Some((i, i));
+        }
+    }
+}
+
+/// Writes the range `open` at the end of `list`.
+fn close_range(list: &mut String, open: Option<(usize, usize)>) {
+    use std::fmt::Write;
+    if let Some((a, z)) = open {
+        if !list.is_empty() {
+            list.push(' ');
+        }
+        let _ = if a == z { write!(list, "{a}") } else { write!(list, "{a}-{z}") };
     }
 }
 
@@ -552,10 +637,61 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     out.start("pnml", &[("xmlns", PNML_NAMESPACE)])?;
     out.start("net", &[("id", net.id()), ("type", PTNET_TYPE)])?;
     out.label("name", net.name())?;
-    if !net.properties().is_empty() {
+    // Each provenance record once, with the nodes it belongs to as ranges of
+    // node indices (places and transitions in document order). Records are
+    // shared (`Arc`) by the nodes of one structure or call, which the
+    // compiler creates one after the other, so the ranges are few; equal
+    // records at different addresses are merged.
+    let mut by_ptr: std::collections::HashMap<*const Provenance, usize> = Default::default();
+    let mut by_value: std::collections::HashMap<&Provenance, usize> = Default::default();
+    let mut records: Vec<(&Provenance, String, String)> = Vec::new();
+    let nodes = net
+        .places()
+        .iter()
+        .map(|p| (&p.provenance, true))
+        .chain(net.transitions().iter().map(|t| (&t.provenance, false)));
+    let (mut last_place, mut last_transition) = (Vec::new(), Vec::new());
+    for (i, (prov, places)) in nodes.enumerate() {
+        let i = if places { i } else { i - net.place_count() };
+        if prov.is_empty() {
+            continue;
+        }
+        let k = match by_ptr.get(&std::sync::Arc::as_ptr(prov)) {
+            Some(&k) => k,
+            None => {
+                let k = *by_value.entry(&**prov).or_insert_with(|| {
+                    records.push((&**prov, String::new(), String::new()));
+                    records.len() - 1
+                });
+                by_ptr.insert(std::sync::Arc::as_ptr(prov), k);
+                k
+            }
+        };
+        let (list, last) =
+            if places { (&mut records[k].1, &mut last_place) } else { (&mut records[k].2, &mut last_transition) };
+        if last.len() <= k {
+            last.resize(k + 1, None);
+        }
+        push_index(list, &mut last[k], i);
+    }
+    for (k, (_, places, transitions)) in records.iter_mut().enumerate() {
+        close_range(places, last_place.get(k).copied().flatten());
+        close_range(transitions, last_transition.get(k).copied().flatten());
+    }
+    if !net.properties().is_empty() || !records.is_empty() {
         out.toolspecific_start()?;
         for (k, v) in net.properties() {
             out.empty("property", &[("key", k), ("value", v)])?;
+        }
+        for (prov, places, transitions) in &records {
+            let mut extra: Vec<(&str, &str)> = Vec::new();
+            if !places.is_empty() {
+                extra.push(("places", places));
+            }
+            if !transitions.is_empty() {
+                extra.push(("transitions", transitions));
+            }
+            out.provenance(prov, &extra)?;
         }
         out.end("toolspecific")?;
     }
@@ -567,18 +703,15 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
 
     for p in net.places() {
         out.start("place", &[("id", &p.id)])?;
-        out.label("name", &p.name)?;
+        if p.name != p.id {
+            out.label("name", &p.name)?;
+        }
         if p.initial > 0 {
             out.label("initialMarking", &p.initial.to_string())?;
         }
-        if p.interface != 0 || !p.provenance.is_empty() {
+        if p.interface != 0 {
             out.toolspecific_start()?;
-            if p.interface != 0 {
-                out.empty("interface", &[("id", &p.interface.to_string())])?;
-            }
-            if !p.provenance.is_empty() {
-                out.provenance(&p.provenance)?;
-            }
+            out.empty("interface", &[("id", &p.interface.to_string())])?;
             out.end("toolspecific")?;
         }
         out.end("place")?;
@@ -586,12 +719,10 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
 
     for t in net.transitions() {
         out.start("transition", &[("id", &t.id)])?;
-        out.label("name", &t.name)?;
-        let has_data = !t.kind.is_immediate()
-            || !t.actions.is_empty()
-            || t.priority.is_some()
-            || t.binding.is_some()
-            || !t.provenance.is_empty();
+        if t.name != t.id {
+            out.label("name", &t.name)?;
+        }
+        let has_data = !t.kind.is_immediate() || !t.actions.is_empty() || t.priority.is_some() || t.binding.is_some();
         if has_data {
             out.toolspecific_start()?;
             match &t.kind {
@@ -641,9 +772,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
                     out.end("binding")?;
                 }
             }
-            if !t.provenance.is_empty() {
-                out.provenance(&t.provenance)?;
-            }
+
             out.end("toolspecific")?;
         }
         out.end("transition")?;

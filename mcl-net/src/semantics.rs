@@ -9,7 +9,11 @@
 //! * a marking in which some immediate transition is enabled is **vanishing**;
 //!   there, only the enabled immediate transitions of highest
 //!   [priority](crate::Transition::priority) are *ready*;
-//! * any other marking is **tangible**; there, the enabled event-driven and
+//! * any other marking is **tangible**; there, if some *deferred* transition
+//!   (timed with delay 0, [`TransitionKind::is_deferred`]) is enabled, the
+//!   enabled deferred transitions of highest priority are ready: the player
+//!   fires a zero-delay timer as soon as the marking is tangible, before it
+//!   handles any event or later timer; otherwise the enabled event-driven and
 //!   timed transitions are ready (an event or a timer decides which fires);
 //! * among ready transitions one is chosen uniformly at random, with a seedable
 //!   ChaCha8 generator so that runs are reproducible.
@@ -126,27 +130,43 @@ pub fn fire(net: &Net, m: &mut Marking, t: TransitionId) -> Result<(), FireError
 /// transitions and says whether the marking is vanishing or tangible.
 ///
 /// If some immediate transition is enabled, keeps the enabled immediate
-/// transitions of highest priority (vanishing); otherwise keeps everything
-/// (tangible). The relative order of kept transitions is preserved.
+/// transitions of highest priority (vanishing). Otherwise (tangible), if
+/// some deferred transition is enabled, keeps the enabled deferred
+/// transitions of highest priority; else keeps everything. The relative
+/// order of kept transitions is preserved.
 pub fn select_ready(net: &Net, enabled: &mut Vec<TransitionId>) -> MarkingClass {
     let ts = net.transitions();
-    let mut best: Option<u32> = None;
+    let (mut best_imm, mut best_def): (Option<u32>, Option<u32>) = (None, None);
     for &t in enabled.iter() {
         if let Some(tr) = ts.get(t.index()) {
-            if tr.kind.is_immediate() {
-                let p = tr.effective_priority();
-                best = Some(best.map_or(p, |b| b.max(p)));
-            }
+            let slot = if tr.kind.is_immediate() {
+                &mut best_imm
+            } else if tr.kind.is_deferred() {
+                &mut best_def
+            } else {
+                continue;
+            };
+            let p = tr.effective_priority();
+            *slot = Some(slot.map_or(p, |b| b.max(p)));
         }
     }
-    match best {
-        None => MarkingClass::Tangible,
-        Some(b) => {
-            enabled.retain(|&t| {
-                ts.get(t.index()).is_some_and(|tr| tr.kind.is_immediate() && tr.effective_priority() == b)
-            });
+    let keep = |deferred: bool, b: u32, enabled: &mut Vec<TransitionId>| {
+        enabled.retain(|&t| {
+            ts.get(t.index()).is_some_and(|tr| {
+                (if deferred { tr.kind.is_deferred() } else { tr.kind.is_immediate() }) && tr.effective_priority() == b
+            })
+        });
+    };
+    match (best_imm, best_def) {
+        (Some(b), _) => {
+            keep(false, b, enabled);
             MarkingClass::Vanishing
         }
+        (None, Some(b)) => {
+            keep(true, b, enabled);
+            MarkingClass::Tangible
+        }
+        (None, None) => MarkingClass::Tangible,
     }
 }
 
@@ -547,6 +567,24 @@ mod tests {
             let mut ex = Executor::new(&net, seed);
             assert_eq!(ex.step(), Ok(Some(hi)));
         }
+    }
+
+    #[test]
+    fn deferred_transitions_fire_before_events_and_timers() {
+        let mut b = NetBuilder::new("deferred");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let ev = b.add_transition(Transition::new("ev").with_kind(TransitionKind::Event("e".into())));
+        let late = b.add_transition(Transition::new("late").with_kind(TransitionKind::Timed(Delay::Fixed(3.0))));
+        let d0 = b.add_transition(Transition::new("d0").with_kind(TransitionKind::Timed(Delay::Fixed(0.0))));
+        let d1 = b
+            .add_transition(Transition::new("d1").with_kind(TransitionKind::Timed(Delay::Fixed(0.0))).with_priority(2));
+        for t in [ev, late, d0, d1] {
+            b.add_input(p, t, 1);
+        }
+        let net = b.build().unwrap();
+        let (class, r) = ready(&net, &net.initial_marking());
+        assert_eq!(class, MarkingClass::Tangible);
+        assert_eq!(r, vec![d1], "deferred first, highest priority first");
     }
 
     #[test]

@@ -129,7 +129,7 @@ fn counters_widen_beyond_a_byte_and_two_bytes() {
     let r = analyze(&net, &opts(Semantics::Plain));
     assert_eq!((r.states, r.edges), (301, 300));
     assert_eq!(r.bounds[1].bound, 300);
-    assert_eq!(r.max_tokens, 300);
+    assert_eq!((r.max_tokens, r.max_tokens_per_marking), (300, 300));
     assert!(!r.one_safe);
 
     let mut b = NetBuilder::new("burst");
@@ -140,7 +140,7 @@ fn counters_widen_beyond_a_byte_and_two_bytes() {
     let net = b.build().unwrap();
     let r = analyze(&net, &opts(Semantics::Plain));
     assert_eq!(r.states, 2);
-    assert_eq!(r.max_tokens_in_place, 70_000);
+    assert_eq!((r.max_tokens, r.max_tokens_per_marking), (70_000, 70_000));
 }
 
 #[test]
@@ -168,7 +168,8 @@ fn one_bit_fields_widen_on_overflow() {
     assert_eq!(ss.bits_per_place(), 1);
     let r = mcl_net::explore::report(&rings, &ss, 1);
     assert!(r.one_safe && r.complete && !r.deadlock);
-    assert_eq!((r.states, r.edges, r.max_tokens), (17u64.pow(4), 4 * 17u64.pow(4), 4));
+    assert_eq!((r.states, r.edges, r.max_tokens_per_marking), (17u64.pow(4), 4 * 17u64.pow(4), 4));
+    assert_eq!(r.max_tokens, 1, "the largest bound of a place");
 }
 
 /// Four independent rings of `n` places with one token each.
@@ -290,7 +291,9 @@ fn empty_net_has_one_dead_state() {
 fn report_serializes_to_json() {
     let r = analyze(&figure_a1(), &Options { max_states: 10, ..Options::default() });
     let v = serde_json::to_value(&r).unwrap();
-    for key in ["states", "edges", "dead_markings", "one_safe", "max_tokens", "bounds", "complete"] {
+    for key in
+        ["states", "edges", "dead_markings", "one_safe", "max_tokens", "max_tokens_per_marking", "bounds", "complete"]
+    {
         assert!(v.get(key).is_some(), "missing {key}");
     }
     assert_eq!(v["stop_reason"], "state_limit");

@@ -199,3 +199,51 @@ fn reads_every_mcc_net() {
     }
     assert!(n > 0);
 }
+
+/// Provenance is written once per record, with the nodes it belongs to as
+/// index ranges; nodes whose name is their id carry no `<name>`; both read
+/// back to an equal net, and the nodes share one record again. Files with a
+/// record in each node (as written before the table) still load.
+#[test]
+fn provenance_is_written_once_per_record() {
+    let shared = std::sync::Arc::new(Provenance {
+        task: None,
+        call_site: Some(7),
+        structure: Some("call".into()),
+        path: Some("m.0".into()),
+        span: Some(SourceSpan { file: "m.mcl".into(), start: 1, end: 9 }),
+    });
+    let other = std::sync::Arc::new(Provenance { structure: Some("sequence".into()), ..Provenance::default() });
+    let mut b = NetBuilder::new("n");
+    let mut ps = Vec::new();
+    for i in 0..6 {
+        let prov = if i == 3 { other.clone() } else { shared.clone() };
+        let mut p = Place::new(format!("p{i}"));
+        p.provenance = prov;
+        ps.push(b.add_place(p));
+    }
+    let mut t = Transition::new("t");
+    t.provenance = shared.clone();
+    let t = b.add_transition(t);
+    b.add_input(ps[0], t, 1).add_output(t, ps[1], 1);
+    let net = b.build().unwrap();
+    let xml = write_pnml(&net).unwrap();
+    assert_eq!(xml.matches("<provenance").count(), 2, "{xml}");
+    assert!(xml.contains(r#"places="0-2 4-5" transitions="0""#), "{xml}");
+    assert!(xml.contains(r#"places="3""#), "{xml}");
+    assert!(!xml.contains("<name>\n        <text>p0"), "names equal to ids are not written: {xml}");
+    let back = read_pnml(&xml).unwrap();
+    assert_eq!(back, net);
+    let p0 = &back.places()[0].provenance;
+    assert!(back.places().iter().enumerate().all(|(i, p)| i == 3 || std::sync::Arc::ptr_eq(&p.provenance, p0)));
+
+    let old = r#"<pnml xmlns="http://www.pnml.org/version-2009/grammar/pnml"><net id="n" type="http://www.pnml.org/version-2009/grammar/ptnet"><page id="g">
+        <place id="p"><toolspecific tool="mcl" version="1"><provenance structure="call" callSite="7" path="m.0" file="m.mcl" start="1" end="9"/></toolspecific></place>
+        </page></net></pnml>"#;
+    let n = read_pnml(old).unwrap();
+    assert_eq!(n.places()[0].provenance.call_site, Some(7));
+    // A range beyond the net is an error with a location, not a panic.
+    let bad = xml.replace(r#"places="3""#, r#"places="30""#);
+    let e = read_pnml(&bad).unwrap_err().to_string();
+    assert!(e.contains("place #30"), "{e}");
+}

@@ -880,6 +880,15 @@ impl Player {
     fn pop_due_timer(&mut self) -> Option<TransitionId> {
         let &(k, _, _) = self.timers.first()?;
         let ties: Vec<(u64, u64, u32)> = self.timers.range((k, 0, 0)..=(k, u64::MAX, u32::MAX)).copied().collect();
+        // Among deferred transitions due now, the highest priority first
+        // (`mcl_net::semantics::select_ready`, the rule the verifier explores).
+        let ties: Vec<(u64, u64, u32)> = if ties.len() > 1 && self.has_priorities {
+            let mut ts: Vec<TransitionId> = ties.iter().map(|&(_, _, t)| TransitionId(t)).collect();
+            select_ready(&self.net, &mut ts);
+            ties.into_iter().filter(|&(_, _, t)| ts.contains(&TransitionId(t))).collect()
+        } else {
+            ties
+        };
         let pick = if ties.len() == 1 { ties[0] } else { ties[uniform_index(&mut self.rng, ties.len())] };
         self.timers.remove(&pick);
         let t = TransitionId(pick.2);

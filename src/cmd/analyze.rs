@@ -51,7 +51,8 @@ pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsC
             println!("edges: {}", r.edges);
             println!("dead markings: {}", r.dead_markings);
             println!("1-safe: {}", if r.one_safe { "yes" } else { "no" });
-            println!("largest bound: {}", r.max_tokens_in_place);
+            println!("largest bound of a place (max_tokens): {}", r.max_tokens);
+            println!("most tokens in one marking: {}", r.max_tokens_per_marking);
             for d in r.dead_examples.iter().take(3) {
                 let m: Vec<String> =
                     d.marking.iter().map(|(p, k)| if *k == 1 { p.clone() } else { format!("{p}×{k}") }).collect();

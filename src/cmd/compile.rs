@@ -15,8 +15,19 @@ use std::path::{Path, PathBuf};
 pub struct Options<'a> {
     pub file: &'a Path,
     pub output: Option<&'a Path>,
-    pub dot: Option<&'a Path>,
+    pub dot: Dot,
     pub out_dir: Option<&'a Path>,
+}
+
+/// Which Graphviz drawings `mcl compile` writes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Dot {
+    /// None.
+    No,
+    /// `--dot OUT.dot`: the drawing of the file's one mission.
+    File(PathBuf),
+    /// `--out-dir DIR --dot`: `DIR/<mission>.dot` beside each `<mission>.pnml`.
+    PerMission,
 }
 
 fn write(path: &Path, text: &str) -> Result<(), String> {
@@ -139,7 +150,7 @@ pub fn run(o: Options<'_>) -> u8 {
                     v.net.transition_count(),
                     coordination_summary(v)
                 );
-                if o.dot.is_some() {
+                if o.dot == Dot::PerMission {
                     let path = dir.join(format!("{stem}.dot"));
                     write(&path, &to_dot(&v.net))?;
                     eprintln!("wrote {}", path.display());
@@ -168,7 +179,7 @@ pub fn run(o: Options<'_>) -> u8 {
                 let path = dir.join(format!("{stem}.pnml"));
                 write(&path, &pnml)?;
                 written.push(path);
-                if o.dot.is_some() {
+                if o.dot == Dot::PerMission {
                     let path = dir.join(format!("{stem}.dot"));
                     write(&path, &to_dot(&m.net))?;
                     written.push(path);
@@ -200,10 +211,10 @@ pub fn run(o: Options<'_>) -> u8 {
                     m.net.transition_count()
                 );
             }
-            None if o.dot.is_none() => print!("{pnml}"),
+            None if o.dot == Dot::No => print!("{pnml}"),
             None => {}
         }
-        if let Some(d) = o.dot {
+        if let Dot::File(d) = &o.dot {
             write(d, &to_dot(&m.net))?;
             eprintln!("wrote {}", d.display());
         }

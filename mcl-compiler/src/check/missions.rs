@@ -107,5 +107,60 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
             );
         }
         cx.out.push(d);
+        return;
+    }
+    check_delay_arguments(cx, c, id, task);
+}
+
+/// The arguments that give the delay of a timed transition of the task's
+/// pattern (`TO(timeout)`) must be positive numbers of seconds, or symbols
+/// (identifiers) whose value is given at run time (`--set timeout=60`, a
+/// scenario's `[symbols]`).
+fn check_delay_arguments(cx: &mut Cx<'_>, c: &Call, id: scope::DefId, task: &TaskDef) {
+    let Some(pid) = task.pattern.as_ref().and_then(|p| cx.scope.first(DefKind::Pattern, &p.text)) else {
+        return;
+    };
+    let Some(Ok(net)) = scope::pattern_net(cx.db, pid) else {
+        return;
+    };
+    // Most patterns have no parameter delay: no allocation for them.
+    fn delay_param(t: &TransitionDef) -> Option<&str> {
+        match &t.delay {
+            Some(Delay::Param(p)) => Some(p.text.as_str()),
+            _ => None,
+        }
+    }
+    for (k, p) in net.transitions.iter().enumerate().filter_map(|(k, t)| Some((k, delay_param(t)?))) {
+        if net.transitions[..k].iter().any(|t| delay_param(t) == Some(p)) {
+            continue;
+        }
+        let Some(i) = task.params.iter().position(|x| x.text == p) else { continue };
+        let Some(arg) = c.args.get(i) else { continue };
+        let problem = match &arg.kind {
+            ValueKind::Number(n) if n.value() > 0.0 && n.value().is_finite() => continue,
+            ValueKind::Number(n) => format!("`{}` is not a positive number of seconds", n.text),
+            ValueKind::Ident(_) | ValueKind::Error => continue,
+            ValueKind::Str(s) => match s.trim().parse::<f64>() {
+                Ok(x) if x > 0.0 && x.is_finite() => continue,
+                Ok(_) => format!("\"{s}\" is not a positive number of seconds"),
+                Err(_) => format!("the string \"{s}\" is not a number of seconds"),
+            },
+            ValueKind::List { .. } => "a list is not a number of seconds".to_string(),
+        };
+        let d = Diagnostic::error(
+            codes::BAD_DELAY_ARGUMENT,
+            format!("the time-out `{p}` of task `{}` must be a positive number of seconds", c.name.text),
+            arg.span,
+        )
+        .with_label(arg.span, problem);
+        let d = cx.def_label(
+            d,
+            id,
+            task.name.span,
+            format!("`{p}` is the delay of a timed transition of `{}`", task.name.text),
+        );
+        cx.out.push(d.with_help(format!(
+            "give a number of seconds above 0, e.g. `60`, or a symbol such as `{p}` whose value is given at run time (`mcl run --set {p}=60`)"
+        )));
     }
 }

@@ -153,11 +153,31 @@ impl Builder {
     }
 
     /// A deferred transition: timed with delay 0, so it fires only in a
-    /// tangible marking, after every immediate cascade has settled.
+    /// tangible marking, after every immediate cascade has settled. Its
+    /// priority is [`DEFERRED_PRIORITY`]: it fires before the release of a
+    /// task's lock ([`Builder::deferred_last`]).
     pub fn deferred(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
+        let t = self.transition(id, TransitionKind::Timed(Delay::Fixed(0.0)), inputs, outputs);
+        if let Some(tr) = self.net.transition_mut(t) {
+            tr.priority = Some(DEFERRED_PRIORITY);
+        }
+        t
+    }
+
+    /// A deferred transition of priority 0: it fires once no other deferred
+    /// transition is ready (the release of a task by a call: every
+    /// structure has aborted what it decided to abort before a waiting
+    /// call can take the task).
+    pub fn deferred_last(&mut self, id: impl Into<Name>, inputs: &[PlaceId], outputs: &[PlaceId]) -> TransitionId {
         self.transition(id, TransitionKind::Timed(Delay::Fixed(0.0)), inputs, outputs)
     }
 }
+
+/// Priority of the deferred transitions of the control structures (kills,
+/// ends after kills, do-blocks); the release of a task's lock has 0.
+pub const DEFERRED_PRIORITY: u32 = 1;
+
+impl Builder {}
 
 /// Appends `n` in decimal.
 pub fn push_decimal(out: &mut String, mut n: usize) {

@@ -10,10 +10,10 @@
 //! | `begin`: the place the parent marks to start the call | the call is *waiting*: its parent started it, it has not taken the task yet (the seed's `P^wait` of the PW-transformation) |
 //! | transition `callN.start` | the call *starts*: takes the task's lock, binds its arguments, starts the task |
 //! | place `callN.run` | the call *runs* (its task works for it) |
-//! | transitions `callN.ok` / `callN.fail` | the call *completes* with that outcome and gives the lock back |
+//! | transitions `callN.ok` / `callN.fail` | the call *completes* with that outcome: `run` → `stopping` |
 //! | transition `callN.abort` | the parent aborts the running call: `run` → `stopping` |
-//! | place `callN.stopping` | the aborted task is going back to rest; the call still holds the lock |
-//! | transition `callN.release` | the aborted call gives the lock back (deferred) |
+//! | place `callN.stopping` | the task is going back to rest (its last immediate transitions, e.g. the disable of its primitive, still use this call's binding); the call still holds the lock |
+//! | transition `callN.release` | the call gives the lock back (deferred: the task is at rest); the call has *ended* |
 //! | transition `callN.cancel` | the parent aborts the call while it waits: it never starts |
 //!
 //! [`call_nodes`] returns these nodes for every call site, read from the
@@ -61,9 +61,10 @@ impl CallNodes {
     }
 
     /// The transitions after which the call no longer holds its task:
-    /// `ok`, `fail` and `release`.
-    pub fn ended(&self) -> [TransitionId; 3] {
-        [self.ok, self.fail, self.release]
+    /// `release` (a call that completes or is aborted goes through
+    /// `stopping` and gives its lock back exactly once, there).
+    pub fn ended(&self) -> [TransitionId; 1] {
+        [self.release]
     }
 
     /// The transitions that put the call into its waiting place (the

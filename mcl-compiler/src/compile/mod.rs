@@ -79,6 +79,7 @@ pub fn compile_mission(
         calls: 0,
         error: None,
         role: None,
+        guards: Vec::new(),
     };
     cx.b.net.name(&name);
     // Room for the whole net at once: no copying as it grows.
@@ -174,6 +175,9 @@ struct Composer<'a> {
     error: Option<CompileError>,
     /// The role given to calls compiled now (inside a condition).
     role: Option<&'static str>,
+    /// The `open` places of the enclosing structures that may abort the
+    /// calls compiled now on their own (see [`Structure::competes`]).
+    guards: Vec<mcl_net::PlaceId>,
 }
 
 impl Composer<'_> {
@@ -196,7 +200,7 @@ impl Composer<'_> {
             [single] => self.stmt(single, ext, path),
             stmts => {
                 self.b.provenance = self.prov("sequence", path, block.span);
-                let kids = structures::build(&mut self.b, &Structure::Sequence(stmts.len()), ext, path);
+                let (kids, _) = structures::build(&mut self.b, &Structure::Sequence(stmts.len()), ext, path);
                 for (i, (s, k)) in stmts.iter().zip(kids).enumerate() {
                     self.stmt(s, k, &format!("{path}.{i}"));
                 }
@@ -206,7 +210,7 @@ impl Composer<'_> {
 
     fn structure(&mut self, s: Structure, span: mcl_syntax::Span, ext: Iface, path: &str, children: &[&Block]) {
         self.b.provenance = self.prov(s.name(), path, span);
-        let kids = structures::build(&mut self.b, &s, ext, path);
+        let (kids, open) = structures::build(&mut self.b, &s, ext, path);
         for (i, (blk, k)) in children.iter().zip(kids).enumerate() {
             let saved = self.role;
             match (&s, i) {
@@ -222,7 +226,12 @@ impl Composer<'_> {
                 }
                 _ => {}
             }
+            let guarded = open.filter(|_| s.competes(i));
+            self.guards.extend(guarded);
             self.block(blk, k, &format!("{path}.{i}"));
+            if guarded.is_some() {
+                self.guards.pop();
+            }
             self.role = saved;
         }
     }
@@ -276,13 +285,8 @@ impl Composer<'_> {
         prov.call_site = Some(id);
         self.b.provenance = Arc::new(prov);
         let n = id as usize;
-        let name = |b: &mut Builder, node: &str| b.id(&[S("call"), N(n), S(node)]);
-        let node = name(&mut self.b, ".run");
-        let run = self.b.place(node, 0);
-        let node = name(&mut self.b, ".stopping");
-        let stopping = self.b.place(node, 0);
-        let node = name(&mut self.b, ".start");
-        let start = self.b.imm(node, &[ext.begin, lock], &[run, tiface.begin]);
+        let guards = self.guards.clone();
+        let start = adapter(&mut self.b, &[S("call"), N(n)], ext, tiface, lock, &guards);
         let args: Vec<(String, String)> = params.iter().cloned().zip(c.args.iter().map(value_json)).collect();
         let label = c.label.as_ref().map(|l| l.text.clone());
         if let Some(t) = self.b.net.transition_mut(start) {
@@ -294,16 +298,6 @@ impl Composer<'_> {
                 role: self.role.map(String::from),
             }));
         }
-        let node = name(&mut self.b, ".ok");
-        self.b.imm(node, &[run, tiface.ok], &[ext.ok, lock]);
-        let node = name(&mut self.b, ".fail");
-        self.b.imm(node, &[run, tiface.fail], &[ext.fail, lock]);
-        let node = name(&mut self.b, ".cancel");
-        self.b.imm(node, &[ext.abort, ext.begin], &[]);
-        let node = name(&mut self.b, ".abort");
-        self.b.imm(node, &[ext.abort, run], &[tiface.abort, stopping]);
-        let node = name(&mut self.b, ".release");
-        self.b.deferred(node, &[stopping], &[lock]);
     }
 
     /// The net of a task, created on first use.
@@ -331,6 +325,63 @@ impl Composer<'_> {
     }
 }
 
+/// The adapter of one call site, with node ids `prefix.run`, `prefix.start`...
+/// between the call's interface `ext` and the task's interface `task`
+/// guarded by its lock place; returns the `start` transition (the caller
+/// puts the call's binding on it).
+///
+/// * `start` (immediate) takes the lock, marks `run` and the task's begin;
+///   it also reads (takes and puts back) every place of `guards`, the `open`
+///   places of the enclosing structures that may abort the call on their
+///   own, so that a call never starts once such a structure has decided to
+///   abort it;
+/// * `ok` / `fail` (immediate) pass the task's outcome to the call and keep
+///   the lock (`stopping`): the task may still be firing its last immediate
+///   transitions (the disable of its primitive, with this call's binding);
+/// * `abort` forwards an abort to the running task (`run` → `stopping`);
+///   `cancel` withdraws a call aborted while it waits for the lock;
+/// * `release` (deferred, priority 0: after every other deferred
+///   transition) gives the lock back from `stopping` once the marking is
+///   tangible, i.e. once the task net is at rest, and once the structures
+///   have aborted what they decided to abort (so that a call they abort
+///   while it waits for this task is cancelled, never started).
+pub fn adapter(
+    b: &mut Builder,
+    prefix: &[builder::Part],
+    ext: Iface,
+    task: Iface,
+    lock: mcl_net::PlaceId,
+    guards: &[mcl_net::PlaceId],
+) -> mcl_net::TransitionId {
+    assert!(prefix.len() < 4, "an adapter prefix has at most three parts");
+    let name = |b: &mut Builder, node: &str| {
+        let mut parts = [S(""); 4];
+        parts[..prefix.len()].copy_from_slice(prefix);
+        parts[prefix.len()] = S(node);
+        b.id(&parts[..=prefix.len()])
+    };
+    let node = name(b, ".run");
+    let run = b.place(node, 0);
+    let node = name(b, ".stopping");
+    let stopping = b.place(node, 0);
+    let node = name(b, ".start");
+    let (mut inputs, mut outputs) = (vec![ext.begin, lock], vec![run, task.begin]);
+    inputs.extend_from_slice(guards);
+    outputs.extend_from_slice(guards);
+    let start = b.imm(node, &inputs, &outputs);
+    let node = name(b, ".ok");
+    b.imm(node, &[run, task.ok], &[ext.ok, stopping]);
+    let node = name(b, ".fail");
+    b.imm(node, &[run, task.fail], &[ext.fail, stopping]);
+    let node = name(b, ".cancel");
+    b.imm(node, &[ext.abort, ext.begin], &[]);
+    let node = name(b, ".abort");
+    b.imm(node, &[ext.abort, run], &[task.abort, stopping]);
+    let node = name(b, ".release");
+    b.deferred_last(node, &[stopping], &[lock]);
+    start
+}
+
 /// Adds the net of task `name` (its pattern with its actions, events and
 /// delays) with node ids `prefix + pattern name`. Returns its interface and
 /// its parameters.
@@ -342,102 +393,118 @@ pub fn add_task_net(
     name: &str,
     prefix: &str,
 ) -> Result<Option<(Iface, Vec<String>)>, CompileError> {
-    {
-        let tid = match scope.first(DefKind::Task, name) {
-            Some(t) => t,
-            None => return Ok(None),
-        };
-        let Some(task) = scope::task(db, tid) else {
-            return Ok(None);
-        };
-        let Some(pid) = task.pattern.as_ref().and_then(|p| scope.first(DefKind::Pattern, &p.text)) else {
-            return Ok(None);
-        };
-        let net = match scope::pattern_net(db, pid) {
-            Some(Ok(n)) => n,
-            Some(Err(e)) => return Err(CompileError::Pattern(e.clone())),
-            None => return Ok(None),
-        };
-        let file_path = tid.file.path(db).display().to_string();
-        let prov = |span: mcl_syntax::Span| {
-            Arc::new(Provenance {
-                task: Some(name.to_string()),
-                call_site: None,
-                structure: None,
-                path: None,
-                span: Some(SourceSpan { file: file_path.clone(), start: span.start, end: span.end }),
-            })
-        };
-
-        let mut places = FxHashMap::default();
-        for pl in &net.places {
-            b.provenance = prov(pl.span);
-            let iface = pl.interface.as_ref().and_then(Number::as_u32).unwrap_or(0);
-            let tokens = pl.tokens.as_ref().and_then(Number::as_u32).unwrap_or(0);
-            let id = b.net.add_place(
-                mcl_net::Place::new(format!("{prefix}{}", pl.name.text))
-                    .with_tokens(tokens)
-                    .with_interface(iface)
-                    .with_provenance(b.provenance.clone()),
-            );
-            places.insert(pl.name.text.as_str(), id);
-        }
-        let (Some(&begin), Some(&abort), Some(&ok), Some(&fail)) =
-            (places.get("begin"), places.get("abort"), places.get("ok"), places.get("fail"))
-        else {
-            return Ok(None);
-        };
-        let iface = Iface { begin, abort, ok, fail };
-        // Bindings of this task: events and actions per transition.
-        let mut events: FxHashMap<&str, &str> = FxHashMap::default();
-        let mut actions: FxHashMap<&str, Vec<ActionRef>> = FxHashMap::default();
-        for bd in &task.bindings {
-            for tr in &bd.transitions {
-                match bd.kind {
-                    BindingKind::Event => {
-                        events.insert(&tr.text, &bd.target.text);
-                    }
-                    BindingKind::Action => {
-                        if let Some(a) =
-                            scope.first(DefKind::Action, &bd.target.text).and_then(|id| scope::action(db, id))
-                        {
-                            actions.entry(&tr.text).or_default().push(action_ref(a));
-                        }
+    let tid = match scope.first(DefKind::Task, name) {
+        Some(t) => t,
+        None => return Ok(None),
+    };
+    let Some(task) = scope::task(db, tid) else {
+        return Ok(None);
+    };
+    let Some(pid) = task.pattern.as_ref().and_then(|p| scope.first(DefKind::Pattern, &p.text)) else {
+        return Ok(None);
+    };
+    let net = match scope::pattern_net(db, pid) {
+        Some(Ok(n)) => n,
+        Some(Err(e)) => return Err(CompileError::Pattern(e.clone())),
+        None => return Ok(None),
+    };
+    // Bindings of this task: events and actions per transition.
+    let mut events: FxHashMap<&str, &str> = FxHashMap::default();
+    let mut actions: FxHashMap<&str, Vec<ActionRef>> = FxHashMap::default();
+    for bd in &task.bindings {
+        for tr in &bd.transitions {
+            match bd.kind {
+                BindingKind::Event => {
+                    events.insert(&tr.text, &bd.target.text);
+                }
+                BindingKind::Action => {
+                    if let Some(a) = scope.first(DefKind::Action, &bd.target.text).and_then(|id| scope::action(db, id))
+                    {
+                        actions.entry(&tr.text).or_default().push(action_ref(a));
                     }
                 }
             }
         }
-        let mut transitions = FxHashMap::default();
-        for t in &net.transitions {
-            b.provenance = prov(t.span);
-            let kind = match (events.get(t.name.text.as_str()), &t.delay) {
-                (Some(e), _) => TransitionKind::Event(e.to_string()),
-                (None, Some(Delay::Fixed(n))) => TransitionKind::Timed(mcl_net::Delay::Fixed(n.value())),
-                (None, Some(Delay::Param(p))) => TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone())),
-                (None, None) => TransitionKind::Immediate,
-            };
-            let tid = b.transition(format!("{prefix}{}", t.name.text), kind, &[], &[]);
-            if let Some(tr) = b.net.transition_mut(tid) {
-                tr.actions = actions.remove(t.name.text.as_str()).unwrap_or_default();
-            }
-            transitions.insert(t.name.text.as_str(), tid);
-        }
-        for arc in &net.arcs {
-            let w = arc.weight.as_ref().and_then(Number::as_u32).unwrap_or(1).max(1);
-            let (s, d) = (arc.source.name.text.as_str(), arc.target.name.text.as_str());
-            match (places.get(s), transitions.get(d), transitions.get(s), places.get(d)) {
-                (Some(&p), Some(&t), _, _) => {
-                    b.net.add_input(p, t, w);
-                }
-                (_, _, Some(&t), Some(&p)) => {
-                    b.net.add_output(t, p, w);
-                }
-                _ => return Err(CompileError::HasErrors),
-            }
-        }
-        let params = task.params.iter().map(|p| p.text.clone()).collect();
-        Ok(Some((iface, params)))
     }
+    let file_path = tid.file.path(db).display().to_string();
+    let Some(iface) = add_pattern_net(b, net, &file_path, Some(name), &events, actions, prefix)? else {
+        return Ok(None);
+    };
+    let params = task.params.iter().map(|p| p.text.clone()).collect();
+    Ok(Some((iface, params)))
+}
+
+/// Adds the net of a pattern with node ids `prefix + node name`: each
+/// transition waits for the event `events` binds to it, else is timed if it
+/// has a delay, else immediate, and sends the `actions` bound to it.
+/// `file_path` and `task` go into the provenance. Returns the interface
+/// (`None` when the pattern lacks one of begin, abort, ok, fail).
+pub fn add_pattern_net(
+    b: &mut Builder,
+    net: &PatternNet,
+    file_path: &str,
+    task: Option<&str>,
+    events: &FxHashMap<&str, &str>,
+    mut actions: FxHashMap<&str, Vec<ActionRef>>,
+    prefix: &str,
+) -> Result<Option<Iface>, CompileError> {
+    let prov = |span: mcl_syntax::Span| {
+        Arc::new(Provenance {
+            task: task.map(str::to_string),
+            call_site: None,
+            structure: None,
+            path: None,
+            span: Some(SourceSpan { file: file_path.to_string(), start: span.start, end: span.end }),
+        })
+    };
+    let mut places = FxHashMap::default();
+    for pl in &net.places {
+        b.provenance = prov(pl.span);
+        let iface = pl.interface.as_ref().and_then(Number::as_u32).unwrap_or(0);
+        let tokens = pl.tokens.as_ref().and_then(Number::as_u32).unwrap_or(0);
+        let id = b.net.add_place(
+            mcl_net::Place::new(format!("{prefix}{}", pl.name.text))
+                .with_tokens(tokens)
+                .with_interface(iface)
+                .with_provenance(b.provenance.clone()),
+        );
+        places.insert(pl.name.text.as_str(), id);
+    }
+    let (Some(&begin), Some(&abort), Some(&ok), Some(&fail)) =
+        (places.get("begin"), places.get("abort"), places.get("ok"), places.get("fail"))
+    else {
+        return Ok(None);
+    };
+    let iface = Iface { begin, abort, ok, fail };
+    let mut transitions = FxHashMap::default();
+    for t in &net.transitions {
+        b.provenance = prov(t.span);
+        let kind = match (events.get(t.name.text.as_str()), &t.delay) {
+            (Some(e), _) => TransitionKind::Event(e.to_string()),
+            (None, Some(Delay::Fixed(n))) => TransitionKind::Timed(mcl_net::Delay::Fixed(n.value())),
+            (None, Some(Delay::Param(p))) => TransitionKind::Timed(mcl_net::Delay::Param(p.text.clone())),
+            (None, None) => TransitionKind::Immediate,
+        };
+        let tid = b.transition(format!("{prefix}{}", t.name.text), kind, &[], &[]);
+        if let Some(tr) = b.net.transition_mut(tid) {
+            tr.actions = actions.remove(t.name.text.as_str()).unwrap_or_default();
+        }
+        transitions.insert(t.name.text.as_str(), tid);
+    }
+    for arc in &net.arcs {
+        let w = arc.weight.as_ref().and_then(Number::as_u32).unwrap_or(1).max(1);
+        let (s, d) = (arc.source.name.text.as_str(), arc.target.name.text.as_str());
+        match (places.get(s), transitions.get(d), transitions.get(s), places.get(d)) {
+            (Some(&p), Some(&t), _, _) => {
+                b.net.add_input(p, t, w);
+            }
+            (_, _, Some(&t), Some(&p)) => {
+                b.net.add_output(t, p, w);
+            }
+            _ => return Err(CompileError::HasErrors),
+        }
+    }
+    Ok(Some(iface))
 }
 
 fn action_ref(a: &ActionDef) -> ActionRef {

@@ -97,9 +97,29 @@ impl Structure {
     }
 }
 
+impl Structure {
+    /// True when child `i` runs in competition with the others, so that the
+    /// structure itself may decide to abort it (every branch of a
+    /// parallel-or; the monitored block and the conditions of a monitor).
+    /// Such a child runs only while the structure's `open` place (returned
+    /// by [`build`]) is marked: a call inside it starts only while `open`
+    /// is marked, so no call starts once the structure has decided to abort
+    /// it (stop before start, no useless enable).
+    pub fn competes(&self, i: usize) -> bool {
+        match self {
+            Structure::ParallelOr(_) => true,
+            Structure::Monitor(_) => i == 0 || i % 2 == 1,
+            _ => false,
+        }
+    }
+}
+
 /// Builds the net of `s` on the external interface `ext` and returns the
-/// internal interfaces of its children, in the order of [`Structure`].
-pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<Iface> {
+/// internal interfaces of its children, in the order of [`Structure`], and
+/// the place that is marked while competing children may still start
+/// calls (see [`Structure::competes`]).
+pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> (Vec<Iface>, Option<PlaceId>) {
+    let mut open_place = None;
     let kids: Vec<Iface> = (0..s.arity()).map(|i| b.iface_parts(&[S(prefix), S("."), N(i)], i as u32 + 2)).collect();
     // Local nodes are `prefix.p_NAME` and `prefix.t_NAME`, apart from the
     // interface places `prefix.I.begin` of the children.
@@ -206,6 +226,7 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
         }
         Structure::ParallelOr(n) => {
             let open = p(b, &[S("open")]);
+            open_place = Some(open);
             let won_ok = p(b, &[S("won_ok")]);
             let won_fail = p(b, &[S("won_fail")]);
             let stop = p(b, &[S("stop")]);
@@ -238,6 +259,7 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
         Structure::Monitor(kinds) => {
             let k = kinds.len();
             let open = p(b, &[S("open")]);
+            open_place = Some(open);
             let a_ok = p(b, &[S("monitored_ok")]);
             let a_fail = p(b, &[S("monitored_fail")]);
             let stop = p(b, &[S("stop")]);
@@ -298,7 +320,7 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> Vec<If
             ti(b, &[S("aborted")], &with(&done, stop), &[]);
         }
     }
-    kids
+    (kids, open_place)
 }
 
 fn with<T: Copy>(v: &[T], extra: T) -> Vec<T> {

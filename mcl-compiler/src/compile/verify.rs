@@ -1,32 +1,39 @@
 //! Verification of building blocks (seed 4.3.1, A.2-A.4).
 //!
 //! A block is placed in a *harness*: an environment that marks `begin` once,
-//! may mark `abort` at any tangible marking while the block runs, and
-//! consumes the outcome; control structures get a reduced block (seed
-//! `N_PNBB1`, or an instantaneous one) plugged into each internal interface.
-//! The whole reachability graph is explored under the MCL semantics (an
-//! immediate transition always fires first; events, timers and the
-//! environment's abort fire in tangible markings, in every order — a
-//! superset of what the player does, so what holds here holds there) and
-//! these properties are checked:
+//! may mark `abort` in any tangible marking while the block runs, and takes
+//! the outcome; control structures get a reduced block (seed `N_PNBB1`, or an
+//! instantaneous one) plugged into each internal interface. The reachability
+//! graph is explored by `mcl_net::explore` under the one MCL semantics that
+//! the player uses (`mcl_net::semantics::select_ready`: immediate
+//! transitions first, by priority; then deferred ones; then events, timers
+//! and the environment's abort, in every order), and these properties are
+//! checked:
 //!
 //! * **common interface** — begin, abort, ok, fail on interface 1 (the checker);
 //! * **1-safeness** — no place ever holds two tokens;
-//! * **reachability condition** — every dead marking is a valid final
-//!   marking (exactly one of ok/fail delivered, or aborted), and from every
-//!   reachable marking a valid final marking can be reached (no trap);
+//! * **reachability condition** — every run from begin *without* abort ends
+//!   with exactly one of ok/fail marked (the environment's abort is not a way
+//!   out: a block that only an abort can end is stuck when nobody aborts it),
+//!   and every run from begin followed by an abort in any running marking
+//!   ends back at rest with neither ok nor fail marked;
 //! * **reusability** — in every final marking, every place of the block
 //!   (and of its children) is back to its initial marking;
-//! * for task patterns: an abort is handled at once (through immediate
-//!   transitions) and an abort at rest enables nothing.
+//! * for task patterns: an abort, and the end of the task, take the task
+//!   back to rest at once (through immediate transitions), and an abort at
+//!   rest enables nothing.
 //!
-//! A violation comes with the shortest run that shows it.
+//! A violation comes with the shortest run that shows it, in the block's own
+//! transition names (`begin` and `abort` are the environment's steps), and,
+//! where the structure of the net explains it, a note: an empty siphon that
+//! keeps the transitions marking ok/fail dead, a marked trap that never lets
+//! the block return to rest, places that no positive P-invariant bounds.
 
 use super::builder::{Builder, Iface};
 use super::structures::{self, Structure};
+use mcl_net::explore::{explore, Options, Semantics, StateId, StateSpace};
+use mcl_net::structural::{self, Limits};
 use mcl_net::{Net, PlaceId, TransitionId, TransitionKind};
-use rustc_hash::FxHashMap;
-use std::collections::VecDeque;
 
 /// The reduced model plugged into an internal interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,10 +47,35 @@ pub enum Child {
 /// A property that does not hold, with the shortest run showing it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Violation {
+    /// `1-safe`, `reachability`, `exactly-one`, `reusability`, `abort`, `rest` or `size`.
     pub property: &'static str,
     pub message: String,
-    /// Transition names of the block, with environment steps in parentheses.
+    /// Transition names of the block; `begin`, `abort` are the environment's
+    /// steps, `ok`, `fail` the environment taking the outcome.
     pub trace: Vec<String>,
+    /// For a run that never ends: the transitions it repeats forever after `trace`.
+    pub cycle: Vec<String>,
+    /// Explanations from the structure of the net (siphons, traps, invariants).
+    pub notes: Vec<String>,
+}
+
+impl Violation {
+    fn new(property: &'static str, message: String, trace: Vec<String>) -> Self {
+        Violation { property, message, trace, cycle: Vec::new(), notes: Vec::new() }
+    }
+
+    /// The counterexample as one line: `begin -> T0 -> T1`, with the
+    /// repeated part of an endless run after it.
+    pub fn counterexample(&self) -> Option<String> {
+        if self.trace.is_empty() && self.cycle.is_empty() {
+            return None;
+        }
+        let mut s = if self.trace.is_empty() { "(start)".to_string() } else { self.trace.join(" -> ") };
+        if !self.cycle.is_empty() {
+            s.push_str(&format!(", then forever: {} -> ...", self.cycle.join(" -> ")));
+        }
+        Some(s)
+    }
 }
 
 /// The outcome of a verification.
@@ -63,14 +95,20 @@ impl Verdict {
 /// A block in its harness, ready to explore.
 pub struct Harness {
     pub net: Net,
-    /// Exactly one of these is marked in a final marking.
-    finals: Vec<PlaceId>,
-    /// Marked when the environment aborted the block (tasks only).
+    /// Marked when the environment took the block's ok / fail.
+    got: Vec<PlaceId>,
+    /// The block's own ok and fail places.
+    outcome: Vec<PlaceId>,
+    /// Marked when the environment aborted the block.
     aborted: Option<PlaceId>,
-    /// Places of the environment (not checked for reusability).
+    /// Places of the environment (not checked for reusability, not shown).
     env: Vec<PlaceId>,
-    /// Transitions of the environment, shown in parentheses in traces.
+    /// Places of the block's external interface.
+    interface: Vec<PlaceId>,
+    /// Transitions of the environment: begin, ok, fail, abort.
     env_transitions: Vec<TransitionId>,
+    /// The environment's abort.
+    env_abort: Option<TransitionId>,
     abort_place: Option<PlaceId>,
     is_task: bool,
 }
@@ -85,37 +123,64 @@ pub fn mission_harness(net: Net) -> Option<Harness> {
     let abort = net.place_by_id(super::MISSION_ABORT)?;
     Some(Harness {
         net,
-        finals: vec![ok, fail],
+        got: vec![ok, fail],
+        outcome: vec![],
         aborted: None,
         env: vec![begin, ok, fail, abort],
+        interface: vec![begin, ok, fail, abort],
         env_transitions: vec![],
+        env_abort: None,
         abort_place: None,
         is_task: false,
     })
 }
 
+struct Env {
+    got: Vec<PlaceId>,
+    aborted: PlaceId,
+    places: Vec<PlaceId>,
+    transitions: Vec<TransitionId>,
+    abort: TransitionId,
+}
+
 /// Adds the environment around the external interface `ext`.
-fn environment(b: &mut Builder, ext: Iface) -> (PlaceId, PlaceId, PlaceId, Vec<PlaceId>, Vec<TransitionId>) {
+fn environment(b: &mut Builder, ext: Iface) -> Env {
     let idle = b.place("env.idle", 1);
     let run = b.place("env.running", 0);
     let got_ok = b.place("env.got_ok", 0);
     let got_fail = b.place("env.got_fail", 0);
     let aborted = b.place("env.aborted", 0);
-    let ts = vec![
+    let abort = b.transition("env.abort", TransitionKind::Event("env.abort".into()), &[run], &[ext.abort, aborted]);
+    let transitions = vec![
         b.imm("env.begin", &[idle], &[ext.begin, run]),
         b.imm("env.ok", &[run, ext.ok], &[got_ok]),
         b.imm("env.fail", &[run, ext.fail], &[got_fail]),
-        b.transition("env.abort", TransitionKind::Event("env.abort".into()), &[run], &[ext.abort, aborted]),
+        abort,
     ];
-    (got_ok, got_fail, aborted, vec![idle, run, got_ok, got_fail, aborted], ts)
+    Env { got: vec![got_ok, got_fail], aborted, places: vec![idle, run, got_ok, got_fail, aborted], transitions, abort }
+}
+
+fn harness(net: Net, ext: Iface, env: Env, is_task: bool) -> Harness {
+    Harness {
+        net,
+        got: env.got,
+        outcome: vec![ext.ok, ext.fail],
+        aborted: Some(env.aborted),
+        env: env.places,
+        interface: vec![ext.begin, ext.abort, ext.ok, ext.fail],
+        env_transitions: env.transitions,
+        env_abort: Some(env.abort),
+        abort_place: Some(ext.abort),
+        is_task,
+    }
 }
 
 /// A control structure with the given children plugged in.
 pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
     let mut b = Builder::new(s.name());
     let ext = b.iface("ext", 1);
-    let (got_ok, got_fail, aborted, env, env_transitions) = environment(&mut b, ext);
-    let kids = structures::build(&mut b, s, ext, "cs");
+    let env = environment(&mut b, ext);
+    let kids = structures::build(&mut b, s, ext, "cs").0;
     for (i, (k, c)) in kids.iter().zip(children.iter().cycle()).enumerate() {
         let n = format!("child{i}");
         match c {
@@ -133,151 +198,84 @@ pub fn structure_harness(s: &Structure, children: &[Child]) -> Harness {
         }
     }
     let net = b.finish().build().expect("generated structure nets are well formed");
-    Harness {
-        abort_place: Some(ext.abort),
-        net,
-        finals: vec![got_ok, got_fail, aborted],
-        aborted: Some(aborted),
-        env,
-        env_transitions,
-        is_task: false,
-    }
+    harness(net, ext, env, false)
 }
 
 /// A task net (a pattern with its bindings) in the environment. The net must
 /// have places `begin`, `abort`, `ok`, `fail`; they are wired to the
 /// environment.
 pub fn task_harness(task: &Net) -> Option<Harness> {
-    let mut nb = task.to_builder();
     let find = |id: &str| task.place_by_id(id);
     let ext = Iface { begin: find("begin")?, abort: find("abort")?, ok: find("ok")?, fail: find("fail")? };
-    let mut b = Builder::from_net(std::mem::replace(&mut nb, mcl_net::NetBuilder::new("x")));
-    let (got_ok, got_fail, aborted, env, env_transitions) = environment(&mut b, ext);
+    let mut b = Builder::from_net(task.to_builder());
+    let env = environment(&mut b, ext);
     let net = b.finish().build().ok()?;
-    Some(Harness {
-        abort_place: Some(ext.abort),
-        net,
-        finals: vec![got_ok, got_fail, aborted],
-        aborted: Some(aborted),
-        env,
-        env_transitions,
-        is_task: true,
-    })
+    Some(harness(net, ext, env, true))
 }
 
-struct Graph {
-    markings: Vec<Vec<u32>>,
-    index: FxHashMap<Vec<u32>, u32>,
-    /// (predecessor, transition) for BFS shortest paths.
-    parent: Vec<Option<(u32, TransitionId)>>,
-    succ: Vec<Vec<u32>>,
-    tangible: Vec<bool>,
-    /// States not expanded because they are not 1-safe.
-    cut: Vec<u32>,
-    complete: bool,
+/// A call adapter (see [`super::compile_mission`]) between the environment
+/// and a reduced task guarded by its lock place, as in a compiled mission.
+pub fn call_adapter_harness() -> Harness {
+    let mut b = Builder::new("call-adapter");
+    let ext = b.iface("call", 1);
+    let env = environment(&mut b, ext);
+    let task = b.iface("task", 2);
+    let lock = b.place("task.idle", 1);
+    super::adapter(&mut b, &[super::builder::Part::S("adapter")], ext, task, lock, &[]);
+    let exe = b.place("task.exe", 0);
+    b.imm("task.t_start", &[task.begin], &[exe]);
+    b.transition("task.t_ok", TransitionKind::Event("task.ok".into()), &[exe], &[task.ok]);
+    b.transition("task.t_fail", TransitionKind::Event("task.fail".into()), &[exe], &[task.fail]);
+    b.imm("task.t_abort", &[task.abort, exe], &[]);
+    let net = b.finish().build().expect("the call adapter is well formed");
+    harness(net, ext, env, false)
 }
 
-fn enabled(net: &Net, m: &[u32], t: TransitionId) -> bool {
-    net.pre(t).iter().all(|&(p, w)| m[p.index()] >= w)
-}
-
-/// Explores the reachability graph under the MCL semantics (immediate first;
-/// every non-immediate transition may fire in a tangible marking).
-fn explore(net: &Net, max_states: usize) -> Graph {
-    let m0: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
-    let mut g = Graph {
-        markings: vec![m0.clone()],
-        index: FxHashMap::default(),
-        parent: vec![None],
-        succ: vec![],
-        tangible: vec![],
-        cut: vec![],
-        complete: true,
-    };
-    g.index.insert(m0, 0);
-    let mut queue = VecDeque::from([0u32]);
-    let ts: Vec<TransitionId> = net.transition_ids().collect();
-    while let Some(s) = queue.pop_front() {
-        let m = g.markings[s as usize].clone();
+/// The options of every block exploration.
+fn options(max_states: usize) -> Options {
+    Options {
+        semantics: Semantics::Mcl,
+        max_states,
+        max_dead_examples: 0,
+        threads: 1,
+        record_edges: true,
         // A marking with two tokens in a place already breaks 1-safeness: it
         // is reported and not expanded, which keeps unbounded nets finite.
-        if m.iter().any(|&k| k > 1) {
-            if g.succ.len() <= s as usize {
-                g.succ.resize(s as usize + 1, Vec::new());
-                g.tangible.resize(s as usize + 1, false);
-            }
-            g.cut.push(s);
-            continue;
-        }
-        let imm: Vec<TransitionId> = ts
-            .iter()
-            .copied()
-            .filter(|&t| net.transition(t).is_some_and(|x| x.kind.is_immediate()) && enabled(net, &m, t))
-            .collect();
-        let is_tangible = imm.is_empty();
-        let fire: Vec<TransitionId> =
-            if is_tangible { ts.iter().copied().filter(|&t| enabled(net, &m, t)).collect() } else { imm };
-        let mut succ = Vec::with_capacity(fire.len());
-        for t in fire {
-            let mut m2 = m.clone();
-            for &(p, w) in net.pre(t) {
-                m2[p.index()] -= w;
-            }
-            for &(p, w) in net.post(t) {
-                m2[p.index()] = m2[p.index()].saturating_add(w);
-            }
-            let id = match g.index.get(&m2) {
-                Some(&id) => id,
-                None => {
-                    if g.markings.len() >= max_states {
-                        g.complete = false;
-                        continue;
-                    }
-                    let id = g.markings.len() as u32;
-                    g.index.insert(m2.clone(), id);
-                    g.markings.push(m2);
-                    g.parent.push(Some((s, t)));
-                    queue.push_back(id);
-                    id
-                }
-            };
-            succ.push(id);
-        }
-        if g.succ.len() <= s as usize {
-            g.succ.resize(s as usize + 1, Vec::new());
-            g.tangible.resize(s as usize + 1, false);
-        }
-        g.succ[s as usize] = succ;
-        g.tangible[s as usize] = is_tangible;
+        cut_above: Some(1),
     }
-    g.succ.resize(g.markings.len(), Vec::new());
-    g.tangible.resize(g.markings.len(), false);
-    g
 }
 
 impl Harness {
+    /// The state space of the harness under the MCL semantics, with its
+    /// edges (`mcl_net::explore`, the engine of `mcl analyze`).
+    pub fn state_space(&self, max_states: usize) -> StateSpace {
+        explore(&self.net, &options(max_states))
+    }
+
     /// The reachability graph in the DOT language: tangible markings as
     /// ellipses labelled with their marked places, vanishing markings as
     /// dots, final markings in bold; edges labelled with the transition.
     /// `None` when it has more than `max_states` states.
     pub fn reachability_dot(&self, max_states: usize) -> Option<String> {
         use std::fmt::Write;
-        let g = explore(&self.net, max_states + 1);
-        if g.markings.len() > max_states {
+        let ss = self.state_space(max_states + 1);
+        if ss.len() > max_states || !ss.complete() {
             return None;
         }
         let mut out = String::from("digraph reachability {\n  rankdir=TB; node [fontname=\"Helvetica\", fontsize=9]; edge [fontname=\"Helvetica\", fontsize=8];\n");
-        for (i, m) in g.markings.iter().enumerate() {
-            let marked: Vec<&str> = self
+        for s in ss.states() {
+            let marked: Vec<String> = self
                 .net
                 .places()
                 .iter()
-                .zip(m)
-                .filter(|(p, &k)| k > 0 && !p.id.starts_with("env.idle"))
-                .map(|(p, _)| p.id.as_str())
+                .enumerate()
+                .filter(|&(i, p)| ss.tokens(s, PlaceId(i as u32)) > 0 && p.id.as_str() != "env.idle")
+                .map(|(_, p)| p.id.to_string())
                 .collect();
-            let fin = g.succ[i].is_empty() && self.is_final(m);
-            if g.tangible[i] || g.succ[i].is_empty() {
+            let dead = ss.successors(s).is_empty();
+            let fin = dead && self.is_good_end(&ss, s);
+            let i = s.0;
+            if !ss.is_vanishing(s) || dead {
                 let _ = writeln!(
                     out,
                     "  s{i} [shape=ellipse{}, label=\"{}\"];",
@@ -288,202 +286,495 @@ impl Harness {
                 let _ = writeln!(out, "  s{i} [shape=point, width=0.08, tooltip=\"{}\"];", marked.join(" "));
             }
         }
-        for (i, succ) in g.succ.iter().enumerate() {
-            let m = &g.markings[i];
-            for &j in succ {
-                // Find the transition that leads from i to j.
-                let t = self.net.transition_ids().find(|&t| {
-                    enabled(&self.net, m, t) && {
-                        let mut m2 = m.clone();
-                        for &(p, w) in self.net.pre(t) {
-                            m2[p.index()] -= w;
-                        }
-                        for &(p, w) in self.net.post(t) {
-                            m2[p.index()] += w;
-                        }
-                        m2 == g.markings[j as usize]
-                    }
-                });
-                let name = t.and_then(|t| self.net.transition(t)).map(|x| x.id.to_string()).unwrap_or_default();
-                let _ = writeln!(out, "  s{i} -> s{j} [label=\"{name}\"];");
+        for s in ss.states() {
+            for &(t, d) in ss.successors(s) {
+                let name = self.net.transition(t).map(|x| x.id.to_string()).unwrap_or_default();
+                let _ = writeln!(out, "  s{} -> s{} [label=\"{name}\"];", s.0, d.0);
             }
         }
         out.push_str("}\n");
         Some(out)
     }
 
-    fn trace(&self, g: &Graph, mut s: u32) -> Vec<String> {
-        let mut out = Vec::new();
-        while let Some((p, t)) = g.parent[s as usize] {
-            let name = self.net.transition(t).map(|x| x.id.to_string()).unwrap_or_default();
-            out.push(if self.env_transitions.contains(&t) {
-                format!("({})", name.trim_start_matches("env."))
-            } else {
-                name
-            });
-            s = p;
+    /// A transition as a step of a counterexample.
+    fn step(&self, t: TransitionId) -> String {
+        let name = self.net.transition(t).map(|x| x.id.to_string()).unwrap_or_default();
+        if self.env_transitions.contains(&t) {
+            name.trim_start_matches("env.").to_string()
+        } else {
+            name
         }
-        out.reverse();
-        out
     }
 
-    fn describe(&self, m: &[u32]) -> String {
-        let marked: Vec<String> = self
-            .net
+    fn trace(&self, ss: &StateSpace, s: StateId) -> Vec<String> {
+        ss.path_to(s).into_iter().map(|t| self.step(t)).collect()
+    }
+
+    fn is_env(&self, p: PlaceId) -> bool {
+        self.env.contains(&p)
+    }
+
+    fn place_name(&self, p: PlaceId) -> String {
+        self.net.place(p).map(|x| x.id.to_string()).unwrap_or_default()
+    }
+
+    /// The block's marked places in `s` (not the environment's), as `{a, b}`.
+    fn describe(&self, ss: &StateSpace, s: StateId) -> String {
+        let marked: Vec<String> = (0..self.net.place_count() as u32)
+            .map(PlaceId)
+            .filter(|&p| !self.is_env(p))
+            .filter_map(|p| match ss.tokens(s, p) {
+                0 => None,
+                1 => Some(self.place_name(p)),
+                k => Some(format!("{}×{k}", self.place_name(p))),
+            })
+            .collect();
+        if marked.is_empty() {
+            "no marked place".to_string()
+        } else {
+            format!("{{{}}}", marked.join(", "))
+        }
+    }
+
+    fn at_rest(&self, ss: &StateSpace, s: StateId) -> bool {
+        self.net
             .places()
             .iter()
-            .zip(m)
-            .filter(|(_, &k)| k > 0)
-            .map(|(p, &k)| if k == 1 { p.id.to_string() } else { format!("{}×{k}", p.id) })
-            .collect();
-        format!("{{{}}}", marked.join(", "))
+            .enumerate()
+            .all(|(i, p)| self.is_env(PlaceId(i as u32)) || ss.tokens(s, PlaceId(i as u32)) == p.initial)
     }
 
-    fn at_rest(&self, m: &[u32]) -> bool {
-        self.net.places().iter().enumerate().all(|(i, p)| self.env.iter().any(|e| e.index() == i) || m[i] == p.initial)
+    fn got(&self, ss: &StateSpace, s: StateId) -> u32 {
+        self.got.iter().map(|&p| ss.tokens(s, p)).sum()
     }
 
-    fn is_final(&self, m: &[u32]) -> bool {
-        self.finals.iter().map(|p| m[p.index()]).sum::<u32>() == 1
+    fn was_aborted(&self, ss: &StateSpace, s: StateId) -> bool {
+        self.aborted.is_some_and(|a| ss.tokens(s, a) > 0)
+    }
+
+    /// A valid end: exactly one outcome taken (or aborted with none), and no
+    /// outcome left in the block's ok/fail places.
+    fn is_good_end(&self, ss: &StateSpace, s: StateId) -> bool {
+        let left: u32 = self.outcome.iter().map(|&p| ss.tokens(s, p)).sum();
+        let got = self.got(ss, s);
+        left == 0 && ((got == 1 && !self.was_aborted(ss, s)) || (got == 0 && self.was_aborted(ss, s)))
     }
 
     /// Explores and checks every property.
     pub fn verify(&self, max_states: usize) -> Verdict {
-        let g = explore(&self.net, max_states);
-        let mut violations = Vec::new();
+        let ss = self.state_space(max_states);
+        let mut violations: Vec<Violation> = Vec::new();
         let push = |v: Violation, vs: &mut Vec<Violation>| {
             if !vs.iter().any(|x: &Violation| x.property == v.property) {
                 vs.push(v);
             }
         };
-        // BFS order means the first state found is at the shortest depth.
-        for s in 0..g.markings.len() as u32 {
-            let m = &g.markings[s as usize];
-            if let Some((i, _)) = m.iter().enumerate().find(|(_, &k)| k > 1) {
-                push(
-                    Violation {
-                        property: "1-safe",
-                        message: format!(
-                            "place `{}` holds {} tokens in {}",
-                            self.net.places()[i].id,
-                            m[i],
-                            self.describe(m)
-                        ),
-                        trace: self.trace(&g, s),
-                    },
-                    &mut violations,
-                );
-            }
-            if g.succ[s as usize].is_empty() && g.complete && !g.cut.contains(&s) {
-                if !self.is_final(m) {
-                    push(
-                        Violation {
-                            property: "reachability",
-                            message: format!(
-                                "deadlock: no transition can fire in {} and the block has not ended",
-                                self.describe(m)
-                            ),
-                            trace: self.trace(&g, s),
-                        },
-                        &mut violations,
-                    );
-                } else if !self.at_rest(m) {
-                    push(
-                        Violation {
-                            property: "reusability",
-                            message: format!("the block ended but left tokens behind: {}", self.describe(m)),
-                            trace: self.trace(&g, s),
-                        },
-                        &mut violations,
-                    );
-                }
-            }
-            if self.is_task
-                && g.tangible[s as usize]
-                && self.aborted.is_some_and(|a| m[a.index()] == 1)
-                && !self.at_rest(m)
-                && !g.succ[s as usize].is_empty()
-            {
-                push(
-                    Violation {
-                        property: "abort",
-                        message: format!(
-                            "after an abort the task waits in {} instead of returning to rest at once",
-                            self.describe(m)
-                        ),
-                        trace: self.trace(&g, s),
-                    },
-                    &mut violations,
-                );
-            }
+        // 1-safeness: the first cut state (BFS order) is at the shortest depth.
+        if let Some(s) = ss.cut_states().next() {
+            let p = (0..self.net.place_count() as u32).map(PlaceId).find(|&p| ss.tokens(s, p) > 1);
+            let name = p.map(|p| self.place_name(p)).unwrap_or_default();
+            let mut v = Violation::new(
+                "1-safe",
+                format!("place `{name}` can hold two tokens: {}", self.describe(&ss, s)),
+                self.trace(&ss, s),
+            );
+            v.notes.extend(self.uncovered_note(&p.into_iter().collect::<Vec<_>>()));
+            push(v, &mut violations);
         }
-        // No trap: from every state a final state is reachable (backward search).
-        if g.complete && g.cut.is_empty() {
-            let mut pred: Vec<Vec<u32>> = vec![Vec::new(); g.markings.len()];
-            for (s, succ) in g.succ.iter().enumerate() {
-                for &t in succ {
-                    pred[t as usize].push(s as u32);
+        let complete = ss.complete();
+        let n = ss.len();
+        if complete {
+            let dead: Vec<bool> = {
+                let mut d = vec![false; n];
+                for s in ss.dead_states() {
+                    d[s.0 as usize] = true;
                 }
+                d
+            };
+            // Runs without abort: from begin, every run must reach a marking
+            // where the environment took ok or fail, without the
+            // environment's abort.
+            let env_abort = self.env_abort;
+            let reach_outcome = coreachable(&ss, |s| self.got(&ss, s) > 0, |t| Some(t) != env_abort);
+            let mut cut = vec![false; n];
+            for s in ss.cut_states() {
+                cut[s.0 as usize] = true;
             }
-            let mut good = vec![false; g.markings.len()];
-            let mut stack: Vec<u32> = (0..g.markings.len() as u32)
-                .filter(|&s| g.succ[s as usize].is_empty() && self.is_final(&g.markings[s as usize]))
+            let stuck_without_abort: Vec<bool> = ss
+                .states()
+                .map(|s| !self.was_aborted(&ss, s) && !reach_outcome[s.0 as usize] && !cut[s.0 as usize])
                 .collect();
-            for &s in &stack {
-                good[s as usize] = true;
-            }
-            while let Some(s) = stack.pop() {
-                for &p in &pred[s as usize] {
-                    if !good[p as usize] {
-                        good[p as usize] = true;
-                        stack.push(p);
+            let no_cut = !cut.iter().any(|&c| c);
+            let found = if no_cut { bottom(&ss, &stuck_without_abort, |t| Some(t) != env_abort) } else { None };
+            if let Some((s, cycle)) = found {
+                let m = self.describe(&ss, s);
+                let message = if cycle.is_empty() {
+                    if self.env_abort.is_some() {
+                        format!("without an abort the block gets stuck in {m}: neither ok nor fail can be marked")
+                    } else {
+                        format!("the mission gets stuck in {m}: neither ok nor fail can be marked")
                     }
+                } else {
+                    format!("the block can loop forever ({m} is reached again and again) without marking ok or fail")
+                };
+                let mut v = Violation::new("reachability", message, self.trace(&ss, s));
+                v.cycle = cycle.iter().map(|&t| self.step(t)).collect();
+                v.notes.extend(self.siphon_note(&ss, s));
+                push(v, &mut violations);
+            }
+            // Final markings: exactly one outcome, nothing left behind.
+            for s in ss.dead_states() {
+                let got = self.got(&ss, s);
+                let left: Vec<PlaceId> = self.outcome.iter().copied().filter(|&p| ss.tokens(s, p) > 0).collect();
+                if got > 1 || (got == 1 && !left.is_empty()) {
+                    push(
+                        Violation::new(
+                            "exactly-one",
+                            "the block marks both ok and fail: a run must end with exactly one of ok and fail"
+                                .to_string(),
+                            self.trace(&ss, s),
+                        ),
+                        &mut violations,
+                    );
+                } else if self.was_aborted(&ss, s) && !left.is_empty() {
+                    let which: Vec<String> = left.iter().map(|&p| format!("`{}`", self.place_name(p))).collect();
+                    push(
+                        Violation::new(
+                            "exactly-one",
+                            format!(
+                                "after an abort the block marks {}: an aborted block must end with neither ok nor fail",
+                                which.join(" and ")
+                            ),
+                            self.trace(&ss, s),
+                        ),
+                        &mut violations,
+                    );
+                } else if (got == 1 || self.was_aborted(&ss, s)) && !self.at_rest(&ss, s) {
+                    let left: Vec<PlaceId> = (0..self.net.place_count() as u32)
+                        .map(PlaceId)
+                        .filter(|&p| !self.is_env(p) && ss.tokens(s, p) != self.net.place(p).map_or(0, |x| x.initial))
+                        .collect();
+                    let what = if self.was_aborted(&ss, s) { "after an abort" } else { "the block ended but" };
+                    let mut v = Violation::new(
+                        "reusability",
+                        format!("{what} left tokens behind: {}", self.describe(&ss, s)),
+                        self.trace(&ss, s),
+                    );
+                    v.notes.extend(self.trap_note(&ss, s, &left));
+                    push(v, &mut violations);
                 }
             }
-            if let Some(s) = (0..g.markings.len() as u32).find(|&s| !good[s as usize] && !g.succ[s as usize].is_empty())
-            {
-                push(
-                    Violation {
-                        property: "reachability",
-                        message: format!(
-                            "from {} the block can never end: it loops forever",
-                            self.describe(&g.markings[s as usize])
-                        ),
-                        trace: self.trace(&g, s),
-                    },
-                    &mut violations,
+            // Every run, once aborted or ended, goes on to a valid end at rest.
+            let reach_end = coreachable(&ss, |s| dead[s.0 as usize] && self.is_good_end(&ss, s), |_| true);
+            let stuck_later: Vec<bool> = ss
+                .states()
+                .map(|s| {
+                    let i = s.0 as usize;
+                    !reach_end[i] && !dead[i] && !stuck_without_abort[i] && !cut[i]
+                })
+                .collect();
+            let found = if no_cut { bottom(&ss, &stuck_later, |_| true) } else { None };
+            if let Some((s, cycle)) = found {
+                let what = if self.was_aborted(&ss, s) { "after an abort" } else { "after ending" };
+                let mut v = Violation::new(
+                    "reachability",
+                    format!("{what} the block never returns to rest: it loops in {}", self.describe(&ss, s)),
+                    self.trace(&ss, s),
                 );
+                v.cycle = cycle.iter().map(|&t| self.step(t)).collect();
+                push(v, &mut violations);
+            }
+            if self.is_task {
+                self.task_checks(&ss, &dead, &mut violations);
             }
         }
         if let (true, Some(abort_place)) = (self.is_task, self.abort_place) {
             // An abort at rest must be inert.
-            let mut m: Vec<u32> = self.net.places().iter().map(|p| p.initial).collect();
-            m[abort_place.index()] += 1;
+            let mut m = self.net.initial_marking();
+            m.0[abort_place.index()] += 1;
             let env_ts = &self.env_transitions;
-            if let Some(t) = self.net.transition_ids().find(|&t| !env_ts.contains(&t) && enabled(&self.net, &m, t)) {
+            if let Some(t) = self
+                .net
+                .transition_ids()
+                .find(|&t| !env_ts.contains(&t) && mcl_net::semantics::is_enabled(&self.net, &m, t))
+            {
                 push(
-                    Violation {
-                        property: "abort",
-                        message: format!(
+                    Violation::new(
+                        "abort",
+                        format!(
                             "an abort at rest fires `{}`: abort must only act on a running task",
                             self.net.transition(t).map(|x| x.id.as_str()).unwrap_or("?")
                         ),
-                        trace: vec!["(abort)".into()],
-                    },
+                        vec!["abort".into()],
+                    ),
                     &mut violations,
                 );
             }
         }
-        if !g.complete {
-            violations.push(Violation {
-                property: "size",
-                message: format!("more than {max_states} states: the block is too large to verify"),
-                trace: vec![],
-            });
+        if !complete {
+            violations.push(Violation::new(
+                "size",
+                format!("more than {max_states} states: the block is too large to verify"),
+                vec![],
+            ));
         }
-        let tangible = g.tangible.iter().filter(|&&t| t).count();
-        Verdict { states: g.markings.len(), tangible, violations }
+        let tangible = ss.states().filter(|&s| !ss.is_vanishing(s)).count();
+        Verdict { states: n, tangible, violations }
     }
+
+    /// Tasks are shared by call sites through a lock that the call gives
+    /// back in the first tangible marking after the task ended or was
+    /// aborted: by then the task must be at rest.
+    fn task_checks(&self, ss: &StateSpace, dead: &[bool], violations: &mut Vec<Violation>) {
+        for s in ss.states() {
+            if ss.is_vanishing(s) || dead[s.0 as usize] || self.at_rest(ss, s) {
+                continue;
+            }
+            let (property, message) = if self.was_aborted(ss, s) {
+                (
+                    "abort",
+                    format!(
+                        "after an abort the task waits in {} instead of returning to rest at once",
+                        self.describe(ss, s)
+                    ),
+                )
+            } else if self.got(ss, s) > 0 {
+                (
+                    "rest",
+                    format!(
+                        "after ending, the task waits in {} instead of returning to rest at once; the next call of the task could start before it is at rest",
+                        self.describe(ss, s)
+                    ),
+                )
+            } else {
+                continue;
+            };
+            if !violations.iter().any(|v| v.property == property) {
+                violations.push(Violation::new(property, message, self.trace(ss, s)));
+            }
+        }
+    }
+
+    /// The block's places (not the environment's, not the interface).
+    fn inner_places(&self) -> impl Iterator<Item = PlaceId> + '_ {
+        (0..self.net.place_count() as u32).map(PlaceId).filter(|&p| !self.is_env(p) && !self.interface.contains(&p))
+    }
+
+    fn names(&self, ps: &[PlaceId]) -> String {
+        ps.iter().map(|&p| format!("`{}`", self.place_name(p))).collect::<Vec<_>>().join(", ")
+    }
+
+    /// In a marking where the block is stuck: an empty siphon (a set of
+    /// places that no transition can mark again once empty) holding an
+    /// input place of every transition that marks ok or fail.
+    fn siphon_note(&self, ss: &StateSpace, s: StateId) -> Option<String> {
+        let empty: Vec<PlaceId> = self.inner_places().filter(|&p| ss.tokens(s, p) == 0).collect();
+        let producers: Vec<TransitionId> = self
+            .outcome
+            .iter()
+            .flat_map(|&p| self.net.producers(p).iter().copied())
+            .filter(|t| !self.env_transitions.contains(t))
+            .collect();
+        if producers.is_empty() {
+            let names: Vec<String> = self.outcome.iter().map(|&p| format!("`{}`", self.place_name(p))).collect();
+            return Some(format!("no transition of the block marks {}", names.join(" or ")));
+        }
+        let needs = |set: &[PlaceId]| {
+            !producers.is_empty() && producers.iter().all(|&t| self.net.pre(t).iter().any(|(p, _)| set.contains(p)))
+        };
+        let largest = structural::max_siphon_within(&self.net, &empty);
+        if !needs(&largest) {
+            return None;
+        }
+        // A minimal siphon inside the largest one, if one alone is enough.
+        let limits = Limits { max_rows: 2_000, max_nodes: 20_000, max_results: 200 };
+        let minimal = structural::minimal_siphons(&self.net, &limits)
+            .sets
+            .into_iter()
+            .filter(|set| set.iter().all(|p| largest.contains(p)) && needs(set))
+            .min_by_key(Vec::len);
+        let set = minimal.unwrap_or(largest);
+        let blocked: Vec<String> = producers
+            .iter()
+            .filter_map(|&t| {
+                let p = self.net.pre(t).iter().find(|(p, _)| set.contains(p))?.0;
+                Some(format!("`{}` needs `{}`", self.net.transition(t)?.id, self.place_name(p)))
+            })
+            .collect();
+        let what = if set.len() == 1 {
+            format!("place {} is empty and no transition can mark it again", self.names(&set))
+        } else {
+            format!("places {} are empty and no transition can mark them again", self.names(&set))
+        };
+        Some(format!("{what} (an unmarked siphon), so ok and fail can never be marked: {}", blocked.join(", ")))
+    }
+
+    /// For places left marked at the end: a trap among them (once marked,
+    /// it stays marked, so the block can never return to rest), or the
+    /// places no positive P-invariant covers.
+    fn trap_note(&self, ss: &StateSpace, s: StateId, left: &[PlaceId]) -> Option<String> {
+        let marked: Vec<PlaceId> = left.iter().copied().filter(|&p| ss.tokens(s, p) > 0).collect();
+        let trap = structural::max_trap_within(&self.net, &marked);
+        if !trap.is_empty() {
+            let (verb, pron) = if trap.len() == 1 { ("is a trap", "it stays") } else { ("form a trap", "they stay") };
+            return Some(format!(
+                "{} {verb}: no transition takes a token out without putting one back, so once marked {pron} marked and the block can never return to rest",
+                self.names(&trap)
+            ));
+        }
+        self.uncovered_note(left)
+    }
+
+    /// The places of `focus` that no positive P-invariant covers: nothing
+    /// bounds their tokens.
+    fn uncovered_note(&self, focus: &[PlaceId]) -> Option<String> {
+        let limits = Limits { max_rows: 5_000, max_nodes: 20_000, max_results: 500 };
+        let inv = structural::p_invariants(&self.net, &limits);
+        if !inv.complete {
+            return None;
+        }
+        let covered: Vec<PlaceId> = inv.invariants.iter().flat_map(|i| i.iter().map(|&(p, _)| p)).collect();
+        let uncovered: Vec<PlaceId> =
+            focus.iter().copied().filter(|p| !covered.contains(p) && !self.is_env(*p)).collect();
+        if uncovered.is_empty() {
+            return None;
+        }
+        Some(format!(
+            "no positive P-invariant covers {}: no weighted token count bounds {}, so a run can add tokens there without taking them out",
+            self.names(&uncovered),
+            if uncovered.len() == 1 { "it" } else { "them" }
+        ))
+    }
+}
+
+/// For every state, whether a state satisfying `target` can be reached from
+/// it following only the edges whose transition satisfies `edge`.
+fn coreachable(
+    ss: &StateSpace,
+    mut target: impl FnMut(StateId) -> bool,
+    edge: impl Fn(TransitionId) -> bool,
+) -> Vec<bool> {
+    let n = ss.len();
+    let mut preds: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for s in ss.states() {
+        for &(t, d) in ss.successors(s) {
+            if edge(t) {
+                preds[d.0 as usize].push(s.0);
+            }
+        }
+    }
+    let mut reach: Vec<bool> = ss.states().map(&mut target).collect();
+    let mut stack: Vec<u32> = (0..n as u32).filter(|&s| reach[s as usize]).collect();
+    while let Some(d) = stack.pop() {
+        for &p in &preds[d as usize] {
+            if !reach[p as usize] {
+                reach[p as usize] = true;
+                stack.push(p);
+            }
+        }
+    }
+    reach
+}
+
+/// The first state (in BFS order, so with a shortest run to it) of a bottom
+/// strongly connected component of the `bad` states, following the edges
+/// whose transition satisfies `edge`; with the transitions of a cycle
+/// through it when the component is not a single dead state. Every
+/// successor of a bad state must be bad.
+fn bottom(ss: &StateSpace, bad: &[bool], edge: impl Fn(TransitionId) -> bool) -> Option<(StateId, Vec<TransitionId>)> {
+    let succ = |s: u32| ss.successors(StateId(s)).iter().filter(|(t, _)| edge(*t)).map(|&(t, d)| (t, d.0));
+    // Iterative Tarjan over the bad states.
+    let n = ss.len();
+    const UNSEEN: u32 = u32::MAX;
+    let mut index = vec![UNSEEN; n];
+    let mut low = vec![0u32; n];
+    let mut on_stack = vec![false; n];
+    let mut stack: Vec<u32> = Vec::new();
+    let mut comp = vec![UNSEEN; n];
+    let mut comps: Vec<Vec<u32>> = Vec::new();
+    let mut next = 0u32;
+    for root in 0..n as u32 {
+        if !bad[root as usize] || index[root as usize] != UNSEEN {
+            continue;
+        }
+        let mut call: Vec<(u32, usize)> = vec![(root, 0)];
+        index[root as usize] = next;
+        low[root as usize] = next;
+        next += 1;
+        stack.push(root);
+        on_stack[root as usize] = true;
+        while let Some(&mut (v, ref mut i)) = call.last_mut() {
+            let edges: Vec<u32> = succ(v).map(|(_, d)| d).filter(|&d| bad[d as usize]).collect();
+            if *i < edges.len() {
+                let w = edges[*i];
+                *i += 1;
+                if index[w as usize] == UNSEEN {
+                    index[w as usize] = next;
+                    low[w as usize] = next;
+                    next += 1;
+                    stack.push(w);
+                    on_stack[w as usize] = true;
+                    call.push((w, 0));
+                } else if on_stack[w as usize] {
+                    low[v as usize] = low[v as usize].min(index[w as usize]);
+                }
+            } else {
+                call.pop();
+                if let Some(&(u, _)) = call.last() {
+                    low[u as usize] = low[u as usize].min(low[v as usize]);
+                }
+                if low[v as usize] == index[v as usize] {
+                    let mut c = Vec::new();
+                    while let Some(w) = stack.pop() {
+                        on_stack[w as usize] = false;
+                        comp[w as usize] = comps.len() as u32;
+                        c.push(w);
+                        if w == v {
+                            break;
+                        }
+                    }
+                    comps.push(c);
+                }
+            }
+        }
+    }
+    // Bottom components: no edge leaves them.
+    let best = comps
+        .iter()
+        .enumerate()
+        .filter(|(k, c)| c.iter().all(|&s| succ(s).all(|(_, d)| comp[d as usize] == *k as u32)))
+        .map(|(_, c)| *c.iter().min().expect("components are not empty"))
+        .min()?;
+    // A cycle through `best` inside its component (BFS), unless it is dead.
+    let k = comp[best as usize];
+    let mut cycle = Vec::new();
+    if succ(best).next().is_some() {
+        let mut parent: std::collections::HashMap<u32, (u32, TransitionId)> = Default::default();
+        let mut queue = std::collections::VecDeque::from([best]);
+        'bfs: while let Some(v) = queue.pop_front() {
+            for (t, d) in succ(v) {
+                if comp[d as usize] != k {
+                    continue;
+                }
+                if d == best {
+                    let mut cur = v;
+                    cycle.push(t);
+                    while cur != best {
+                        let (p, t) = parent[&cur];
+                        cycle.push(t);
+                        cur = p;
+                    }
+                    cycle.reverse();
+                    break 'bfs;
+                }
+                if let std::collections::hash_map::Entry::Vacant(e) = parent.entry(d) {
+                    e.insert((v, t));
+                    queue.push_back(d);
+                }
+            }
+        }
+    }
+    Some((StateId(best), cycle))
 }
 
 #[cfg(test)]
@@ -534,11 +825,17 @@ mod tests {
     }
 
     #[test]
+    fn the_call_adapter_verifies() {
+        let v = call_adapter_harness().verify(100_000);
+        assert!(v.ok(), "{:#?}", v.violations);
+    }
+
+    #[test]
     fn a_broken_structure_is_caught_with_a_counterexample() {
         // A sequence whose abort forgets the second child: aborting while B runs deadlocks.
         let mut b = Builder::new("broken");
         let ext = b.iface("cs", 1);
-        let (got_ok, got_fail, aborted, env, env_transitions) = environment(&mut b, ext);
+        let env = environment(&mut b, ext);
         let a = b.iface("a", 2);
         let run = b.place("run", 0);
         b.imm("start", &[ext.begin], &[a.begin, run]);
@@ -551,19 +848,39 @@ mod tests {
         b.transition("c.fail", TransitionKind::Event("e2".into()), &[exe], &[a.fail]);
         b.imm("c.abort", &[a.abort, exe], &[]);
         let net = b.finish().build().unwrap();
-        let h = Harness {
-            abort_place: Some(ext.abort),
-            net,
-            finals: vec![got_ok, got_fail, aborted],
-            aborted: Some(aborted),
-            env,
-            env_transitions,
-            is_task: false,
-        };
+        let h = harness(net, ext, env, false);
         let v = h.verify(10_000);
         assert!(!v.ok());
-        let r = v.violations.iter().find(|v| v.property == "reusability").expect("stray abort token");
+        let r = v.violations.iter().find(|v| v.property == "exactly-one").expect("late outcome after abort");
         // The abort is never forwarded: the child ends on its own and its result is left behind.
-        assert_eq!(r.trace, vec!["(begin)", "start", "c.start", "(abort)", "c.ok", "ok"]);
+        assert_eq!(r.trace, vec!["begin", "start", "c.start", "abort", "c.ok", "ok"]);
+    }
+
+    /// A block that only an abort can end is stuck when nobody aborts it.
+    #[test]
+    fn a_block_that_needs_an_abort_to_end_is_stuck() {
+        let mut b = Builder::new("dead");
+        let ext = b.iface("x", 1);
+        let run = b.place("run", 0);
+        b.imm("T0", &[ext.begin], &[run]);
+        b.imm("TA", &[run, ext.abort], &[]);
+        let task = b.finish().build().unwrap();
+        // As a task net: interface places named begin/abort/ok/fail.
+        let mut nb = mcl_net::NetBuilder::new("dead");
+        let ids: Vec<_> = ["begin", "abort", "ok", "fail", "run"]
+            .iter()
+            .map(|n| nb.add_place(mcl_net::Place::new(*n).with_interface(u32::from(*n != "run"))))
+            .collect();
+        let t0 = nb.add_transition(mcl_net::Transition::new("T0"));
+        let ta = nb.add_transition(mcl_net::Transition::new("TA"));
+        nb.add_input(ids[0], t0, 1).add_output(t0, ids[4], 1);
+        nb.add_input(ids[4], ta, 1).add_input(ids[1], ta, 1);
+        let net = nb.build().unwrap();
+        drop(task);
+        let v = task_harness(&net).unwrap().verify(1000);
+        let r = v.violations.iter().find(|v| v.property == "reachability").expect("stuck without abort");
+        assert_eq!(r.trace, vec!["begin", "T0"]);
+        assert!(r.message.contains("{run}"), "{}", r.message);
+        assert!(!r.message.contains("env."), "{}", r.message);
     }
 }

@@ -343,10 +343,13 @@ pub struct AnalysisReport {
     pub dead_examples: Vec<DeadMarking>,
     /// Every place holds at most one token in every reachable marking.
     pub one_safe: bool,
-    /// Largest total number of tokens in a reachable marking (MCC `MaxTokenPerMarking`).
-    pub max_tokens: u64,
-    /// Largest bound of a single place (MCC `MaxTokenInPlace`).
-    pub max_tokens_in_place: u32,
+    /// The largest bound of a place: the most tokens any one place holds in
+    /// a reachable marking (MCC `MaxTokenInPlace`; 1 for a 1-safe net with
+    /// a marked place).
+    pub max_tokens: u32,
+    /// The most tokens in one reachable marking, all places together (MCC
+    /// `MaxTokenPerMarking`).
+    pub max_tokens_per_marking: u64,
     /// Bound of each place, in place order.
     pub bounds: Vec<PlaceBound>,
     /// Vanishing markings (MCL semantics only; 0 under plain semantics).
@@ -395,8 +398,8 @@ pub fn report(net: &Net, ss: &StateSpace, max_dead_examples: usize) -> AnalysisR
         dead_markings: ss.dead_states().len() as u64,
         dead_examples,
         one_safe: bounds.iter().all(|&b| b <= 1),
-        max_tokens,
-        max_tokens_in_place: bounds.iter().copied().max().unwrap_or(0),
+        max_tokens: bounds.iter().copied().max().unwrap_or(0),
+        max_tokens_per_marking: max_tokens,
         bounds: net
             .places()
             .iter()

@@ -1,0 +1,79 @@
+//! `mcl compile` and `mcl analyze` through the binary: Graphviz output with
+//! and without `--out-dir`, and the fields of `mcl analyze --format json`.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mcl-compile-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn mcl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mcl")).args(args).current_dir(root()).output().expect("run mcl")
+}
+
+fn files(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn dot_without_a_path_writes_one_drawing_per_mission_into_the_out_dir() {
+    let dir = tmp("per-mission");
+    let d = dir.to_str().unwrap();
+    // `--dot` last, with no value (as `mcl compile --help` shows it optional).
+    let o = mcl(&["compile", "examples/survey.mcl", "--out-dir", d, "--dot"]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(files(&dir), ["mission.dot", "mission.pnml"]);
+    let dot = std::fs::read_to_string(dir.join("mission.dot")).unwrap();
+    assert!(dot.starts_with("digraph"), "{dot}");
+    // A file with several missions: one drawing per mission.
+    let dir = tmp("several");
+    let o = mcl(&["compile", "examples/mission-operators.mcl", "--dot", "--out-dir", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let names = files(&dir);
+    let dots = names.iter().filter(|n| n.ends_with(".dot")).count();
+    let pnmls = names.iter().filter(|n| n.ends_with(".pnml")).count();
+    assert!(dots > 1 && dots == pnmls, "{names:?}");
+}
+
+#[test]
+fn dot_with_a_path_and_dot_misuse() {
+    let dir = tmp("one");
+    let dot = dir.join("m.dot");
+    let pnml = dir.join("m.pnml");
+    let o = mcl(&["compile", "examples/survey.mcl", "--dot", dot.to_str().unwrap(), "-o", pnml.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read_to_string(&dot).unwrap().starts_with("digraph"));
+    // No path and no folder: a usage error that says what to do.
+    let o = mcl(&["compile", "examples/survey.mcl", "--dot"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--dot needs a path"));
+    // A path with a folder: refused rather than ignored.
+    let o = mcl(&["compile", "examples/survey.mcl", "--out-dir", dir.to_str().unwrap(), "--dot=x.dot"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("takes no path"));
+}
+
+#[test]
+fn analyze_json_max_tokens_is_the_largest_place_bound() {
+    let o = mcl(&["analyze", "--format", "json", "tests/data/mcc/Dekker-PT-010.pnml"]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["one_safe"], true);
+    assert_eq!(v["max_tokens"], 1, "a 1-safe net: no place holds more than one token");
+    assert_eq!(v["max_tokens_per_marking"], 20, "tokens of all places in one marking");
+    let largest = v["bounds"].as_array().unwrap().iter().map(|b| b["bound"].as_u64().unwrap()).max().unwrap();
+    assert_eq!(v["max_tokens"].as_u64(), Some(largest));
+    assert!(v.get("max_tokens_in_place").is_none());
+}
