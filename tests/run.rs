@@ -107,8 +107,10 @@ fn survey_nominal_in_virtual_time() {
             "18 !eventAltitudeOk @2",
             "18 disableAltitude @2",
             "18 enableTrajectory @3",
-            "18 enableAltitude @5",
+            // The second Altitude call waits for its task's release (the
+            // first call's task is at rest), so it starts last in the instant.
             "18 enableTakeImages @4",
+            "18 enableAltitude @5",
             "108 !eventTrajectoryOk @3",
             "108 disableTrajectory @3",
             "108 disableAltitude @5",
