@@ -10,6 +10,9 @@ use mcl_lsp::analysis::{completion, diagnostics, hover, navigation, outline, sem
 use std::path::PathBuf;
 use tower_lsp_server::ls_types::Uri;
 
+/// A task that does nothing (the standard library has its pattern).
+const VOID: &str = "tasks { Void(): Instant { } Take( x ): Instant { } }\n";
+
 fn world(path: &PathBuf) -> World {
     let mut w = World::default();
     let uri = Uri::from_file_path(path).unwrap();
@@ -59,20 +62,24 @@ fn features_survive_nesting_far_too_deep() {
     let n = 100_000;
     for (open, close) in [("{ ", " }"), ("not ( ", " )"), ("if ", " then { Void() }"), ("[", "]")] {
         let text = if open == "[" {
-            format!("mission {{ Void( {}1{} ) }}\n", open.repeat(n), close.repeat(n))
+            format!("{VOID}mission {{ Take( {}1{} ) }}\n", open.repeat(n), close.repeat(n))
         } else {
-            format!("mission {{ {}Void(){} }}\n", open.repeat(n), close.repeat(n))
+            format!("{VOID}mission {{ {}Void(){} }}\n", open.repeat(n), close.repeat(n))
         };
         let codes = on_a_small_stack(text);
-        assert_eq!(codes, ["E0016"], "{open}");
+        assert_eq!(codes.iter().filter(|c| **c == "E0016").count(), 1, "{open}: {codes:?}");
+        // A block `{ ... }` is no statement: that is the braces' own error.
+        assert!(codes.iter().all(|c| *c == "E0016" || (open == "{ " && *c == "E0010")), "{open}: {codes:?}");
     }
 }
 
 #[test]
 fn features_work_just_below_the_limit() {
-    let depth = mcl_syntax::parser::MAX_NESTING - 2;
+    // 60 levels, the mission's body, a branch of the parallel, a call's
+    // parentheses: 63.
+    let depth = mcl_syntax::parser::MAX_NESTING - 4;
     let text = format!(
-        "mission {{\n{}Void() ; parallel {{ Void() }} and {{ Void() }}{}\n}}\n",
+        "{VOID}mission {{\n{}Void() ; parallel {{ Void() }} and {{ Void() }}{}\n}}\n",
         "try { not ( ".repeat(depth / 2),
         " ) } catch { Void() }".repeat(depth / 2)
     );

@@ -322,6 +322,10 @@ fn balance<'s>(
     let mut pending: Vec<usize> = vec![0];
     let mut nested = 0usize;
     let mut skip: Option<TooDeep> = None;
+    // After a nesting error, the other constructs too deep in the same item
+    // (the `catch` of a `try` too deep, a call's parentheses at the limit)
+    // are skipped too, without another error.
+    let mut quiet = false;
     // The header of the mission being read (`mission : name [ ID at NUM ]`,
     // `mission Name( ... )`): how far it got, and where its body should
     // have started if a token that belongs to no header came before any
@@ -384,7 +388,10 @@ fn balance<'s>(
                 }
             } else if tok == Token::Semi && !s.group && stack.len() == s.keep {
                 end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, span.start as usize);
-            } else if starts_item_here(tok, tokens.get(i + 1).map(|t| t.0)) {
+            } else if matches!(tok, Token::Kw(k) if k.starts_item() && stack.is_empty())
+                || starts_item_here(tok, tokens.get(i + 1).map(|t| t.0))
+            {
+                // The next item (where `split_items` cuts the file too).
                 end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, span.start as usize);
             } else {
                 continue;
@@ -405,11 +412,22 @@ fn balance<'s>(
                     _ => {}
                 }
             }
+            // `if ( A )`, `while { A }`: the condition's delimiters are its
+            // level, not the keyword.
+            let top = pending.last_mut().expect("the top level is always there");
+            if *top > 0 && i > 0 && matches!(tokens[i - 1].0, Token::Kw(Kw::If | Kw::While | Kw::Condition | Kw::WhileCondition))
+            {
+                *top -= 1;
+                nested -= 1;
+            }
             stack.push((tok, span));
             pending.push(0);
             out.push((tok, span));
             if stack.len() + nested > MAX_NESTING {
-                errors.push(too_deep(span, "blocks"));
+                if !quiet {
+                    errors.push(too_deep(span, "blocks"));
+                    quiet = true;
+                }
                 skip = Some(TooDeep { keep: stack.len(), group: true, start: span.start as usize });
             }
         } else if is_closer(tok) {
@@ -445,13 +463,11 @@ fn balance<'s>(
             }
         } else if !stack.is_empty() && starts_item_here(tok, tokens.get(i + 1).map(|t| t.0)) {
             // Items only appear at the top level: close everything still open.
-            while let Some(open) = stack.pop() {
-                errors.push(unclosed(open, Span::at(span.start as usize), "before the next item"));
-                out.push((closer_of(open.0).expect("opener"), Span::at(span.start as usize)));
-            }
+            close_all(&mut stack, span.start as usize, "before the next item", errors, &mut out, &unclosed);
             pending.truncate(1);
             pending[0] = 0;
             nested = 0;
+            quiet = false;
             header = matches!(tok, Token::Kw(Kw::Mission | Kw::PlanOp)).then_some(0);
             missing_open = None;
             out.push((tok, span));
@@ -487,24 +503,52 @@ fn balance<'s>(
                     *top += 1;
                     nested += 1;
                     if stack.len() + nested > MAX_NESTING {
-                        errors.push(too_deep(span, "control structures"));
+                        if !quiet {
+                            errors.push(too_deep(span, "control structures"));
+                            quiet = true;
+                        }
                         skip = Some(TooDeep { keep: stack.len(), group: false, start: span.start as usize });
                     }
                 }
                 Token::Kw(k) if k.starts_item() => {
                     nested -= *top;
                     *top = 0;
+                    if stack.is_empty() {
+                        quiet = false;
+                    }
                 }
                 _ => {}
             }
         }
     }
     end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, len);
-    while let Some(open) = stack.pop() {
-        errors.push(unclosed(open, Span::at(len), at_end));
-        out.push((closer_of(open.0).expect("opener"), Span::at(len)));
-    }
+    close_all(&mut stack, len, at_end, errors, &mut out, &unclosed);
     out
+}
+
+/// Closes every delimiter still open at `at`, one error each; beyond a few
+/// (generated or pasted text), one error at the outermost says how many more
+/// are open inside it.
+fn close_all<'s>(
+    stack: &mut Vec<(Token<'s>, Span)>,
+    at: usize,
+    why: &str,
+    errors: &mut Vec<Diagnostic>,
+    out: &mut Vec<(Token<'s>, Span)>,
+    unclosed: &dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic,
+) {
+    const SHOWN: usize = 3;
+    let n = stack.len();
+    for (k, open) in stack.drain(..).rev().enumerate() {
+        if n <= SHOWN || k == n - 1 {
+            let mut d = unclosed(open, Span::at(at), why);
+            if n > SHOWN {
+                d = d.with_note(format!("{} more delimiters opened inside this one are not closed either", n - 1));
+            }
+            errors.push(d);
+        }
+        out.push((closer_of(open.0).expect("opener"), Span::at(at)));
+    }
 }
 
 // ---------------------------------------------------------------------------
