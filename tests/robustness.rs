@@ -72,7 +72,7 @@ fn deep_programs() -> Vec<(&'static str, String, bool)> {
     let rep = |s: &str, n: usize| s.repeat(n);
     vec![
         ("braces", format!("{VOID}mission {{ {}Void(){} }}\n", rep("{ ", N), rep(" }", N)), true),
-        ("parens", format!("{VOID}mission {{ {}Void(){} }}\n", rep("( ", N), rep(" )", N)), false),
+        ("parens", format!("{VOID}mission {{ {}Void(){} }}\n", rep("( ", N), rep(" )", N)), true),
         ("not", format!("{VOID}mission {{ {}Void(){} }}\n", rep("not ( ", N), rep(" )", N)), false),
         ("try", format!("{VOID}mission {{ {}Void(){} }}\n", rep("try { ", N), rep(" } catch { Void() }", N)), false),
         ("if_bare", format!("{VOID}mission {{ {}Void(){} }}\n", rep("if ", N), rep(" then { Void() }", N)), false),
