@@ -196,7 +196,9 @@ fn mutated_corpus_never_panics_and_spans_stay_in_the_text() {
     db.set_text(&dir.join("vehicle.mcl"), vehicle.as_str());
     let mut runner = TestRunner::new(Config { cases: 160, failure_persistence: None, ..Config::default() });
     let strategy = (0..corpus.len(), prop::collection::vec(mutation(), 1..4));
+    let db = std::cell::RefCell::new(db);
     let result = runner.run(&strategy, |(which, mutations)| {
+        let mut db = db.borrow_mut();
         let (name, original) = &corpus[which];
         let mut text = original.clone();
         for m in &mutations {
@@ -210,8 +212,8 @@ fn mutated_corpus_never_panics_and_spans_stay_in_the_text() {
         let _ = mcl_syntax::format::format(&text);
         // The whole check, as `mcl check` runs it.
         let file = db.set_text(&dir.join("mission.mcl"), text.as_str());
-        for fd in check_file(&db, file).iter() {
-            let t = fd.file.text(&db).as_deref().unwrap_or("").to_string();
+        for fd in check_file(&*db, file).iter() {
+            let t = fd.file.text(&*db).as_deref().unwrap_or("").to_string();
             let d = &fd.diag;
             assert_span_ok(&t, &format!("{name}: {} {}", d.code, d.message), d.span.start, d.span.end)?;
             for l in d.labels.iter().filter(|l| l.file.is_none()) {

@@ -415,7 +415,9 @@ fn balance<'s>(
             // `if ( A )`, `while { A }`: the condition's delimiters are its
             // level, not the keyword.
             let top = pending.last_mut().expect("the top level is always there");
-            if *top > 0 && i > 0 && matches!(tokens[i - 1].0, Token::Kw(Kw::If | Kw::While | Kw::Condition | Kw::WhileCondition))
+            if *top > 0
+                && i > 0
+                && matches!(tokens[i - 1].0, Token::Kw(Kw::If | Kw::While | Kw::Condition | Kw::WhileCondition))
             {
                 *top -= 1;
                 nested -= 1;

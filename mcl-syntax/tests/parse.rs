@@ -773,13 +773,19 @@ fn parse_small_stack(src: String) -> (Vec<&'static str>, Parse) {
 fn nesting_beyond_the_limit_is_one_error_at_the_first_level_too_deep() {
     use mcl_syntax::parser::MAX_NESTING;
     let n = 50_000;
-    for (open, close) in [("not ( ", " )"), ("try { ", " } catch { C() }"), ("if ", " then { A() }"), ("while ", " do { A() }")] {
+    for (open, close) in
+        [("not ( ", " )"), ("try { ", " } catch { C() }"), ("if ", " then { A() }"), ("while ", " do { A() }")]
+    {
         let src = format!("mission {{ {}A(){} }}\nmission : after {{ B() }}", open.repeat(n), close.repeat(n));
         let (codes, p) = parse_small_stack(src.clone());
         assert_eq!(codes, ["E0016"], "{open}");
         // The mission body is level 1: the construct at level 65 is reported.
         let at = p.errors[0].span.start as usize;
-        assert_eq!(at, "mission { ".len() + open.len() * (MAX_NESTING - 1) + open.find(['(', '{']).unwrap_or(0), "{open}");
+        assert_eq!(
+            at,
+            "mission { ".len() + open.len() * (MAX_NESTING - 1) + open.find(['(', '{']).unwrap_or(0),
+            "{open}"
+        );
         // The next item is parsed as usual.
         assert!(sexp(&p.file).ends_with("(mission after {B()})"), "{open}: {}", sexp(&p.file));
     }
