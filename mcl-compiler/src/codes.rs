@@ -41,6 +41,7 @@ pub const UNKNOWN_LABEL: &str = "E0402";
 pub const AMBIGUOUS_LABEL: &str = "E0403";
 pub const CONSTRAINT_BOUND: &str = "E0404";
 pub const CONSTRAINT_ARITY: &str = "E0405";
+pub const CONSTRAINT_ON_OPERATOR: &str = "E0409";
 /// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
 pub const DEADLOCKING_CONSTRAINTS: &str = "E0406";
 /// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
@@ -85,6 +86,7 @@ registry! {
     "E0013" => "empty block",
     "E0014" => "action without exactly one command",
     "W0015" => "non-canonical spelling",
+    "E0016" => "nesting too deep",
     "E0101" => "undefined task",
     "E0102" => "undefined action",
     "E0103" => "undefined event",
@@ -115,6 +117,7 @@ registry! {
     "E0405" => "wrong number of calls in a constraint",
     "E0406" => "constraints that deadlock",
     "W0407" => "coordination analysis inconclusive",
+    "E0409" => "constraint names a planning operator",
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
     "E0601" => "building block that breaks the block properties",

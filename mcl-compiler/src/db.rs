@@ -114,7 +114,12 @@ impl Database {
 }
 
 fn read(path: &Path) -> Option<Arc<str>> {
-    std::fs::read_to_string(path).ok().map(Arc::from)
+    // A byte order mark is no part of the text: without it, byte offsets,
+    // columns and the rendered source lines agree.
+    std::fs::read_to_string(path).ok().map(|t| match t.strip_prefix('\u{feff}') {
+        Some(rest) => Arc::from(rest),
+        None => Arc::from(t),
+    })
 }
 
 /// Makes a path absolute and removes `.` and `..` components lexically (and

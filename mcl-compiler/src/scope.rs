@@ -2,6 +2,7 @@
 
 use crate::db::{Db, SourceFile};
 use crate::queries::{file_items, item_start, local_item, parse_item, program, whole_file};
+use mcl_syntax::ast::SourceFile as SourceFileAst;
 use mcl_syntax::ast::*;
 use mcl_syntax::{Shift, Span};
 use rustc_hash::FxHashMap;
@@ -147,6 +148,54 @@ fn item_of(db: &dyn Db, id: DefId) -> Option<&Item> {
     let w = whole_file(db, id.file);
     let i = (*w.item_of_part.get(id.item as usize)?)?;
     w.parse.file.items.get(i as usize)
+}
+
+/// The names of the missions of one file, in source order (one per
+/// `Item::Mission`): a named mission's (or operator's) name; an anonymous
+/// mission is `mission` when it is the file's only one, otherwise
+/// `mission1`, `mission2`, ... by its rank among the anonymous missions
+/// (skipping a number that a named mission already uses). Every tool that
+/// names a mission uses this one function: the checker's messages, the
+/// compiled nets and their PNML file names, `mcl run --mission` and traces.
+pub fn mission_names(file: &SourceFileAst) -> Vec<String> {
+    let missions: Vec<&Mission> = file
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Mission(m) => Some(m),
+            _ => None,
+        })
+        .collect();
+    let anonymous = missions.iter().filter(|m| m.name.is_none()).count();
+    let taken = |s: &str| missions.iter().any(|m| m.name.as_ref().is_some_and(|n| n.text == s));
+    let mut rank = 0;
+    missions
+        .iter()
+        .map(|m| match &m.name {
+            Some(n) => n.text.clone(),
+            None if anonymous == 1 => "mission".to_string(),
+            None => loop {
+                rank += 1;
+                let name = format!("mission{rank}");
+                if !taken(&name) {
+                    break name;
+                }
+            },
+        })
+        .collect()
+}
+
+/// Whether a definition has a syntax error inside `span` (the span of its
+/// node, of the same kind as `id`'s spans). The checks of a broken
+/// definition, and of its uses, would only repeat that error in other words:
+/// they are skipped (the definition still defines its name).
+pub fn is_broken(db: &dyn Db, id: DefId, span: Span) -> bool {
+    let Some(c) = file_items(db, id.file).get(id.item as usize) else { return false };
+    let off = if id.local { 0 } else { item_start(db, id.file, id.item) };
+    parse_item(db, c.text)
+        .errors
+        .iter()
+        .any(|e| e.is_error() && e.span.start + off >= span.start && e.span.start + off <= span.end)
 }
 
 /// Typed access to the syntax node of a definition.

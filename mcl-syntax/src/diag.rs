@@ -104,4 +104,6 @@ pub mod codes {
     pub const MISSING_COMMAND: &str = "E0014";
     /// A non-canonical spelling that is accepted (warning).
     pub const NON_CANONICAL: &str = "W0015";
+    /// Blocks or control structures nested deeper than the parser's limit.
+    pub const NESTING_TOO_DEEP: &str = "E0016";
 }

@@ -396,6 +396,10 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
             i += c.len_utf8();
             return i;
         }
+        // A byte order mark starts many files written on Windows: skipped.
+        if c == '\u{feff}' && i == 0 {
+            return i + c.len_utf8();
+        }
         // `#` is a comment in many languages: report it and skip the line.
         if c == '#' {
             let mut end = i;

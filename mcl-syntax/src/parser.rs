@@ -201,7 +201,8 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
     let lexed = lex(src);
     let mut errors = lexed.errors;
     let why = if next.is_some() { "before the next item" } else { "at the end of the file" };
-    let tokens = balance(lexed.tokens, src.len(), &mut errors, why);
+    let mut deep_regions = Vec::new();
+    let tokens = balance(lexed.tokens, src.len(), &mut errors, why, &mut deep_regions);
     let len = src.len();
     let mut input: Vec<(Token<'_>, SimpleSpan)> =
         tokens.iter().map(|(t, s)| (*t, SimpleSpan::from(s.range()))).collect();
@@ -217,6 +218,14 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
     let (file, parse_errors) =
         item_parser(limit).parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
+    // What a too-deep construct left (an opener and its closer, a keyword)
+    // does not parse: those errors are follow-ups of the nesting error.
+    if !deep_regions.is_empty() {
+        errors.retain(|d| {
+            d.code == codes::NESTING_TOO_DEEP
+                || !deep_regions.iter().any(|r| r.start <= d.span.start && d.span.start <= r.end)
+        });
+    }
     let file = file.unwrap_or_default();
     lint_spellings(&file, &mut errors);
     errors.sort_by_key(|d| (d.span.start, d.span.end));
@@ -253,14 +262,76 @@ fn starts_item_here(tok: Token<'_>, next: Option<Token<'_>>) -> bool {
     }
 }
 
+/// The deepest nesting the parser accepts: open delimiters plus control
+/// structures whose condition is written without delimiters (`if if A then
+/// { B } then { C }`). Every later stage (checker, compiler, formatter,
+/// language server) walks the tree recursively, so this bound is also the
+/// bound of their recursion; it leaves room for a debug build on a 2 MB
+/// thread stack. Real missions nest a handful of levels.
+pub const MAX_NESTING: usize = 64;
+
+/// A construct nested deeper than [`MAX_NESTING`] whose contents the
+/// balancing pass dropped: the error at its first token, and the region
+/// whose parse errors are follow-ups of that one.
+struct TooDeep {
+    /// Number of open delimiters that stay open once the region ends (for
+    /// a group, they include its opener).
+    keep: usize,
+    /// Whether the region is one delimited group (it ends with that group's
+    /// closer) or a control structure's keyword (it ends at the next `;` or
+    /// closer at its level).
+    group: bool,
+    start: usize,
+}
+
+/// Whether the identifier at `i` starts a call `Name( ... )` followed by
+/// what follows a statement (rather than a parametrised mission's header).
+fn is_call(tokens: &[(Token<'_>, Span)], i: usize) -> bool {
+    if tokens.get(i + 1).map(|t| t.0) != Some(Token::LParen) {
+        return false;
+    }
+    let mut depth = 0usize;
+    for (j, (t, _)) in tokens.iter().enumerate().skip(i + 1) {
+        if closer_of(*t).is_some() {
+            depth += 1;
+        } else if let Token::Kw(k) = t {
+            if k.starts_item() {
+                return false;
+            }
+        } else if is_closer(*t) {
+            depth -= 1;
+            if depth == 0 {
+                return !matches!(tokens.get(j + 1).map(|t| t.0), Some(Token::LBrace | Token::LBracket));
+            }
+        }
+    }
+    false
+}
+
 fn balance<'s>(
     tokens: Vec<(Token<'s>, Span)>,
     len: usize,
     errors: &mut Vec<Diagnostic>,
     at_end: &str,
+    deep_regions: &mut Vec<Span>,
 ) -> Vec<(Token<'s>, Span)> {
     let mut out = Vec::with_capacity(tokens.len() + 4);
     let mut stack: Vec<(Token<'s>, Span)> = Vec::new();
+    // Per open delimiter (and the top level at index 0): the control
+    // keywords whose bare condition is still open; `nested` is their sum.
+    let mut pending: Vec<usize> = vec![0];
+    let mut nested = 0usize;
+    let mut skip: Option<TooDeep> = None;
+    // After a nesting error, the other constructs too deep in the same item
+    // (the `catch` of a `try` too deep, a call's parentheses at the limit)
+    // are skipped too, without another error.
+    let mut quiet = false;
+    // The header of the mission being read (`mission : name [ ID at NUM ]`,
+    // `mission Name( ... )`): how far it got, and where its body should
+    // have started if a token that belongs to no header came before any
+    // `{`. A `}` with no opener then closes that missing `{`.
+    let mut header: Option<u8> = None;
+    let mut missing_open: Option<(usize, Span)> = None;
     let unclosed = |open: (Token<'_>, Span), at: Span, why: &str| {
         let close = closer_of(open.0).expect("stack holds openers");
         Diagnostic::error(codes::UNCLOSED_DELIMITER, format!("unclosed {}", open.0), open.1)
@@ -268,10 +339,99 @@ fn balance<'s>(
             .with_label(at, format!("{close} expected {why}"))
             .with_help(format!("add the missing {close}"))
     };
+    let too_deep = |span: Span, what: &str| {
+        Diagnostic::error(
+            codes::NESTING_TOO_DEEP,
+            format!("{what} nested too deeply (more than {MAX_NESTING} levels)"),
+            span,
+        )
+        .with_label(span, format!("this is nesting level {}", MAX_NESTING + 1))
+        .with_help("split the mission: move the innermost part into a task or a separate mission; its contents are not checked")
+    };
+    // Ends the dropped region before `at`: the delimiters opened inside it
+    // are forgotten, the others stay open.
+    let end_skip = |skip: &mut Option<TooDeep>,
+                    stack: &mut Vec<(Token<'s>, Span)>,
+                    pending: &mut Vec<usize>,
+                    nested: &mut usize,
+                    deep_regions: &mut Vec<Span>,
+                    at: usize| {
+        if let Some(s) = skip.take() {
+            stack.truncate(s.keep);
+            pending.truncate(s.keep + 1);
+            *nested = pending.iter().sum();
+            deep_regions.push(Span::new(s.start, at));
+        }
+    };
     for (i, &(tok, span)) in tokens.iter().enumerate() {
+        if let Some(s) = &skip {
+            // Inside a dropped region: only the delimiters are followed, to
+            // find where it ends.
+            if closer_of(tok).is_some() {
+                stack.push((tok, span));
+                pending.push(0);
+                continue;
+            }
+            if is_closer(tok) {
+                match stack.iter().rposition(|(o, _)| closer_of(*o) == Some(tok)) {
+                    Some(pos) if pos >= s.keep => {
+                        stack.truncate(pos);
+                        pending.truncate(pos + 1);
+                        continue;
+                    }
+                    Some(_) => {
+                        // It closes the group or an outer block: the region
+                        // ends here and the closer is handled as usual.
+                        end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, span.start as usize);
+                    }
+                    None => continue,
+                }
+            } else if tok == Token::Semi && !s.group && stack.len() == s.keep {
+                end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, span.start as usize);
+            } else if matches!(tok, Token::Kw(k) if k.starts_item() && stack.is_empty())
+                || starts_item_here(tok, tokens.get(i + 1).map(|t| t.0))
+            {
+                // The next item (where `split_items` cuts the file too).
+                end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, span.start as usize);
+            } else {
+                continue;
+            }
+        }
         if closer_of(tok).is_some() {
+            if stack.is_empty() {
+                match (header, tok) {
+                    (Some(h), Token::LParen) if h <= 2 => header = Some(3),
+                    (Some(h), Token::LBracket) if h <= 3 => header = Some(4),
+                    (Some(_), _) => {
+                        if tok != Token::LBrace {
+                            missing_open = Some((out.len(), span));
+                        }
+                        header = None;
+                    }
+                    (None, Token::LBrace) => missing_open = None,
+                    _ => {}
+                }
+            }
+            // `if ( A )`, `while { A }`: the condition's delimiters are its
+            // level, not the keyword.
+            let top = pending.last_mut().expect("the top level is always there");
+            if *top > 0
+                && i > 0
+                && matches!(tokens[i - 1].0, Token::Kw(Kw::If | Kw::While | Kw::Condition | Kw::WhileCondition))
+            {
+                *top -= 1;
+                nested -= 1;
+            }
             stack.push((tok, span));
+            pending.push(0);
             out.push((tok, span));
+            if stack.len() + nested > MAX_NESTING {
+                if !quiet {
+                    errors.push(too_deep(span, "blocks"));
+                    quiet = true;
+                }
+                skip = Some(TooDeep { keep: stack.len(), group: true, start: span.start as usize });
+            }
         } else if is_closer(tok) {
             match stack.iter().rposition(|(o, _)| closer_of(*o) == Some(tok)) {
                 Some(pos) => {
@@ -281,31 +441,116 @@ fn balance<'s>(
                         out.push((closer_of(open.0).expect("opener"), Span::at(span.start as usize)));
                     }
                     stack.pop();
+                    pending.truncate(pos + 1);
+                    nested = pending.iter().sum();
                     out.push((tok, span));
                 }
-                None => {
-                    errors.push(
+                None => match missing_open.take() {
+                    Some((at, first)) if tok == Token::RBrace => {
+                        // `mission m  Depth(1); }`: the body's `{` is missing.
+                        errors.push(
+                            Diagnostic::error(codes::UNEXPECTED_TOKEN, "expected `{` before the mission's body", first)
+                                .with_label(first, "the body starts here")
+                                .with_label(span, "and ends here")
+                                .with_help("add the missing `{` after the mission's header"),
+                        );
+                        out.insert(at, (Token::LBrace, Span::at(first.start as usize)));
+                        out.push((tok, span));
+                    }
+                    _ => errors.push(
                         Diagnostic::error(codes::UNMATCHED_CLOSE, format!("unmatched {tok}"), span)
                             .with_help("remove it, or add the opening delimiter it closes"),
-                    );
-                }
+                    ),
+                },
             }
         } else if !stack.is_empty() && starts_item_here(tok, tokens.get(i + 1).map(|t| t.0)) {
             // Items only appear at the top level: close everything still open.
-            while let Some(open) = stack.pop() {
-                errors.push(unclosed(open, Span::at(span.start as usize), "before the next item"));
-                out.push((closer_of(open.0).expect("opener"), Span::at(span.start as usize)));
-            }
+            close_all(&mut stack, span.start as usize, "before the next item", errors, &mut out, &unclosed);
+            pending.truncate(1);
+            pending[0] = 0;
+            nested = 0;
+            quiet = false;
+            header = matches!(tok, Token::Kw(Kw::Mission | Kw::PlanOp)).then_some(0);
+            missing_open = None;
             out.push((tok, span));
         } else {
+            if stack.is_empty() {
+                match (header, tok) {
+                    (_, Token::Kw(k)) if k.starts_item() => {
+                        header = matches!(k, Kw::Mission | Kw::PlanOp).then_some(0);
+                        missing_open = None;
+                    }
+                    (Some(0), Token::Colon) => header = Some(1),
+                    (Some(h), Token::Ident(_)) if h <= 1 && !is_call(&tokens, i) => header = Some(2),
+                    (Some(h), Token::Kw(_)) if h == 1 => header = Some(2),
+                    (Some(_), _) => {
+                        missing_open = Some((out.len(), span));
+                        header = None;
+                    }
+                    _ => {}
+                }
+            }
             out.push((tok, span));
+            let top = pending.last_mut().expect("the top level is always there");
+            match tok {
+                Token::Semi => {
+                    nested -= *top;
+                    *top = 0;
+                }
+                Token::Kw(Kw::Then | Kw::Do) if *top > 0 => {
+                    *top -= 1;
+                    nested -= 1;
+                }
+                Token::Kw(Kw::If | Kw::While | Kw::Condition | Kw::WhileCondition) => {
+                    *top += 1;
+                    nested += 1;
+                    if stack.len() + nested > MAX_NESTING {
+                        if !quiet {
+                            errors.push(too_deep(span, "control structures"));
+                            quiet = true;
+                        }
+                        skip = Some(TooDeep { keep: stack.len(), group: false, start: span.start as usize });
+                    }
+                }
+                Token::Kw(k) if k.starts_item() => {
+                    nested -= *top;
+                    *top = 0;
+                    if stack.is_empty() {
+                        quiet = false;
+                    }
+                }
+                _ => {}
+            }
         }
     }
-    while let Some(open) = stack.pop() {
-        errors.push(unclosed(open, Span::at(len), at_end));
-        out.push((closer_of(open.0).expect("opener"), Span::at(len)));
-    }
+    end_skip(&mut skip, &mut stack, &mut pending, &mut nested, deep_regions, len);
+    close_all(&mut stack, len, at_end, errors, &mut out, &unclosed);
     out
+}
+
+/// Closes every delimiter still open at `at`, one error each; beyond a few
+/// (generated or pasted text), one error at the outermost says how many more
+/// are open inside it.
+fn close_all<'s>(
+    stack: &mut Vec<(Token<'s>, Span)>,
+    at: usize,
+    why: &str,
+    errors: &mut Vec<Diagnostic>,
+    out: &mut Vec<(Token<'s>, Span)>,
+    unclosed: &dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic,
+) {
+    const SHOWN: usize = 3;
+    let n = stack.len();
+    for (k, open) in stack.drain(..).rev().enumerate() {
+        if n <= SHOWN || k == n - 1 {
+            let mut d = unclosed(open, Span::at(at), why);
+            if n > SHOWN {
+                d = d.with_note(format!("{} more delimiters opened inside this one are not closed either", n - 1));
+            }
+            errors.push(d);
+        }
+        out.push((closer_of(open.0).expect("opener"), Span::at(at)));
+    }
 }
 
 // ---------------------------------------------------------------------------
@@ -650,10 +895,23 @@ where
 fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
     // import "path";
     let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
-    let import = kw(Kw::Import)
-        .then(string)
-        .then_ignore(just(Token::Semi))
-        .map_with(|(_, (path, path_span)), e| Item::Import(Import { path, path_span, span: Span::from(e.span()) }));
+    // A missing `;` is one error after the path, and the import is kept (so
+    // that the names it brings are still defined).
+    let import = kw(Kw::Import).then(string).then(just(Token::Semi).or_not()).validate(
+        |((_, (path, path_span)), semi), e, emitter| {
+            if semi.is_none() {
+                emitter.emit(Rich::custom(
+                    SimpleSpan::from(path_span.end as usize..path_span.end as usize),
+                    custom(
+                        codes::UNEXPECTED_TOKEN,
+                        "expected `;` after the imported file",
+                        "write `import \"file.mcl\";`",
+                    ),
+                ));
+            }
+            Item::Import(Import { path, path_span, span: Span::from(e.span()) })
+        },
+    );
 
     // actions { name = Primitive( c: cmd, v: x, ... ); }
     enum ActionArg {
@@ -772,16 +1030,29 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .rewind()
         .ignore_then(
             pattern.map(Some).recover_with(via_parser(
-                token_tree()
-                    .and_is(none_of([Token::RBrace]).ignored())
+                // A broken pattern keeps its name, so that its uses are not
+                // reported as undefined (the checker skips its checks).
+                name()
+                    .or_not()
+                    .rewind()
                     .then(
                         token_tree()
                             .and_is(none_of([Token::RBrace]).ignored())
-                            .and_is(none_of([Token::LBrace]).ignored())
-                            .repeated(),
+                            .then(
+                                token_tree()
+                                    .and_is(none_of([Token::RBrace]).ignored())
+                                    .and_is(none_of([Token::LBrace]).ignored())
+                                    .repeated(),
+                            )
+                            .then(just(Token::Semi).or_not()),
                     )
-                    .then(just(Token::Semi).or_not())
-                    .to(None),
+                    .map_with(|(name, _), e| {
+                        name.map(|name| Pattern {
+                            name,
+                            body: PatternBody::Net(PatternNet::default()),
+                            span: Span::from(e.span()),
+                        })
+                    }),
             )),
         )
         .repeated()
@@ -817,11 +1088,26 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .rewind()
         .ignore_then(
             task.map(Some).recover_with(via_parser(
-                token_tree()
-                    .and_is(none_of([Token::RBrace]).ignored())
-                    .then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated())
-                    .then(token_tree().and_is(just(Token::LBrace).ignored()).or_not())
-                    .to(None),
+                // A broken task keeps its name, so that its calls are not
+                // reported as undefined (the checker skips its checks).
+                name()
+                    .or_not()
+                    .rewind()
+                    .then(
+                        token_tree()
+                            .and_is(none_of([Token::RBrace]).ignored())
+                            .then(token_tree().and_is(none_of([Token::RBrace, Token::LBrace]).ignored()).repeated())
+                            .then(token_tree().and_is(just(Token::LBrace).ignored()).or_not()),
+                    )
+                    .map_with(|(name, _), e| {
+                        name.map(|name| TaskDef {
+                            name,
+                            params: Vec::new(),
+                            pattern: None,
+                            bindings: Vec::new(),
+                            span: Span::from(e.span()),
+                        })
+                    }),
             )),
         )
         .repeated()
@@ -865,10 +1151,28 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
     // Every part of the header is parsed as optional, and the combination
     // is checked afterwards: a malformed header is one error, and the
     // mission is kept.
+    // `mission : while { ... }`: a keyword where the name goes is one error,
+    // and the mission keeps it as its name.
+    let kw_name =
+        any().filter(|t: &Token<'_>| matches!(t, Token::Kw(k) if !k.starts_item())).validate(|t, e, emitter| {
+            let text = match t {
+                Token::Kw(k) => k.as_str(),
+                _ => "",
+            };
+            emitter.emit(Rich::custom(
+                e.span(),
+                custom(
+                    codes::UNEXPECTED_TOKEN,
+                    format!("`{text}` is a keyword and cannot be a mission's name"),
+                    "choose another name",
+                ),
+            ));
+            Name { text: text.to_string(), span: Span::from(e.span()) }
+        });
     let header = just(Token::Colon)
         .map_with(|_, e| Span::from(e.span()))
         .or_not()
-        .then(name().or_not())
+        .then(name().or(kw_name).or_not())
         .then(params.or_not())
         .then(placement.or_not())
         .then_ignore(junk.or_not())

@@ -92,7 +92,11 @@ impl LineIndex {
         let offset = floor_char_boundary(text, offset);
         let line = self.line_of(offset);
         let start = self.line_start(line);
-        let column = text[start..offset].chars().count() + 1;
+        let mut column = text[start..offset].chars().count() + 1;
+        // A byte order mark is not a column of the first line.
+        if line == 0 && offset > 0 && text.starts_with('\u{feff}') {
+            column -= 1;
+        }
         LineCol { line: line as u32 + 1, column: column as u32 }
     }
 
@@ -147,5 +151,14 @@ mod tests {
         assert_eq!(idx.utf16_position(text, x), (1, 3));
         assert_eq!(idx.offset_of_utf16(text, 1, 3), x);
         assert_eq!(idx.offset_of_utf16(text, 9, 0), text.len());
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_no_column() {
+        let text = "\u{feff}mission {\n}";
+        let idx = LineIndex::new(text);
+        assert_eq!(idx.line_col(text, 3), LineCol { line: 1, column: 1 });
+        assert_eq!(idx.line_col(text, text.find('{').unwrap()), LineCol { line: 1, column: 9 });
+        assert_eq!(idx.line_col(text, text.find('}').unwrap()), LineCol { line: 2, column: 1 });
     }
 }

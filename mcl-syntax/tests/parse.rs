@@ -585,7 +585,9 @@ fn broken_definitions_are_skipped_one_by_one() {
     assert_eq!(t, "(actions (a = P c:x) (c = P c:z))\n(events e1 e3)");
     let (codes, t, _) = bad("tasks { A(): P { a: x; e: y -> T; } B( p q ): P { } C(): P { } }");
     assert_eq!(codes, ["E0010", "E0010"]);
-    assert_eq!(t, "(tasks (A(): P (e y -> T)) (C(): P))");
+    // The broken task keeps its name (so that its calls are not undefined),
+    // with nothing else.
+    assert_eq!(t, "(tasks (A(): P (e y -> T)) (B()) (C(): P))");
     let (codes, t, _) = bad("constraints { mutex { a:b } = x; order { a:b, c:d } foo { x } sync { a:b } }");
     assert_eq!(codes, ["E0010", "E0010"]);
     // The mutex is kept without its bound (the checker reports E0404).
@@ -746,4 +748,106 @@ fn bad_corpus_snapshots() {
     for code in ["E0001", "E0002", "E0003", "E0004", "E0010", "E0011", "E0012", "E0013", "E0014", "W0015"] {
         assert!(codes_seen.contains(code), "no corpus file produces {code}");
     }
+}
+
+// ---------------------------------------------------------------------------
+// Robustness: nesting, byte order mark, classic slips recovered as one error.
+
+/// Parses on a thread with a 2 MB stack (tokio's blocking threads, where the
+/// language server parses).
+fn parse_small_stack(src: String) -> (Vec<&'static str>, Parse) {
+    std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || {
+            let p = parse(&src);
+            check_invariants(&src, &p);
+            let _ = mcl_syntax::format::format(&src);
+            (p.errors.iter().map(|d| d.code).collect(), p)
+        })
+        .unwrap()
+        .join()
+        .expect("no stack overflow")
+}
+
+#[test]
+fn nesting_beyond_the_limit_is_one_error_at_the_first_level_too_deep() {
+    use mcl_syntax::parser::MAX_NESTING;
+    let n = 50_000;
+    for (open, close) in
+        [("not ( ", " )"), ("try { ", " } catch { C() }"), ("if ", " then { A() }"), ("while ", " do { A() }")]
+    {
+        let src = format!("mission {{ {}A(){} }}\nmission : after {{ B() }}", open.repeat(n), close.repeat(n));
+        let (codes, p) = parse_small_stack(src.clone());
+        assert_eq!(codes, ["E0016"], "{open}");
+        // The mission body is level 1: the construct at level 65 is reported.
+        let at = p.errors[0].span.start as usize;
+        assert_eq!(
+            at,
+            "mission { ".len() + open.len() * (MAX_NESTING - 1) + open.find(['(', '{']).unwrap_or(0),
+            "{open}"
+        );
+        // The next item is parsed as usual.
+        assert!(sexp(&p.file).ends_with("(mission after {B()})"), "{open}: {}", sexp(&p.file));
+    }
+    // Exactly at the limit (the body, 62 `not`s, the call's parentheses): no error.
+    let ok = format!("mission {{ {}A(){} }}", "not ( ".repeat(MAX_NESTING - 2), " )".repeat(MAX_NESTING - 2));
+    let (codes, _) = parse_small_stack(ok);
+    assert!(codes.is_empty(), "{codes:?}");
+    // The body, 61 blocks, the innermost condition's and call's parentheses.
+    let ok = format!("mission {{ {}A(){} }}", "if ( B() ) { ".repeat(MAX_NESTING - 3), " }".repeat(MAX_NESTING - 3));
+    let (codes, _) = parse_small_stack(ok);
+    assert!(codes.is_empty(), "a delimited condition is not a level of its own: {codes:?}");
+    // Unclosed: the nesting error and one error for the many unclosed delimiters.
+    let (codes, p) = parse_small_stack(format!("mission {{ {}A()", "not ( ".repeat(n)));
+    assert_eq!(codes, ["E0011", "E0016"]);
+    assert!(p.errors[0].notes[0].contains("64 more delimiters"), "{:?}", p.errors[0].notes);
+}
+
+#[test]
+fn a_byte_order_mark_is_skipped_and_no_column() {
+    let src = "\u{feff}mission { A() ; B( }";
+    let p = parse(src);
+    check_invariants(src, &p);
+    assert_eq!(sexp(&p.file), "(mission {A(); B()})");
+    assert_eq!(p.errors.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0011"]);
+    let idx = LineIndex::new(src);
+    let b = src.find('B').unwrap();
+    assert_eq!(idx.line_col(src, b).column, 17);
+    // Elsewhere it is an invisible character, reported.
+    let (codes, _, _) = bad("mission { A() \u{feff}}");
+    assert_eq!(codes, ["E0001"]);
+}
+
+#[test]
+fn a_mission_without_its_opening_brace_is_one_error() {
+    let (codes, t, p) = bad("mission : m Depth( 1 ) ; Surface() }\nmission : n { A() }");
+    assert_eq!(codes, ["E0010"]);
+    assert_eq!(p.errors[0].message, "expected `{` before the mission's body");
+    assert_eq!(p.errors[0].span.start, 12);
+    assert_eq!(t, "(mission m {Depth(1); Surface()})\n(mission n {A()})");
+    // Anonymous: the call is not taken for a parametrised mission's header.
+    let (codes, t, _) = bad("mission Depth( 1 ) ; Surface() }");
+    assert_eq!(codes, ["E0010"]);
+    assert_eq!(t, "(mission {Depth(1); Surface()})");
+    // Named without `:` (a second mistake): two errors, the body is kept.
+    let (codes, t, _) = bad("mission m  Depth(1); }");
+    assert_eq!(codes, ["E0010", "E0010"]);
+    assert_eq!(t, "(mission m {Depth(1)})");
+}
+
+#[test]
+fn an_import_without_semicolon_is_one_error_and_kept() {
+    let (codes, t, p) = bad("import \"vehicle.mcl\"\nmission { A() }");
+    assert_eq!(codes, ["E0010"]);
+    assert_eq!(p.errors[0].span, Span::at(20));
+    assert_eq!(t, "(import \"vehicle.mcl\")\n(mission {A()})");
+}
+
+#[test]
+fn a_keyword_as_a_mission_name_is_one_error() {
+    let (codes, t, p) = bad("mission : while { A() ; B() }");
+    assert_eq!(codes, ["E0010"]);
+    assert!(p.errors[0].message.contains("`while` is a keyword"), "{}", p.errors[0].message);
+    assert_eq!(text("mission : while { A() ; B() }", p.errors[0].span), "while");
+    assert_eq!(t, "(mission while {A(); B()})");
 }

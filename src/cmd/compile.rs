@@ -169,12 +169,9 @@ pub fn run(o: Options<'_>) -> u8 {
     let result = (|| -> Result<(), String> {
         if let Some(dir) = o.out_dir {
             let mut written: Vec<PathBuf> = Vec::new();
-            for (i, m) in missions.iter().enumerate() {
-                let stem = if m.name == "mission" && missions.len() > 1 {
-                    format!("mission{}", i + 1)
-                } else {
-                    file_stem(&m.name)
-                };
+            for m in &missions {
+                // Names are unique per file (`mcl_compiler::scope::mission_names`).
+                let stem = file_stem(&m.name);
                 let pnml = mcl_net::write_pnml(&m.net).map_err(|e| e.to_string())?;
                 let path = dir.join(format!("{stem}.pnml"));
                 write(&path, &pnml)?;

@@ -113,6 +113,9 @@ fn check_tasks(cx: &mut Cx<'_>, block: &TasksBlock) {
         let Some(pattern) = scope::pattern(cx.db, pid) else {
             continue;
         };
+        if scope::is_broken(cx.db, pid, pattern.span) {
+            continue;
+        }
         if !matches!(scope::pattern_net(cx.db, pid), Some(Ok(_))) {
             continue;
         }

@@ -5,7 +5,7 @@
 
 use super::Cx;
 use crate::codes;
-use crate::scope::missions;
+use crate::scope::{missions, DefKind};
 use mcl_syntax::ast::*;
 use mcl_syntax::visit::calls;
 use mcl_syntax::{Diagnostic, Span};
@@ -79,6 +79,31 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                     cx.out.push(d);
                     continue;
                 };
+                if is_operator(m) {
+                    // Seed 6.4 coordinates the missions vehicles run; an
+                    // operator (or a mission with parameters) only runs as
+                    // a step of a plan, instantiated by the planner.
+                    let what = if m.kind == MissionKind::PlanOp {
+                        "a planning operator (`mcl_plan_op`)"
+                    } else {
+                        "a parametrised mission, a planning operator"
+                    };
+                    let d = Diagnostic::error(
+                        codes::CONSTRAINT_ON_OPERATOR,
+                        format!("`{}` is {what}, not a vehicle's mission", mname.text),
+                        mname.span,
+                    )
+                    .with_label(mname.span, "constraints name the missions vehicles run");
+                    let d = match cx.scope.get(DefKind::Mission, &mname.text).iter().find(|id| id.file == *mfile) {
+                        Some(&id) => cx.def_label(d, id, m.keyword_span.cover(mname_def_span(m)), "defined here"),
+                        None => d,
+                    };
+                    let d = d.with_help(
+                        "constrain calls of a named mission (`mission : name { ... }`); an operator's calls run only as steps of a plan",
+                    );
+                    cx.out.push(d);
+                    continue;
+                }
                 let labels: Vec<&str> =
                     calls(&m.body).into_iter().filter_map(|c| c.label.as_ref().map(|l| l.text.as_str())).collect();
                 if !labels.contains(&r.label.text.as_str()) {
@@ -126,6 +151,18 @@ fn check_constraint(cx: &mut Cx<'_>, all: &[(crate::db::SourceFile, &Mission)], 
                         )
                         .with_help(format!("label a call with `Task( ... ) : {}`", r.label.text)),
                     ),
+                    1 if is_operator(owners[0]) => {
+                        let m = owners[0];
+                        let what = m.name.as_ref().map_or("an operator".to_string(), |n| format!("`{}`", n.text));
+                        cx.out.push(
+                            Diagnostic::error(
+                                codes::CONSTRAINT_ON_OPERATOR,
+                                format!("the call labelled `{}` is in {what}, a planning operator, not a vehicle's mission", r.label.text),
+                                r.label.span,
+                            )
+                            .with_help("constrain calls of a named mission (`mission : name { ... }`); an operator's calls run only as steps of a plan"),
+                        );
+                    }
                     1 => {}
                     _ => {
                         let names: Vec<String> = owners
@@ -161,4 +198,14 @@ fn unlabelled_call(cx: &Cx<'_>, mfile: crate::db::SourceFile, m: &Mission, name:
     })?;
     let call = calls(&m.body).into_iter().find(|c| c.label.is_none() && c.name.text.eq_ignore_ascii_case(name))?;
     Some((call.name.text.clone(), call.span))
+}
+
+/// The span of a mission's name where it is defined (relative to the mission).
+fn mname_def_span(m: &Mission) -> Span {
+    m.name.as_ref().map_or(m.keyword_span, |n| n.span)
+}
+
+/// An operator of the planner: `mcl_plan_op`, or a mission with parameters.
+fn is_operator(m: &Mission) -> bool {
+    m.kind == MissionKind::PlanOp || !m.params.is_empty()
 }

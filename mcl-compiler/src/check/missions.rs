@@ -79,6 +79,10 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
     let Some(task) = scope::task(cx.db, id) else {
         return;
     };
+    // A task with a syntax error: its header may be incomplete.
+    if scope::is_broken(cx.db, id, task.span) {
+        return;
+    }
     // A syntax error inside the parentheses already explains what is wrong.
     let broken_args = cx
         .syntax_errors

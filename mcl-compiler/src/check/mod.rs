@@ -155,6 +155,11 @@ impl<'a> Cx<'a> {
         LocalDiagnostics { diags: self.out, anchors: self.anchors }
     }
 
+    /// Whether the item has a syntax error inside `span` (relative to the item).
+    pub fn has_syntax_error_in(&self, span: Span) -> bool {
+        self.syntax_errors.iter().any(|e| e.is_error() && e.span.start >= span.start && e.span.start <= span.end)
+    }
+
     /// The item being checked, as a file of one item (spans relative to it).
     pub fn ast(&self) -> &'a mcl_syntax::ast::SourceFile {
         self.ast

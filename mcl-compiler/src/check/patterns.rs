@@ -17,6 +17,10 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
             continue;
         };
         for p in &block.patterns {
+            // A pattern with a syntax error is reported once, by the parser.
+            if cx.has_syntax_error_in(p.span) {
+                continue;
+            }
             match &p.body {
                 PatternBody::Net(net) => check_net(cx, p, net),
                 PatternBody::File { path, path_span } => {

@@ -18,6 +18,10 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
 }
 
 fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
+    // A task with a syntax error is reported once, by the parser.
+    if cx.has_syntax_error_in(t.span) {
+        return;
+    }
     // Header.
     let mut params: FxHashMap<&str, Span> = FxHashMap::default();
     for p in &t.params {
@@ -61,6 +65,8 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
                 None
             }
             Some(id) => match (scope::pattern(cx.db, id), scope::pattern_net(cx.db, id)) {
+                // A pattern with a syntax error: its parts may be missing.
+                (Some(p), _) if scope::is_broken(cx.db, id, p.span) => return,
                 (Some(p), Some(Ok(net))) => {
                     let in_mcl = matches!(p.body, PatternBody::Net(_));
                     pattern_at = Some(if in_mcl { id } else { scope::DefId { item: 0, ..id } });

@@ -69,7 +69,19 @@ pub fn compile_mission(
     mission: &Mission,
     mission_file: SourceFile,
 ) -> Result<Net, CompileError> {
-    let name = mission.name.as_ref().map(|n| n.text.clone()).unwrap_or_else(|| "mission".to_string());
+    // The name every tool gives it (`scope::mission_names`), found by its
+    // place among the missions of its file.
+    let parsed = crate::queries::parse(db, mission_file);
+    let names = scope::mission_names(&parsed.file);
+    let place = parsed.file.items.iter().filter_map(|i| match i {
+        Item::Mission(m) => Some(m),
+        _ => None,
+    });
+    let name = place
+        .zip(&names)
+        .find(|(m, _)| m.span == mission.span && m.name == mission.name)
+        .map(|(_, n)| n.clone())
+        .unwrap_or_else(|| mission.name.as_ref().map_or_else(|| "mission".to_string(), |n| n.text.clone()));
     let mut cx = Composer {
         db,
         scope: scope::scope(db, root),
@@ -543,7 +555,8 @@ pub fn value_json(v: &Value) -> String {
 
 /// A compiled mission.
 pub struct CompiledMission {
-    /// The mission's name (`mission` for an anonymous one).
+    /// The mission's name (`scope::mission_names`: `mission`, or `mission1`,
+    /// `mission2`, ... for the anonymous ones of a file that has several).
     pub name: String,
     pub net: Net,
 }
