@@ -93,7 +93,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
     for a in &domain.actions {
         let Some(m) = &a.mcl else {
             warnings.push(format!(
-                "{}:{}: action `{}` has no `:mcl` mission: a plan using it cannot run on the vehicle",
+                "{}:{}: action `{}` has no MCL mission (an `mcl` line, a `pddl_map` mapping or a `:mcl` field): a plan using it cannot run on the vehicle",
                 domain.file, a.line, a.name
             ));
             continue;

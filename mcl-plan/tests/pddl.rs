@@ -44,7 +44,12 @@ fn parses_the_seed_constructs() {
     assert_eq!(mv.params.len(), 3);
     assert!(mv.conds.contains(&Cond::Equal(Term::Var(1), Term::Var(2), false)), "l1 != l2 (Extract 7.1)");
     assert!(matches!(mv.conds[1], Cond::Compare(..)), "attribute comparison");
-    let m = mv.mcl.as_ref().unwrap();
+    // Plain STRIPS: the mission comes from the `pddl_map` of operators.mcl.
+    assert!(mv.mcl.is_none());
+    let mut d = d;
+    let prog = mcl_plan::model::McProgram::load(&root().join("examples/planning/move/operators.mcl")).unwrap();
+    mcl_plan::model::apply_pddl_map(&prog, &mut d).unwrap();
+    let m = d.actions[0].mcl.as_ref().unwrap();
     assert_eq!(m.name, "MclMove", "case kept");
     assert_eq!(
         m.args,

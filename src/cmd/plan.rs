@@ -116,16 +116,47 @@ pub fn run(o: Options) -> u8 {
             return 2;
         }
     }
-    let beside = |name: &str| operators.as_ref().map(|m| m.parent().unwrap_or(Path::new(".")).join(name));
-    let Some(domain_path) = o.domain.clone().or_else(|| beside("domain.pddl")) else {
-        eprintln!("error: no domain: give --domain D.pddl (or FILE.mcl with domain.pddl beside it)");
-        return 2;
+    // The .mcl program: its compiler diagnostics first, then its planning
+    // blocks (`planning { ... }`: the problem is written in MCL) and its
+    // mappings of PDDL actions (`pddl_map { ... }`).
+    let mut prog = None;
+    if let Some(ops_path) = &operators {
+        if let Err(report) = check_mcl(ops_path) {
+            eprint!("{report}");
+            eprintln!("error: the mission operators in `{}` have errors", ops_path.display());
+            return 2;
+        }
+        match mcl_plan::model::McProgram::load(ops_path) {
+            Ok(p) => prog = Some(p),
+            Err(e) => {
+                print_errors(&e);
+                return 2;
+            }
+        }
+    }
+    // The MCL planning model, unless PDDL files are given explicitly.
+    let from_mcl =
+        o.domain.is_none() && o.problem.is_none() && prog.as_ref().is_some_and(|p| p.has_planning());
+    let loaded = if from_mcl {
+        mcl_plan::model::to_model(prog.as_ref().expect("from_mcl implies a program"))
+    } else {
+        let beside = |name: &str| operators.as_ref().map(|m| m.parent().unwrap_or(Path::new(".")).join(name));
+        let Some(domain_path) = o.domain.clone().or_else(|| beside("domain.pddl")) else {
+            eprintln!("error: no domain: give --domain D.pddl (or FILE.mcl with domain.pddl beside it, or a `planning` block in FILE.mcl)");
+            return 2;
+        };
+        let Some(problem_path) = o.problem.clone().or_else(|| beside("problem.pddl")) else {
+            eprintln!("error: no problem: give --problem P.pddl (or FILE.mcl with problem.pddl beside it, or a `planning` block in FILE.mcl)");
+            return 2;
+        };
+        mcl_plan::load(&domain_path, &problem_path).and_then(|(mut d, p)| {
+            if let Some(prog) = &prog {
+                mcl_plan::model::apply_pddl_map(prog, &mut d)?;
+            }
+            Ok((d, p))
+        })
     };
-    let Some(problem_path) = o.problem.clone().or_else(|| beside("problem.pddl")) else {
-        eprintln!("error: no problem: give --problem P.pddl (or FILE.mcl with problem.pddl beside it)");
-        return 2;
-    };
-    let (domain, problem) = match mcl_plan::load(&domain_path, &problem_path) {
+    let (domain, problem) = match loaded {
         Ok(x) => x,
         Err(e) => {
             print_errors(&e);
@@ -133,11 +164,6 @@ pub fn run(o: Options) -> u8 {
         }
     };
     if let Some(ops_path) = &operators {
-        if let Err(report) = check_mcl(ops_path) {
-            eprint!("{report}");
-            eprintln!("error: the mission operators in `{}` have errors", ops_path.display());
-            return 2;
-        }
         let ops = match mcl_plan::mcl::load_operators(ops_path) {
             Ok(ops) => ops,
             Err(errs) => {
