@@ -430,7 +430,7 @@ pub fn apply_pddl_map(prog: &McProgram, d: &mut Domain) -> Result<(), Vec<Error>
                 continue;
             }
             seen.push(name.clone());
-            let known: Vec<&str> = d.actions.iter().map(|a| a.name.as_str()).collect();
+            let known: Vec<String> = d.actions.iter().map(|a| a.name.clone()).collect();
             let Some(a) = d.actions.iter_mut().find(|a| a.name == name) else {
                 errors.push(f.error(
                     m.action.span,
