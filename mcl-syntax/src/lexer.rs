@@ -543,6 +543,27 @@ mod tests {
     fn arrows_end_identifiers() {
         assert_eq!(kinds("begin->T0"), vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]);
         assert_eq!(kinds("a → b"), vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]);
+        // Comparisons of planning expressions; `=` alone stays `Eq`.
+        assert_eq!(
+            kinds("a!=b<=c<d>=e>f==g=h"),
+            vec![
+                Token::Ident("a"),
+                Token::Cmp("!="),
+                Token::Ident("b"),
+                Token::Cmp("<="),
+                Token::Ident("c"),
+                Token::Cmp("<"),
+                Token::Ident("d"),
+                Token::Cmp(">="),
+                Token::Ident("e"),
+                Token::Cmp(">"),
+                Token::Ident("f"),
+                Token::Cmp("=="),
+                Token::Ident("g"),
+                Token::Eq,
+                Token::Ident("h"),
+            ]
+        );
     }
 
     #[test]
