@@ -156,6 +156,7 @@ pub fn run(o: Options) -> u8 {
             Ok((d, p))
         })
     };
+    let mut run_ops: Option<PathBuf> = None;
     let (domain, problem) = match loaded {
         Ok(x) => x,
         Err(e) => {
@@ -181,6 +182,29 @@ pub fn run(o: Options) -> u8 {
             print_errors(&errors);
             return 2;
         }
+        // A run plays the missions of one file: the one that defines the
+        // mission operators (FILE.mcl itself, or the file it imports them from).
+        let mut files: Vec<&Path> = Vec::new();
+        for a in &domain.actions {
+            if let Some(f) = a.mcl.as_ref().and_then(|m| ops.iter().find(|o| o.name == m.name)).map(|o| o.file.as_path()) {
+                if !files.contains(&f) {
+                    files.push(f);
+                }
+            }
+        }
+        match files[..] {
+            [] => {}
+            [f] => run_ops = Some(f.to_path_buf()),
+            _ if o.execute.is_some() => {
+                let list: Vec<String> = files.iter().map(|f| format!("`{}`", f.display())).collect();
+                eprintln!(
+                    "error: --run plays the mission operators of one file, but they are defined in {}: move them into one file",
+                    list.join(" and ")
+                );
+                return 2;
+            }
+            _ => {}
+        }
     }
     if let Some(x) = o.execute {
         if o.validate.is_some() {
@@ -191,7 +215,8 @@ pub fn run(o: Options) -> u8 {
             eprintln!("error: --run needs the mission operators: give FILE.mcl (or --operators FILE.mcl)");
             return 2;
         };
-        return execute(domain, problem, &ops, algorithm(o.search, o.heuristic), o.max_states, x);
+        let run_ops = run_ops.unwrap_or_else(|| ops.clone());
+        return execute(domain, problem, &ops, &run_ops, algorithm(o.search, o.heuristic), o.max_states, x);
     }
     if let Some(plan_path) = &o.validate {
         let text = match std::fs::read_to_string(plan_path) {
@@ -414,6 +439,7 @@ const AAC_CONNECT_WAIT: std::time::Duration = std::time::Duration::from_secs(10)
 fn execute(
     domain: mcl_plan::Domain,
     problem: mcl_plan::Problem,
+    file: &Path,
     ops: &Path,
     alg: Algorithm,
     max_states: u64,
@@ -441,7 +467,7 @@ fn execute(
         eprintln!("error: --time-limit must be a number of seconds ≥ 0");
         return 2;
     }
-    let world_path = x.world.clone().unwrap_or_else(|| ops.parent().unwrap_or(Path::new(".")).join("world.xml"));
+    let world_path = x.world.clone().unwrap_or_else(|| file.parent().unwrap_or(Path::new(".")).join("world.xml"));
     let xml = match std::fs::read_to_string(&world_path) {
         Ok(t) => t,
         Err(e) => {
@@ -512,7 +538,7 @@ fn execute(
     let report = match &x.aac {
         None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
         Some(addr) => {
-            let stem = ops.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+            let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
             let mut aac = match connect_aac(addr, x.token.clone(), format!("plan:{stem}"), AAC_CONNECT_WAIT) {
                 Ok(a) => a,
                 Err(e) => {
