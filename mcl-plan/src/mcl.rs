@@ -102,7 +102,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
             None => {
                 let known: Vec<&str> = ops.iter().map(|o| o.name.as_str()).collect();
                 errors.push(Error {
-                    file: domain.file.clone(),
+                    file: m.file.clone().unwrap_or_else(|| domain.file.clone()),
                     line: m.line,
                     column: m.column,
                     message: format!(
@@ -114,7 +114,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
                 });
             }
             Some(o) if o.params.len() != m.args.len() => errors.push(Error {
-                file: domain.file.clone(),
+                file: m.file.clone().unwrap_or_else(|| domain.file.clone()),
                 line: m.line,
                 column: m.column,
                 message: format!(

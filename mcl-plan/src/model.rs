@@ -408,7 +408,7 @@ fn operator(
                     });
                 }
                 let lc = f.error(c.name.span, "");
-                a.mcl = Some(MclCall { name: c.name.text.clone(), args, line: lc.line, column: lc.column });
+                a.mcl = Some(MclCall { name: c.name.text.clone(), args, line: lc.line, column: lc.column, file: Some(lc.file) });
             }
         }
     }
@@ -494,7 +494,7 @@ pub fn apply_pddl_map(prog: &McProgram, d: &mut Domain) -> Result<(), Vec<Error>
                 }
             }
             let lc = f.error(m.call.name.span, "");
-            a.mcl = Some(MclCall { name: m.call.name.text.clone(), args, line: lc.line, column: lc.column });
+            a.mcl = Some(MclCall { name: m.call.name.text.clone(), args, line: lc.line, column: lc.column, file: Some(lc.file) });
         }
     }
     if errors.is_empty() {

@@ -146,8 +146,10 @@ fn grounding_errors() {
         .contains("is for domain `other`"));
     assert!(bad("(define (problem p) (:domain m) (:objects a - loc) (:init (at a a)) (:goal (at a)))")
         .contains("takes 1 argument(s), given 2"));
-    // A missing attribute of an :mcl argument.
-    let d = parse_domain("move.pddl", &example("examples/planning/move/domain.pddl")).unwrap();
+    // A missing attribute of a mission argument (the `pddl_map` of operators.mcl).
+    let mut d = parse_domain("move.pddl", &example("examples/planning/move/domain.pddl")).unwrap();
+    let prog = mcl_plan::model::McProgram::load(&root().join("examples/planning/move/operators.mcl")).unwrap();
+    mcl_plan::model::apply_pddl_map(&prog, &mut d).unwrap();
     let p = parse_problem("p.pddl", &example("examples/planning/move/problem.pddl").replace("(= (z survey) 12)", ""))
         .unwrap();
     // z survey missing: the comparison is false, the action is not grounded, no plan.
@@ -157,7 +159,7 @@ fn grounding_errors() {
         .unwrap();
     let e = mcl_plan::ground(&d, &p).map(|_| ()).unwrap_err();
     assert!(e[0].message.contains("needs attribute `y` of `survey`"), "{e:?}");
-    assert!(e[0].to_string().starts_with("move.pddl:15:"), "{}", e[0]);
+    assert!(e[0].to_string().contains("operators.mcl:27:"), "at the mapping: {}", e[0]);
 }
 
 #[test]
