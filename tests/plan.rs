@@ -229,7 +229,10 @@ fn the_mcl_planning_model_and_the_pddl_files_give_the_same_plan() {
     assert!(stdout(&a).contains("mcl:    MclMove( 40, 25.5, 12 )"), "{}", stdout(&a));
     assert_eq!(stdout(&a), stdout(&b));
     assert!(!stderr(&b).contains("warning"), "the pddl_map gives `move` its mission: {}", stderr(&b));
-    assert_eq!(stdout(&mcl(&["examples/planning/move/move.mcl"])), "(move ictineu dock survey)\n; cost = 1 (unit cost)\n");
+    assert_eq!(
+        stdout(&mcl(&["examples/planning/move/move.mcl"])),
+        "(move ictineu dock survey)\n; cost = 1 (unit cost)\n"
+    );
 }
 
 #[test]
@@ -259,7 +262,8 @@ fn errors_in_planning_blocks_and_pddl_maps_stop_mcl_plan_with_file_and_line() {
     let o = mcl(&[ops.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
-        stderr(&o).contains("ops.mcl:5:5: the PDDL domain `move`") && stderr(&o).contains("has no action `jump` (it has: move)"),
+        stderr(&o).contains("ops.mcl:5:5: the PDDL domain `move`")
+            && stderr(&o).contains("has no action `jump` (it has: move)"),
         "{}",
         stderr(&o)
     );

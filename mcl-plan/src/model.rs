@@ -214,7 +214,10 @@ pub fn to_model(prog: &McProgram) -> Result<(Domain, Problem), Vec<Error>> {
                             if x.goal {
                                 p.goal.push((g, fact.negated.is_none()));
                             } else if fact.negated.is_some() {
-                                errors.push(f.error(fact.span, "the initial state lists the facts that are true: remove `not` (closed world)"));
+                                errors.push(f.error(
+                                    fact.span,
+                                    "the initial state lists the facts that are true: remove `not` (closed world)",
+                                ));
                             } else {
                                 p.init.push(g);
                             }
@@ -264,7 +267,11 @@ fn note_relation(f: &McFile, fact: &ast::PlanFact, relations: &mut BTreeMap<Stri
     match relations.get(&r) {
         Some(&m) if m != n => errors.push(f.error(
             fact.relation.span,
-            format!("relation `{}` relates {m} entit{} elsewhere, {n} here", fact.relation.text, if m == 1 { "y" } else { "ies" }),
+            format!(
+                "relation `{}` relates {m} entit{} elsewhere, {n} here",
+                fact.relation.text,
+                if m == 1 { "y" } else { "ies" }
+            ),
         )),
         Some(_) => {}
         None => {
@@ -337,7 +344,8 @@ fn operator(
             OpPartKind::Precond(v) | OpPartKind::Add(v) | OpPartKind::Del(v) => {
                 for fact in v {
                     note_relation(f, fact, relations, errors);
-                    let atom = Atom { pred: lower(&fact.relation), args: fact.args().map(|n| term(n, errors)).collect() };
+                    let atom =
+                        Atom { pred: lower(&fact.relation), args: fact.args().map(|n| term(n, errors)).collect() };
                     match &part.kind {
                         OpPartKind::Precond(_) => a.pre.push(Literal { atom, positive: fact.negated.is_none() }),
                         _ if fact.negated.is_some() => errors.push(f.error(
@@ -379,7 +387,8 @@ fn operator(
             }
             OpPartKind::Mcl(c) => {
                 if a.mcl.is_some() {
-                    errors.push(f.error(part.keyword_span, format!("operator `{}` runs two MCL missions", o.name.text)));
+                    errors
+                        .push(f.error(part.keyword_span, format!("operator `{}` runs two MCL missions", o.name.text)));
                 }
                 let mut args = Vec::new();
                 for x in &c.args {
@@ -408,7 +417,13 @@ fn operator(
                     });
                 }
                 let lc = f.error(c.name.span, "");
-                a.mcl = Some(MclCall { name: c.name.text.clone(), args, line: lc.line, column: lc.column, file: Some(lc.file) });
+                a.mcl = Some(MclCall {
+                    name: c.name.text.clone(),
+                    args,
+                    line: lc.line,
+                    column: lc.column,
+                    file: Some(lc.file),
+                });
             }
         }
     }
@@ -465,7 +480,12 @@ pub fn apply_pddl_map(prog: &McProgram, d: &mut Domain) -> Result<(), Vec<Error>
                 if p.is_none() {
                     errors.push(f.error(
                         n.span,
-                        format!("`{}` is not a parameter of the mapping `{}( {} )`", n.text, m.action.text, names.join(", ")),
+                        format!(
+                            "`{}` is not a parameter of the mapping `{}( {} )`",
+                            n.text,
+                            m.action.text,
+                            names.join(", ")
+                        ),
                     ));
                 }
                 p
@@ -494,7 +514,13 @@ pub fn apply_pddl_map(prog: &McProgram, d: &mut Domain) -> Result<(), Vec<Error>
                 }
             }
             let lc = f.error(m.call.name.span, "");
-            a.mcl = Some(MclCall { name: m.call.name.text.clone(), args, line: lc.line, column: lc.column, file: Some(lc.file) });
+            a.mcl = Some(MclCall {
+                name: m.call.name.text.clone(),
+                args,
+                line: lc.line,
+                column: lc.column,
+                file: Some(lc.file),
+            });
         }
     }
     if errors.is_empty() {

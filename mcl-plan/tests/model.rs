@@ -14,7 +14,10 @@ fn root() -> PathBuf {
 fn plan_text(d: &mcl_plan::Domain, p: &mcl_plan::Problem) -> Vec<String> {
     let sol = mcl_plan::solve(d, p, Algorithm::Astar(Heuristic::Max), 1_000_000).unwrap();
     let Outcome::Plan(plan) = sol.outcome else { panic!("no plan") };
-    plan.steps.iter().map(|s| format!("{} {}", s.action, s.mcl.as_ref().map(|m| m.to_string()).unwrap_or_default())).collect()
+    plan.steps
+        .iter()
+        .map(|s| format!("{} {}", s.action, s.mcl.as_ref().map(|m| m.to_string()).unwrap_or_default()))
+        .collect()
 }
 
 #[test]

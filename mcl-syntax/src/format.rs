@@ -1251,7 +1251,13 @@ impl Printer<'_> {
                 if t.attrs.is_empty() {
                     self.semi_after(end);
                 } else {
-                    self.inline_list(end, t.span.end as usize, &t.attrs, |a| a.span.end as usize, |p, a| p.name(a, true));
+                    self.inline_list(
+                        end,
+                        t.span.end as usize,
+                        &t.attrs,
+                        |a| a.span.end as usize,
+                        |p, a| p.name(a, true),
+                    );
                 }
             }
             PlanDef::Entity(x) => {
@@ -1262,12 +1268,18 @@ impl Printer<'_> {
                 if x.values.is_empty() {
                     self.semi_after(end);
                 } else {
-                    self.inline_list(end, x.span.end as usize, &x.values, |v| v.span.end as usize, |p, v| {
-                        p.name(&v.name, true);
-                        let eq = p.tok_if(v.name.span.end as usize, Token::Eq);
-                        p.tok("=", eq, Class::Normal, true);
-                        p.value(&v.value, true);
-                    });
+                    self.inline_list(
+                        end,
+                        x.span.end as usize,
+                        &x.values,
+                        |v| v.span.end as usize,
+                        |p, v| {
+                            p.name(&v.name, true);
+                            let eq = p.tok_if(v.name.span.end as usize, Token::Eq);
+                            p.tok("=", eq, Class::Normal, true);
+                            p.value(&v.value, true);
+                        },
+                    );
                 }
             }
             PlanDef::Function(x) => {
@@ -1344,11 +1356,17 @@ impl Printer<'_> {
             OpPartKind::Precond(v) | OpPartKind::Add(v) | OpPartKind::Del(v) => {
                 self.inline_list(from, end, v, |f| f.span.end as usize, |p, f| p.plan_fact(f))
             }
-            OpPartKind::Expression(v) => self.inline_list(from, end, v, |x| x.span.end as usize, |p, x| {
-                p.plan_operand(&x.left, true);
-                p.tok(&x.op, Some(x.op_span), Class::Normal, true);
-                p.plan_operand(&x.right, true);
-            }),
+            OpPartKind::Expression(v) => self.inline_list(
+                from,
+                end,
+                v,
+                |x| x.span.end as usize,
+                |p, x| {
+                    p.plan_operand(&x.left, true);
+                    p.tok(&x.op, Some(x.op_span), Class::Normal, true);
+                    p.plan_operand(&x.right, true);
+                },
+            ),
             OpPartKind::Cost(c) => {
                 self.plan_operand(c, true);
                 self.semi_after(c.span.end as usize);

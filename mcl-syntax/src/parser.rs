@@ -1251,33 +1251,31 @@ where
     let end = just(Token::Semi).or_not().ignored();
     // type location { x; y; z; }  |  type robot;  |  type auv : robot;
     let attrs = braced(semi_list(name()), Vec::new).then_ignore(end.clone()).or(just(Token::Semi).to(Vec::new()));
-    let ty = word("type", "`type`")
-        .then(name())
-        .then(just(Token::Colon).ignore_then(name()).or_not())
-        .then(attrs)
-        .map_with(|(((keyword_span, name), parent), attrs), e| {
-            PlanDef::Type(PlanType { keyword_span, name, parent, attrs, span: Span::from(e.span()) })
-        });
+    let ty =
+        word("type", "`type`").then(name()).then(just(Token::Colon).ignore_then(name()).or_not()).then(attrs).map_with(
+            |(((keyword_span, name), parent), attrs), e| {
+                PlanDef::Type(PlanType { keyword_span, name, parent, attrs, span: Span::from(e.span()) })
+            },
+        );
     // entity location dock { x = 0; }  |  entity robot auv;
-    let attr_value = name()
-        .then_ignore(just(Token::Eq))
-        .then(value())
-        .map_with(|(name, value), e| AttrValue { name, value, span: Span::from(e.span()) });
-    let values =
-        braced(semi_list(attr_value), Vec::new).then_ignore(end.clone()).or(just(Token::Semi).to(Vec::new()));
+    let attr_value = name().then_ignore(just(Token::Eq)).then(value()).map_with(|(name, value), e| AttrValue {
+        name,
+        value,
+        span: Span::from(e.span()),
+    });
+    let values = braced(semi_list(attr_value), Vec::new).then_ignore(end.clone()).or(just(Token::Semi).to(Vec::new()));
     let entity = word("entity", "`entity`").then(name()).then(name()).then(values).map_with(
         |(((keyword_span, ty), name), values), e| {
             PlanDef::Entity(PlanEntity { keyword_span, ty, name, values, span: Span::from(e.span()) })
         },
     );
     // function distance( zone, zone );
-    let function = word("function", "`function`")
-        .then(name())
-        .then(plan_names())
-        .then_ignore(just(Token::Semi))
-        .map_with(|((keyword_span, name), params), e| {
-            PlanDef::Function(PlanFunction { keyword_span, name, params, span: Span::from(e.span()) })
-        });
+    let function =
+        word("function", "`function`").then(name()).then(plan_names()).then_ignore(just(Token::Semi)).map_with(
+            |((keyword_span, name), params), e| {
+                PlanDef::Function(PlanFunction { keyword_span, name, params, span: Span::from(e.span()) })
+            },
+        );
     // operator move( vehicle v, location l1 ) { precond { ... } ... }
     let typed = name().then(name()).map(|(ty, name)| TypedParam { ty, name });
     let typed_params = typed
@@ -1286,7 +1284,11 @@ where
         .collect::<Vec<_>>()
         .delimited_by(just(Token::LParen), just(Token::RParen));
     let expr = plan_operand()
-        .then(select! { Token::Cmp(s) => s.to_string(), Token::Eq => "=".to_string() }.map_with(|op, e| (op, Span::from(e.span()))).labelled("comparison"))
+        .then(
+            select! { Token::Cmp(s) => s.to_string(), Token::Eq => "=".to_string() }
+                .map_with(|op, e| (op, Span::from(e.span())))
+                .labelled("comparison"),
+        )
         .then(plan_operand())
         .map_with(|((left, (op, op_span)), right), e| PlanExpr { left, op, op_span, right, span: Span::from(e.span()) })
         .labelled("expression");
@@ -1297,7 +1299,10 @@ where
         word("expression", "`expression`")
             .then(braced(semi_list(expr), Vec::new))
             .map(|(k, x)| (k, OpPartKind::Expression(x))),
-        word("cost", "`cost`").then(plan_operand()).then_ignore(just(Token::Semi)).map(|(k, c)| (k, OpPartKind::Cost(c))),
+        word("cost", "`cost`")
+            .then(plan_operand())
+            .then_ignore(just(Token::Semi))
+            .map(|(k, c)| (k, OpPartKind::Cost(c))),
         word("mcl", "`mcl`").then(plan_call()).then_ignore(just(Token::Semi)).map(|(k, c)| (k, OpPartKind::Mcl(c))),
     ))
     .then_ignore(end.clone())
@@ -1315,14 +1320,15 @@ where
         Fact(PlanFact),
         Value(FunctionValue),
     }
-    let fvalue = name()
-        .then(plan_names())
-        .then_ignore(just(Token::Eq))
-        .then(value())
-        .map_with(|((name, args), value), e| Entry::Value(FunctionValue { name, args, value, span: Span::from(e.span()) }));
+    let fvalue =
+        name().then(plan_names()).then_ignore(just(Token::Eq)).then(value()).map_with(|((name, args), value), e| {
+            Entry::Value(FunctionValue { name, args, value, span: Span::from(e.span()) })
+        });
     let entry = fvalue.or(plan_fact().map(Entry::Fact));
-    let initial = word("initial", "`initial`").then(braced(semi_list(entry), Vec::new)).then_ignore(end.clone()).map_with(
-        |(keyword_span, entries), e| {
+    let initial = word("initial", "`initial`")
+        .then(braced(semi_list(entry), Vec::new))
+        .then_ignore(end.clone())
+        .map_with(|(keyword_span, entries), e| {
             let mut facts = Vec::new();
             let mut values = Vec::new();
             for x in entries {
@@ -1332,8 +1338,7 @@ where
                 }
             }
             PlanDef::Facts(PlanFacts { keyword_span, goal: false, facts, values, span: Span::from(e.span()) })
-        },
-    );
+        });
     let goal = word("goal", "`goal`").then(plan_facts()).then_ignore(end).map_with(|(keyword_span, facts), e| {
         PlanDef::Facts(PlanFacts { keyword_span, goal: true, facts, values: Vec::new(), span: Span::from(e.span()) })
     });
@@ -1341,7 +1346,9 @@ where
         .labelled("`type`, `entity`, `function`, `operator`, `initial` or `goal`");
     kw(Kw::Planning)
         .then(braced(plan_list(def), Vec::new))
-        .map_with(|(keyword_span, defs), e| Item::Planning(PlanningBlock { keyword_span, defs, span: Span::from(e.span()) }))
+        .map_with(|(keyword_span, defs), e| {
+            Item::Planning(PlanningBlock { keyword_span, defs, span: Span::from(e.span()) })
+        })
         .boxed()
 }
 
@@ -1359,6 +1366,8 @@ where
         .labelled("mapping `action( params ) -> Mission( args );`");
     kw(Kw::PddlMap)
         .then(braced(plan_list(mapping), Vec::new))
-        .map_with(|(keyword_span, maps), e| Item::PddlMap(PddlMapBlock { keyword_span, maps, span: Span::from(e.span()) }))
+        .map_with(|(keyword_span, maps), e| {
+            Item::PddlMap(PddlMapBlock { keyword_span, maps, span: Span::from(e.span()) })
+        })
         .boxed()
 }

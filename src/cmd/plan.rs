@@ -135,8 +135,7 @@ pub fn run(o: Options) -> u8 {
         }
     }
     // The MCL planning model, unless PDDL files are given explicitly.
-    let from_mcl =
-        o.domain.is_none() && o.problem.is_none() && prog.as_ref().is_some_and(|p| p.has_planning());
+    let from_mcl = o.domain.is_none() && o.problem.is_none() && prog.as_ref().is_some_and(|p| p.has_planning());
     let loaded = if from_mcl {
         mcl_plan::model::to_model(prog.as_ref().expect("from_mcl implies a program"))
     } else {
@@ -186,7 +185,9 @@ pub fn run(o: Options) -> u8 {
         // mission operators (FILE.mcl itself, or the file it imports them from).
         let mut files: Vec<&Path> = Vec::new();
         for a in &domain.actions {
-            if let Some(f) = a.mcl.as_ref().and_then(|m| ops.iter().find(|o| o.name == m.name)).map(|o| o.file.as_path()) {
+            if let Some(f) =
+                a.mcl.as_ref().and_then(|m| ops.iter().find(|o| o.name == m.name)).map(|o| o.file.as_path())
+            {
                 if !files.contains(&f) {
                     files.push(f);
                 }

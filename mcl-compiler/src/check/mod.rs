@@ -62,10 +62,8 @@ pub fn check_item<'db>(db: &'db dyn Db, key: ItemCheckKey<'db>) -> LocalDiagnost
     if matches!(parsed.file.items.first(), Some(mcl_syntax::ast::Item::Constraints(_))) {
         constraints::check(&mut cx);
     }
-    if matches!(
-        parsed.file.items.first(),
-        Some(mcl_syntax::ast::Item::Planning(_) | mcl_syntax::ast::Item::PddlMap(_))
-    ) {
+    if matches!(parsed.file.items.first(), Some(mcl_syntax::ast::Item::Planning(_) | mcl_syntax::ast::Item::PddlMap(_)))
+    {
         planning::check(&mut cx);
     }
     unused::check_params(&mut cx);

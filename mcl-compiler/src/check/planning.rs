@@ -63,7 +63,8 @@ fn duplicate(cx: &mut Cx<'_>, what: &str, name: &Name, first: &Name) {
 }
 
 fn check_planning(cx: &mut Cx<'_>, b: &PlanningBlock) {
-    let mut m = Model { types: HashMap::new(), entities: HashMap::new(), functions: HashMap::new(), relations: HashMap::new() };
+    let mut m =
+        Model { types: HashMap::new(), entities: HashMap::new(), functions: HashMap::new(), relations: HashMap::new() };
     // Definitions first: a name may be used before it is defined.
     for d in &b.defs {
         match d {
@@ -124,7 +125,10 @@ fn check_planning(cx: &mut Cx<'_>, b: &PlanningBlock) {
                             .with_label(v.name.span, format!("not an attribute of `{}`", e.ty.text));
                             let d = cx.suggest(d, &v.name.text, attrs.iter().map(|a| a.text.as_str()));
                             let d = if d.help.is_none() {
-                                d.with_help(format!("declare it in the type: `type {} {{ {}; }}`", e.ty.text, v.name.text))
+                                d.with_help(format!(
+                                    "declare it in the type: `type {} {{ {}; }}`",
+                                    e.ty.text, v.name.text
+                                ))
                             } else {
                                 d
                             };
@@ -212,16 +216,17 @@ fn resolve<'a>(cx: &mut Cx<'_>, m: &Model<'a>, params: &Params<'a>, n: &'a Name)
     } else {
         format!("unknown entity `{}`", n.text)
     };
-    let d = Diagnostic::error(codes::PLAN_UNBOUND, msg, n.span).with_label(
-        n.span,
-        if in_op { "unbound variable" } else { "no `entity` of the planning block has this name" },
-    );
+    let d = Diagnostic::error(codes::PLAN_UNBOUND, msg, n.span)
+        .with_label(n.span, if in_op { "unbound variable" } else { "no `entity` of the planning block has this name" });
     let names: Vec<&str> = params.0.iter().map(|p| p.name.text.as_str()).chain(m.entities.keys().copied()).collect();
     let d = cx.suggest(d, &n.text, names.into_iter());
     let d = if d.help.is_some() {
         d
     } else if in_op {
-        d.with_help(format!("add it to the operator's parameters, e.g. `( TYPE {}, ... )`, or define the entity", n.text))
+        d.with_help(format!(
+            "add it to the operator's parameters, e.g. `( TYPE {}, ... )`, or define the entity",
+            n.text
+        ))
     } else {
         d.with_help(format!("define it: `entity TYPE {};`", n.text))
     };
@@ -247,7 +252,9 @@ fn check_fact<'a>(cx: &mut Cx<'_>, m: &mut Model<'a>, params: &Params<'a>, f: &'
                 f.relation.span,
             )
             .with_label(first, format!("first used with {}", entities(k)))
-            .with_help("a fact is `entity relation` (a quality) or `entity relation entity`; a relation keeps one form"),
+            .with_help(
+                "a fact is `entity relation` (a quality) or `entity relation entity`; a relation keeps one form",
+            ),
         ),
         Some(_) => {}
         None => {
@@ -301,7 +308,11 @@ fn check_function_use<'a>(cx: &mut Cx<'_>, m: &Model<'a>, params: &Params<'a>, f
             let d = Diagnostic::error(codes::PLAN_UNKNOWN_ATTRIBUTE, format!("unknown function `{}`", f.text), f.span)
                 .with_label(f.span, "no `function` of the planning block has this name");
             let d = cx.suggest(d, &f.text, m.functions.keys().copied());
-            let d = if d.help.is_none() { d.with_help(format!("declare it: `function {}( TYPE, ... );`", f.text)) } else { d };
+            let d = if d.help.is_none() {
+                d.with_help(format!("declare it: `function {}( TYPE, ... );`", f.text))
+            } else {
+                d
+            };
             cx.out.push(d);
         }
         Some(decl) if decl.params.len() != args.len() => cx.out.push(

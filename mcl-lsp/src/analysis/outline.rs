@@ -245,7 +245,9 @@ pub fn document_symbols(a: &Analysis<'_>, file: SourceFile) -> Vec<DocumentSymbo
                 let kids = b
                     .maps
                     .iter()
-                    .map(|m| sym(a, file, m.action.text.clone(), None, SymbolKind::METHOD, m.span, m.action.span, vec![]))
+                    .map(|m| {
+                        sym(a, file, m.action.text.clone(), None, SymbolKind::METHOD, m.span, m.action.span, vec![])
+                    })
                     .collect();
                 out.push(sym(a, file, "pddl_map".into(), None, SymbolKind::NAMESPACE, b.span, b.keyword_span, kids));
             }
