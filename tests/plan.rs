@@ -200,3 +200,71 @@ fn validates_plans() {
         "invalid plan: step 1 (gotoop auv deploy inspection): precondition (position_ok auv) does not hold\n"
     );
 }
+
+/// The planning model written in MCL (`planning { ... }`, docs/language.md
+/// section 13) and the same problem in PDDL give the same plan.
+#[test]
+fn the_mcl_planning_model_and_the_pddl_files_give_the_same_plan() {
+    let mcl_form = mcl(&["examples/planning/cable/planning.mcl"]);
+    assert_eq!(mcl_form.status.code(), Some(0), "{}", stderr(&mcl_form));
+    assert_eq!(stdout(&mcl_form), SEED_PLAN, "the seed's seven steps");
+    let pddl_form = mcl(&["examples/planning/cable/cable.mcl"]);
+    assert_eq!(stdout(&pddl_form), stdout(&mcl_form));
+    for format in ["steps", "json"] {
+        let a = mcl(&["examples/planning/cable/planning.mcl", "--format", format]);
+        let b = mcl(&["examples/planning/cable/cable.mcl", "--format", format]);
+        assert_eq!(stdout(&a), stdout(&b), "--format {format}");
+    }
+    // BFS: the fewest steps, the same seven.
+    let a = mcl(&["examples/planning/cable/planning.mcl", "--search", "bfs"]);
+    assert_eq!(stdout(&a), SEED_PLAN);
+
+    // Extracts 7.1-7.3: move.mcl in MCL; operators.mcl with a plain STRIPS
+    // domain.pddl whose action gets its mission from a `pddl_map`.
+    let a = mcl(&["examples/planning/move/move.mcl", "--format", "steps"]);
+    let b = mcl(&["examples/planning/move/operators.mcl", "--format", "steps"]);
+    assert_eq!(a.status.code(), Some(0), "{}", stderr(&a));
+    assert_eq!(b.status.code(), Some(0), "{}", stderr(&b));
+    assert!(stdout(&a).contains("1. (move ictineu dock survey)"), "{}", stdout(&a));
+    assert!(stdout(&a).contains("mcl:    MclMove( 40, 25.5, 12 )"), "{}", stdout(&a));
+    assert_eq!(stdout(&a), stdout(&b));
+    assert!(!stderr(&b).contains("warning"), "the pddl_map gives `move` its mission: {}", stderr(&b));
+    assert_eq!(
+        stdout(&mcl(&["examples/planning/move/move.mcl"])),
+        "(move ictineu dock survey)\n; cost = 1 (unit cost)\n"
+    );
+}
+
+#[test]
+fn errors_in_planning_blocks_and_pddl_maps_stop_mcl_plan_with_file_and_line() {
+    let dir = tmp("mcl-model-errors");
+    std::fs::copy(root().join("examples/vehicle.mcl"), dir.join("vehicle.mcl")).unwrap();
+    // A checked error (E0702) stops `mcl plan` with the compiler's report.
+    let bad = dir.join("bad.mcl");
+    std::fs::write(
+        &bad,
+        "import \"vehicle.mcl\";\nmission Go( x ) { Goto( [x] ) }\n\nplanning {\n    type place { x; }\n    entity place a { x = 1; }\n    operator go( place p ) {\n        add { q here; }\n        mcl Go( p.x );\n    }\n    goal { a here; }\n}\n",
+    )
+    .unwrap();
+    let o = mcl(&[bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("E0702"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.mcl:8:15"), "{}", stderr(&o));
+    // A pddl_map naming an action the PDDL domain lacks: at the mapping's line.
+    let (_, _) = write(
+        &dir,
+        &std::fs::read_to_string(root().join("examples/planning/move/domain.pddl")).unwrap(),
+        &std::fs::read_to_string(root().join("examples/planning/move/problem.pddl")).unwrap(),
+    );
+    let ops = dir.join("ops.mcl");
+    std::fs::write(&ops, "import \"vehicle.mcl\";\nmission Go( x ) { Goto( [x] ) }\n\npddl_map {\n    jump( v, a, b ) -> Go( b.x );\n}\n")
+        .unwrap();
+    let o = mcl(&[ops.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("ops.mcl:5:5: the PDDL domain `move`")
+            && stderr(&o).contains("has no action `jump` (it has: move)"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -320,3 +320,30 @@ fn bad_input_is_reported() {
     let o = mcl(&[CABLE, "--mock"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// The cable mission written in MCL (`planning.mcl`) runs as its PDDL form
+/// does: the same plans, steps and outcome with the same seed.
+#[test]
+fn the_mcl_planning_model_runs_like_the_pddl_files() {
+    let run = |file: &str, trace: &str| {
+        let t = tmp(trace);
+        let ts = t.display().to_string();
+        let o =
+            mcl(&[file, "--run", "--mock", "--scenario", SCENARIO, "--virtual-time", "--trace", &ts, "--seed", "7"]);
+        let rs: Vec<Value> = std::fs::read_to_string(&t)
+            .unwrap_or_default()
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("a JSON line"))
+            .collect();
+        (o, rs)
+    };
+    let (a, ra) = run("examples/planning/cable/planning.mcl", "mcl-form.jsonl");
+    let (b, rb) = run(CABLE, "pddl-form.jsonl");
+    assert_eq!(a.status.code(), Some(0), "{}\n{}", text(&a.stdout), text(&a.stderr));
+    assert_eq!(b.status.code(), Some(0));
+    assert_eq!(strings(&kind(&ra, "plan")[0]["steps"]), SEED_PLAN);
+    let plans =
+        |rs: &[Value]| kind(rs, "plan").iter().map(|p| (p["steps"].clone(), p["calls"].clone())).collect::<Vec<_>>();
+    assert_eq!(plans(&ra), plans(&rb));
+    assert_eq!(kind(&ra, "outcome"), kind(&rb, "outcome"));
+}

@@ -41,7 +41,7 @@ module.exports = grammar({
     global: _ => [
       'import', 'actions', 'events', 'pattern', 'patterns', 'tasks', 'mission', 'mcl_plan_op', 'constraints',
       'places', 'transitions', 'arcs', 'while', 'if', 'then', 'else', 'do', 'parallel', 'and', 'or', 'try',
-      'catch', 'not', 'monitor', 'condition', 'while_condition',
+      'catch', 'not', 'monitor', 'condition', 'while_condition', 'planning', 'pddl_map',
     ],
   },
 
@@ -58,6 +58,8 @@ module.exports = grammar({
       $.tasks_block,
       $.mission,
       $.constraints_block,
+      $.planning_block,
+      $.pddl_map_block,
     ),
 
     // import "vehicle.mcl";
@@ -243,6 +245,87 @@ module.exports = grammar({
     label_ref: $ => seq(
       optional(seq(field('mission', $.identifier), ':')),
       field('label', $.identifier),
+    ),
+
+    // planning { type ...; entity ...; function ...; operator ... { ... } initial { ... } goal { ... } }
+    // (docs/language.md, section 13). Its words are contextual.
+    planning_block: $ => seq('planning', '{', repeat($._plan_def), '}'),
+    _plan_def: $ => choice($.plan_type, $.plan_entity, $.plan_function, $.plan_operator, $.plan_initial, $.plan_goal),
+    plan_type: $ => seq(
+      'type',
+      field('name', $.identifier),
+      optional(seq(':', field('parent', $.identifier))),
+      choice(seq('{', repeat(seq(field('attribute', $.identifier), ';')), '}', optional(';')), ';'),
+    ),
+    plan_entity: $ => seq(
+      'entity',
+      field('type', $.identifier),
+      field('name', $.identifier),
+      choice(seq('{', repeat($.attribute_value), '}', optional(';')), ';'),
+    ),
+    attribute_value: $ => seq(field('name', $.identifier), '=', field('value', $._value), ';'),
+    plan_function: $ => seq('function', field('name', $.identifier), field('parameters', $.parameters), ';'),
+    plan_operator: $ => seq(
+      'operator',
+      field('name', $.identifier),
+      '(',
+      commaSep($.typed_parameter),
+      ')',
+      '{',
+      repeat($._op_part),
+      '}',
+      optional(';'),
+    ),
+    typed_parameter: $ => seq(field('type', $.identifier), field('name', $.identifier)),
+    _op_part: $ => choice($.fact_list, $.expression_list, $.cost, $.mcl_line),
+    fact_list: $ => seq(
+      field('kind', choice('precond', 'add', 'del')),
+      '{',
+      repeat(seq($.fact, ';')),
+      '}',
+      optional(';'),
+    ),
+    fact: $ => seq(
+      optional('not'),
+      field('subject', $.identifier),
+      field('relation', $.identifier),
+      optional(field('object', $.identifier)),
+    ),
+    expression_list: $ => seq('expression', '{', repeat(seq($.expression, ';')), '}', optional(';')),
+    expression: $ => seq(
+      field('left', $._operand),
+      field('operator', choice('!=', '==', '=', '<', '<=', '>', '>=')),
+      field('right', $._operand),
+    ),
+    cost: $ => seq('cost', field('value', $._operand), ';'),
+    mcl_line: $ => seq('mcl', field('call', $.mission_call), ';'),
+    mission_call: $ => seq(field('name', $.identifier), '(', commaSep($._operand), ')'),
+    _operand: $ => choice($.attribute, $.function_value, $.identifier, $.number, $.string),
+    attribute: $ => seq(field('entity', $.identifier), '.', field('name', $.identifier)),
+    function_value: $ => seq(field('name', $.identifier), field('arguments', $.parameters)),
+    plan_initial: $ => seq(
+      'initial',
+      '{',
+      repeat(seq(choice($.fact, $.function_assignment), ';')),
+      '}',
+      optional(';'),
+    ),
+    function_assignment: $ => seq(
+      field('name', $.identifier),
+      field('arguments', $.parameters),
+      '=',
+      field('value', $._value),
+    ),
+    plan_goal: $ => seq('goal', '{', repeat(seq($.fact, ';')), '}', optional(';')),
+
+    // pddl_map { move( v, l1, l2 ) -> MclMove( l2.x, l2.y, l2.z ); }
+    pddl_map_block: $ => seq('pddl_map', '{', repeat($.mapping), '}'),
+    mapping: $ => seq(
+      field('action', $.identifier),
+      field('parameters', $.parameters),
+      $._arrow,
+      field('call', $.mission_call),
+      ';',
     ),
 
     // Values: call arguments and action parameters.

@@ -51,6 +51,15 @@ pub const COORDINATION_INCONCLUSIVE: &str = "W0407";
 /// `mcl-coord` reports them (its tests check their explanations).
 pub const COORDINATION: &[&str] = &[DEADLOCKING_CONSTRAINTS, COORDINATION_INCONCLUSIVE];
 
+// Planning (`planning { ... }`, `pddl_map { ... }`).
+pub const PLAN_UNKNOWN_TYPE: &str = "E0701";
+pub const PLAN_UNBOUND: &str = "E0702";
+pub const PLAN_UNKNOWN_ATTRIBUTE: &str = "E0703";
+pub const PLAN_RELATION_ARITY: &str = "E0704";
+pub const PLAN_MISSION: &str = "E0705";
+pub const PLAN_DUPLICATE: &str = "E0706";
+pub const PLAN_MAP_PARAMETER: &str = "E0707";
+
 // Imports.
 pub const IMPORT_NOT_FOUND: &str = "E0501";
 pub const IMPORT_CYCLE: &str = "E0502";
@@ -121,6 +130,13 @@ registry! {
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
     "E0601" => "building block that breaks the block properties",
+    "E0701" => "unknown planning type",
+    "E0702" => "unknown entity or unbound variable in planning",
+    "E0703" => "unknown attribute or function in planning",
+    "E0704" => "relation or function used with the wrong number of entities",
+    "E0705" => "planning operator runs an unknown mission or with the wrong arity",
+    "E0706" => "duplicate planning definition",
+    "E0707" => "mapping argument that is not a parameter of the mapping",
     "W0901" => "unused definition",
     "W0902" => "unused mission parameter",
 }

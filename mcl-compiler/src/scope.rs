@@ -124,7 +124,7 @@ pub fn file_defs(db: &dyn Db, file: SourceFile) -> Vec<(DefId, String)> {
                     emit(DefKind::Mission, 0, n);
                 }
             }
-            Item::Import(_) | Item::Constraints(_) => {}
+            Item::Import(_) | Item::Constraints(_) | Item::Planning(_) | Item::PddlMap(_) => {}
         }
     }
     out

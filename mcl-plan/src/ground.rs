@@ -757,10 +757,10 @@ impl Ctx<'_> {
                         None => {
                             let oname = self.objects.get(o as usize).cloned().unwrap_or_default();
                             let e = err(
-                                &self.d.file,
+                                m.file.as_deref().unwrap_or(&self.d.file),
                                 m.line,
                                 format!(
-                                    "{}: the :mcl argument needs attribute `{attr}` of `{oname}`, which {} does not give (add `(= ({attr} {oname}) VALUE)` to :init)",
+                                    "{}: the mission's argument needs attribute `{attr}` of `{oname}`, which {} does not give (add `(= ({attr} {oname}) VALUE)` to :init)",
                                     self.name(ai, b),
                                     self.p.file
                                 ),

@@ -19,6 +19,7 @@ pub mod gen;
 pub mod ground;
 pub mod heuristic;
 pub mod mcl;
+pub mod model;
 pub mod pddl;
 pub mod plan;
 pub mod run;

@@ -93,7 +93,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
     for a in &domain.actions {
         let Some(m) = &a.mcl else {
             warnings.push(format!(
-                "{}:{}: action `{}` has no `:mcl` mission: a plan using it cannot run on the vehicle",
+                "{}:{}: action `{}` has no MCL mission (an `mcl` line, a `pddl_map` mapping or a `:mcl` field): a plan using it cannot run on the vehicle",
                 domain.file, a.line, a.name
             ));
             continue;
@@ -102,7 +102,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
             None => {
                 let known: Vec<&str> = ops.iter().map(|o| o.name.as_str()).collect();
                 errors.push(Error {
-                    file: domain.file.clone(),
+                    file: m.file.clone().unwrap_or_else(|| domain.file.clone()),
                     line: m.line,
                     column: m.column,
                     message: format!(
@@ -114,7 +114,7 @@ pub fn check_mapping(domain: &Domain, ops: &[MclOperator]) -> (Vec<Error>, Vec<S
                 });
             }
             Some(o) if o.params.len() != m.args.len() => errors.push(Error {
-                file: domain.file.clone(),
+                file: m.file.clone().unwrap_or_else(|| domain.file.clone()),
                 line: m.line,
                 column: m.column,
                 message: format!(

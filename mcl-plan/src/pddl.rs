@@ -112,6 +112,9 @@ pub struct MclCall {
     pub args: Vec<MclArg>,
     pub line: usize,
     pub column: usize,
+    /// The file the call is written in when it is not the domain's: the
+    /// .mcl file of a `planning` operator or of a `pddl_map` mapping.
+    pub file: Option<String>,
 }
 
 /// A typed parameter, constant, object or predicate argument.
@@ -588,7 +591,7 @@ impl<'a> P<'a> {
             });
         }
         let (line, column) = self.src.line_col(span.start);
-        Ok(MclCall { name, args, line, column })
+        Ok(MclCall { name, args, line, column, file: None })
     }
 
     fn action(&self, l: &[Sexpr], span: Span) -> R<Action> {

@@ -44,7 +44,12 @@ fn parses_the_seed_constructs() {
     assert_eq!(mv.params.len(), 3);
     assert!(mv.conds.contains(&Cond::Equal(Term::Var(1), Term::Var(2), false)), "l1 != l2 (Extract 7.1)");
     assert!(matches!(mv.conds[1], Cond::Compare(..)), "attribute comparison");
-    let m = mv.mcl.as_ref().unwrap();
+    // Plain STRIPS: the mission comes from the `pddl_map` of operators.mcl.
+    assert!(mv.mcl.is_none());
+    let mut d = d;
+    let prog = mcl_plan::model::McProgram::load(&root().join("examples/planning/move/operators.mcl")).unwrap();
+    mcl_plan::model::apply_pddl_map(&prog, &mut d).unwrap();
+    let m = d.actions[0].mcl.as_ref().unwrap();
     assert_eq!(m.name, "MclMove", "case kept");
     assert_eq!(
         m.args,
@@ -141,8 +146,10 @@ fn grounding_errors() {
         .contains("is for domain `other`"));
     assert!(bad("(define (problem p) (:domain m) (:objects a - loc) (:init (at a a)) (:goal (at a)))")
         .contains("takes 1 argument(s), given 2"));
-    // A missing attribute of an :mcl argument.
-    let d = parse_domain("move.pddl", &example("examples/planning/move/domain.pddl")).unwrap();
+    // A missing attribute of a mission argument (the `pddl_map` of operators.mcl).
+    let mut d = parse_domain("move.pddl", &example("examples/planning/move/domain.pddl")).unwrap();
+    let prog = mcl_plan::model::McProgram::load(&root().join("examples/planning/move/operators.mcl")).unwrap();
+    mcl_plan::model::apply_pddl_map(&prog, &mut d).unwrap();
     let p = parse_problem("p.pddl", &example("examples/planning/move/problem.pddl").replace("(= (z survey) 12)", ""))
         .unwrap();
     // z survey missing: the comparison is false, the action is not grounded, no plan.
@@ -152,7 +159,7 @@ fn grounding_errors() {
         .unwrap();
     let e = mcl_plan::ground(&d, &p).map(|_| ()).unwrap_err();
     assert!(e[0].message.contains("needs attribute `y` of `survey`"), "{e:?}");
-    assert!(e[0].to_string().starts_with("move.pddl:15:"), "{}", e[0]);
+    assert!(e[0].to_string().contains("operators.mcl:27:"), "at the mapping: {}", e[0]);
 }
 
 #[test]

@@ -45,6 +45,8 @@ pub enum Item {
     Tasks(TasksBlock),
     Mission(Mission),
     Constraints(ConstraintsBlock),
+    Planning(PlanningBlock),
+    PddlMap(PddlMapBlock),
 }
 
 impl Item {
@@ -57,6 +59,8 @@ impl Item {
             Item::Tasks(x) => x.span,
             Item::Mission(x) => x.span,
             Item::Constraints(x) => x.span,
+            Item::Planning(x) => x.span,
+            Item::PddlMap(x) => x.span,
         }
     }
 }
@@ -381,4 +385,377 @@ pub struct LabelRef {
     pub mission: Option<Name>,
     pub label: Name,
     pub span: Span,
+}
+
+// ---------------------------------------------------------------------------
+// Planning (seed chapter 7, docs/planning.md).
+
+/// `planning { ... }`: types, entities, functions, operators, initial state
+/// and goal of a planning problem (seed 7.2, Extracts 7.1-7.2, Table 8.1).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanningBlock {
+    pub keyword_span: Span,
+    pub defs: Vec<PlanDef>,
+    pub span: Span,
+}
+
+/// One definition of a `planning` block.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum PlanDef {
+    Type(PlanType),
+    Entity(PlanEntity),
+    Function(PlanFunction),
+    Operator(PlanOperator),
+    /// `initial { ... }` or `goal { ... }`.
+    Facts(PlanFacts),
+}
+
+impl PlanDef {
+    pub fn span(&self) -> Span {
+        match self {
+            PlanDef::Type(x) => x.span,
+            PlanDef::Entity(x) => x.span,
+            PlanDef::Function(x) => x.span,
+            PlanDef::Operator(x) => x.span,
+            PlanDef::Facts(x) => x.span,
+        }
+    }
+}
+
+/// `type location { x; y; z; }`, `type robot;`, `type auv : robot;`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanType {
+    pub keyword_span: Span,
+    pub name: Name,
+    pub parent: Option<Name>,
+    /// The attributes every entity of the type has.
+    pub attrs: Vec<Name>,
+    pub span: Span,
+}
+
+/// `entity location dock { x = 0; y = 0; z = 0; }` or `entity robot auv;`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanEntity {
+    pub keyword_span: Span,
+    pub ty: Name,
+    pub name: Name,
+    pub values: Vec<AttrValue>,
+    pub span: Span,
+}
+
+/// `x = 0;` in an entity.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct AttrValue {
+    pub name: Name,
+    pub value: Value,
+    pub span: Span,
+}
+
+/// `function distance( zone, zone );`: a value per tuple of entities, given
+/// in `initial` as `distance( deploy, recovery ) = 5;`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanFunction {
+    pub keyword_span: Span,
+    pub name: Name,
+    /// The types of the arguments.
+    pub params: Vec<Name>,
+    pub span: Span,
+}
+
+/// `operator move( vehicle v, location l1, location l2 ) { ... }`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanOperator {
+    pub keyword_span: Span,
+    pub name: Name,
+    pub params: Vec<TypedParam>,
+    pub parts: Vec<OpPart>,
+    pub span: Span,
+}
+
+/// `vehicle v`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct TypedParam {
+    pub ty: Name,
+    pub name: Name,
+}
+
+/// One part of an operator.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct OpPart {
+    pub keyword_span: Span,
+    pub kind: OpPartKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum OpPartKind {
+    /// `precond { v in l1; not v busy; }`
+    Precond(Vec<PlanFact>),
+    /// `add { ... }`
+    Add(Vec<PlanFact>),
+    /// `del { ... }`
+    Del(Vec<PlanFact>),
+    /// `expression { l1 != l2; }`
+    Expression(Vec<PlanExpr>),
+    /// `cost 1;`, `cost distance( a, b );`
+    Cost(PlanOperand),
+    /// `mcl MclMove( l2.x, l2.y, l2.z );`
+    Mcl(PlanCall),
+}
+
+impl OpPartKind {
+    pub fn keyword(&self) -> &'static str {
+        match self {
+            OpPartKind::Precond(_) => "precond",
+            OpPartKind::Add(_) => "add",
+            OpPartKind::Del(_) => "del",
+            OpPartKind::Expression(_) => "expression",
+            OpPartKind::Cost(_) => "cost",
+            OpPartKind::Mcl(_) => "mcl",
+        }
+    }
+}
+
+/// A fact `entity relation [entity]` (seed 7.2.1: `ictineu in dock`,
+/// `cable found`), negated with `not` in preconditions and goals.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanFact {
+    pub negated: Option<Span>,
+    pub subject: Name,
+    pub relation: Name,
+    pub object: Option<Name>,
+    pub span: Span,
+}
+
+impl PlanFact {
+    /// The entities (or parameters) the fact relates.
+    pub fn args(&self) -> impl Iterator<Item = &Name> {
+        std::iter::once(&self.subject).chain(self.object.as_ref())
+    }
+}
+
+/// `initial { ... }` or `goal { ... }`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanFacts {
+    pub keyword_span: Span,
+    pub goal: bool,
+    pub facts: Vec<PlanFact>,
+    /// `distance( deploy, recovery ) = 5;` (only in `initial`).
+    pub values: Vec<FunctionValue>,
+    pub span: Span,
+}
+
+/// `distance( deploy, recovery ) = 5;`
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct FunctionValue {
+    pub name: Name,
+    pub args: Vec<Name>,
+    pub value: Value,
+    pub span: Span,
+}
+
+/// An operand of an expression, a cost or an `mcl` argument.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanOperand {
+    pub kind: OperandKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum OperandKind {
+    /// A parameter, an entity, or (in `mcl`) a symbolic value.
+    Name(Name),
+    /// `l2.x`
+    Attr(Name, Name),
+    /// `distance( a, b )`
+    Function(Name, Vec<Name>),
+    /// A number or a string.
+    Literal(Value),
+}
+
+/// `l1 != l2`, `l2.z <= v.max_depth`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanExpr {
+    pub left: PlanOperand,
+    /// `!=`, `==` (or `=`), `<`, `<=`, `>`, `>=`.
+    pub op: String,
+    pub op_span: Span,
+    pub right: PlanOperand,
+    pub span: Span,
+}
+
+/// `MclMove( l2.x, l2.y, l2.z )`: the MCL mission operator an operator runs.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PlanCall {
+    pub name: Name,
+    pub args: Vec<PlanOperand>,
+    pub span: Span,
+}
+
+/// `pddl_map { move( v, l1, l2 ) -> MclMove( l2.x, l2.y, l2.z ); }`: the MCL
+/// missions of the actions of a PDDL domain.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PddlMapBlock {
+    pub keyword_span: Span,
+    pub maps: Vec<PddlMapping>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PddlMapping {
+    /// The PDDL action's name.
+    pub action: Name,
+    /// Names for the action's parameters, in order.
+    pub params: Vec<Name>,
+    pub call: PlanCall,
+    pub span: Span,
+}
+
+/// Calls `f` on every span of a value (to move or erase them).
+pub fn value_spans_mut(v: &mut Value, f: &mut dyn FnMut(&mut Span)) {
+    f(&mut v.span);
+    match &mut v.kind {
+        ValueKind::Ident(n) => f(&mut n.span),
+        ValueKind::Number(n) => f(&mut n.span),
+        ValueKind::List { tag, items } => {
+            if let Some(t) = tag {
+                f(&mut t.span);
+            }
+            for i in items {
+                value_spans_mut(i, f);
+            }
+        }
+        ValueKind::Str(_) | ValueKind::Error => {}
+    }
+}
+
+impl PlanOperand {
+    pub fn spans_mut(&mut self, f: &mut dyn FnMut(&mut Span)) {
+        f(&mut self.span);
+        match &mut self.kind {
+            OperandKind::Name(n) => f(&mut n.span),
+            OperandKind::Attr(a, b) => {
+                f(&mut a.span);
+                f(&mut b.span);
+            }
+            OperandKind::Function(n, args) => {
+                f(&mut n.span);
+                args.iter_mut().for_each(|a| f(&mut a.span));
+            }
+            OperandKind::Literal(v) => value_spans_mut(v, f),
+        }
+    }
+}
+
+impl PlanCall {
+    pub fn spans_mut(&mut self, f: &mut dyn FnMut(&mut Span)) {
+        f(&mut self.span);
+        f(&mut self.name.span);
+        self.args.iter_mut().for_each(|a| a.spans_mut(f));
+    }
+}
+
+impl PlanFact {
+    pub fn spans_mut(&mut self, f: &mut dyn FnMut(&mut Span)) {
+        f(&mut self.span);
+        if let Some(s) = &mut self.negated {
+            f(s);
+        }
+        f(&mut self.subject.span);
+        f(&mut self.relation.span);
+        if let Some(o) = &mut self.object {
+            f(&mut o.span);
+        }
+    }
+}
+
+impl PlanningBlock {
+    /// Calls `f` on every span of the block (to move or erase them).
+    pub fn spans_mut(&mut self, f: &mut dyn FnMut(&mut Span)) {
+        f(&mut self.keyword_span);
+        f(&mut self.span);
+        for d in &mut self.defs {
+            match d {
+                PlanDef::Type(t) => {
+                    f(&mut t.keyword_span);
+                    f(&mut t.span);
+                    f(&mut t.name.span);
+                    if let Some(p) = &mut t.parent {
+                        f(&mut p.span);
+                    }
+                    t.attrs.iter_mut().for_each(|a| f(&mut a.span));
+                }
+                PlanDef::Entity(x) => {
+                    f(&mut x.keyword_span);
+                    f(&mut x.span);
+                    f(&mut x.ty.span);
+                    f(&mut x.name.span);
+                    for v in &mut x.values {
+                        f(&mut v.span);
+                        f(&mut v.name.span);
+                        value_spans_mut(&mut v.value, f);
+                    }
+                }
+                PlanDef::Function(x) => {
+                    f(&mut x.keyword_span);
+                    f(&mut x.span);
+                    f(&mut x.name.span);
+                    x.params.iter_mut().for_each(|a| f(&mut a.span));
+                }
+                PlanDef::Operator(o) => {
+                    f(&mut o.keyword_span);
+                    f(&mut o.span);
+                    f(&mut o.name.span);
+                    for p in &mut o.params {
+                        f(&mut p.ty.span);
+                        f(&mut p.name.span);
+                    }
+                    for part in &mut o.parts {
+                        f(&mut part.keyword_span);
+                        f(&mut part.span);
+                        match &mut part.kind {
+                            OpPartKind::Precond(v) | OpPartKind::Add(v) | OpPartKind::Del(v) => {
+                                v.iter_mut().for_each(|x| x.spans_mut(f))
+                            }
+                            OpPartKind::Expression(v) => {
+                                for x in v {
+                                    f(&mut x.span);
+                                    f(&mut x.op_span);
+                                    x.left.spans_mut(f);
+                                    x.right.spans_mut(f);
+                                }
+                            }
+                            OpPartKind::Cost(c) => c.spans_mut(f),
+                            OpPartKind::Mcl(c) => c.spans_mut(f),
+                        }
+                    }
+                }
+                PlanDef::Facts(x) => {
+                    f(&mut x.keyword_span);
+                    f(&mut x.span);
+                    x.facts.iter_mut().for_each(|a| a.spans_mut(f));
+                    for v in &mut x.values {
+                        f(&mut v.span);
+                        f(&mut v.name.span);
+                        v.args.iter_mut().for_each(|a| f(&mut a.span));
+                        value_spans_mut(&mut v.value, f);
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl PddlMapBlock {
+    /// Calls `f` on every span of the block (to move or erase them).
+    pub fn spans_mut(&mut self, f: &mut dyn FnMut(&mut Span)) {
+        f(&mut self.keyword_span);
+        f(&mut self.span);
+        for m in &mut self.maps {
+            f(&mut m.span);
+            f(&mut m.action.span);
+            m.params.iter_mut().for_each(|a| f(&mut a.span));
+            m.call.spans_mut(f);
+        }
+    }
 }

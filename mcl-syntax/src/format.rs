@@ -243,6 +243,8 @@ fn norm_item(item: &mut Item) {
                 }
             }
         }
+        Item::Planning(b) => b.spans_mut(&mut |s| *s = Z),
+        Item::PddlMap(b) => b.spans_mut(&mut |s| *s = Z),
     }
 }
 
@@ -713,6 +715,8 @@ impl<'a> Printer<'a> {
                 }
                 self.close(Self::span1(c.span.end as usize - 1), c.constraints.is_empty());
             }
+            Item::Planning(b) => self.planning(b),
+            Item::PddlMap(b) => self.pddl_map(b),
         }
     }
 
@@ -1132,6 +1136,262 @@ impl<'a> Printer<'a> {
             self.tok(":", colon, Class::Normal, true);
             self.name(l, true);
         }
+    }
+}
+
+// --- Planning blocks (docs/planning.md) -------------------------------------
+//
+// `planning { ... }`: one definition per line; the attribute list of a type,
+// the values of an entity and the facts and expressions of an operator's
+// parts on one line (`precond { v in l1; }`); an operator's parts one per
+// line; the entries of `initial` and `goal` one per line. `pddl_map { ... }`:
+// one mapping per line.
+impl Printer<'_> {
+    /// The last `tok` in `[from, end)`.
+    fn last_tok_in(&self, from: usize, end: usize, tok: Token<'static>) -> Option<Span> {
+        let (a, b) = (self.tok_index(from), self.tok_index(end));
+        self.toks[a..b].iter().rev().find(|(t, _)| *t == tok).map(|(_, s)| *s)
+    }
+
+    /// The `tok` at `pos` (the first token there), if it is one.
+    fn tok_if(&self, pos: usize, tok: Token<'static>) -> Option<Span> {
+        self.toks.get(self.tok_index(pos)).filter(|(t, _)| *t == tok).map(|(_, s)| *s)
+    }
+
+    fn semi_after(&mut self, pos: usize) {
+        let semi = self.tok_if(pos, Token::Semi);
+        self.tok(";", semi, Class::Closer, false);
+    }
+
+    /// `{ a; b; }` on one line: each item written by `f`, its end given by `end_of`.
+    fn inline_list<T>(
+        &mut self,
+        from: usize,
+        end: usize,
+        items: &[T],
+        end_of: impl Fn(&T) -> usize,
+        mut f: impl FnMut(&mut Self, &T),
+    ) {
+        let open = self.tok_if(from, Token::LBrace);
+        self.tok("{", open, Class::Closer, true);
+        for x in items {
+            f(self, x);
+            self.semi_after(end_of(x));
+        }
+        let close = self.last_tok_in(from, end, Token::RBrace);
+        self.tok("}", close, Class::Closer, true);
+    }
+
+    fn plan_fact(&mut self, x: &PlanFact) {
+        if let Some(n) = x.negated {
+            self.tok("not", Some(n), Class::Normal, true);
+        }
+        self.name(&x.subject, true);
+        self.name(&x.relation, true);
+        if let Some(o) = &x.object {
+            self.name(o, true);
+        }
+    }
+
+    fn plan_operand(&mut self, o: &PlanOperand, space: bool) {
+        match &o.kind {
+            OperandKind::Name(n) => self.name(n, space),
+            OperandKind::Attr(a, b) => {
+                self.name(a, space);
+                let dot = self.tok_if(a.span.end as usize, Token::Dot);
+                self.tok(".", dot, Class::Normal, false);
+                self.name(b, false);
+            }
+            OperandKind::Function(n, args) => {
+                self.name(n, space);
+                self.param_list(args, n.span.end as usize);
+            }
+            OperandKind::Literal(v) => self.value(v, space),
+        }
+    }
+
+    fn plan_call(&mut self, c: &PlanCall) {
+        self.name(&c.name, true);
+        let open = self.tok_if(c.name.span.end as usize, Token::LParen);
+        self.tok("(", open, Class::Normal, false);
+        for (i, a) in c.args.iter().enumerate() {
+            if i > 0 {
+                let comma = self.tok_if(c.args[i - 1].span.end as usize, Token::Comma);
+                self.tok(",", comma, Class::Closer, false);
+            }
+            self.plan_operand(a, true);
+        }
+        let close = self.last_tok_in(c.name.span.end as usize, c.span.end as usize, Token::RParen);
+        self.tok(")", close, Class::Closer, !c.args.is_empty());
+    }
+
+    fn planning(&mut self, b: &PlanningBlock) {
+        self.tok("planning", Some(b.keyword_span), Class::Normal, true);
+        self.open(self.tok_if(b.keyword_span.end as usize, Token::LBrace));
+        for d in &b.defs {
+            self.line_element(d.span().start as usize);
+            self.plan_def(d);
+        }
+        let close = self.last_tok_in(b.keyword_span.end as usize, b.span.end as usize, Token::RBrace);
+        self.close(close, b.defs.is_empty());
+    }
+
+    fn plan_def(&mut self, d: &PlanDef) {
+        match d {
+            PlanDef::Type(t) => {
+                self.tok("type", Some(t.keyword_span), Class::Normal, true);
+                self.name(&t.name, true);
+                let mut end = t.name.span.end as usize;
+                if let Some(p) = &t.parent {
+                    let colon = self.tok_if(end, Token::Colon);
+                    self.tok(":", colon, Class::Normal, true);
+                    self.name(p, true);
+                    end = p.span.end as usize;
+                }
+                if t.attrs.is_empty() {
+                    self.semi_after(end);
+                } else {
+                    self.inline_list(
+                        end,
+                        t.span.end as usize,
+                        &t.attrs,
+                        |a| a.span.end as usize,
+                        |p, a| p.name(a, true),
+                    );
+                }
+            }
+            PlanDef::Entity(x) => {
+                self.tok("entity", Some(x.keyword_span), Class::Normal, true);
+                self.name(&x.ty, true);
+                self.name(&x.name, true);
+                let end = x.name.span.end as usize;
+                if x.values.is_empty() {
+                    self.semi_after(end);
+                } else {
+                    self.inline_list(
+                        end,
+                        x.span.end as usize,
+                        &x.values,
+                        |v| v.span.end as usize,
+                        |p, v| {
+                            p.name(&v.name, true);
+                            let eq = p.tok_if(v.name.span.end as usize, Token::Eq);
+                            p.tok("=", eq, Class::Normal, true);
+                            p.value(&v.value, true);
+                        },
+                    );
+                }
+            }
+            PlanDef::Function(x) => {
+                self.tok("function", Some(x.keyword_span), Class::Normal, true);
+                self.name(&x.name, true);
+                self.param_list(&x.params, x.name.span.end as usize);
+                let close = self.last_tok_in(x.name.span.end as usize, x.span.end as usize, Token::RParen);
+                self.semi_after(close.map_or(x.span.end as usize, |s| s.end as usize));
+            }
+            PlanDef::Operator(o) => {
+                self.tok("operator", Some(o.keyword_span), Class::Normal, true);
+                self.name(&o.name, true);
+                let open = self.tok_if(o.name.span.end as usize, Token::LParen);
+                self.tok("(", open, Class::Normal, false);
+                let mut end = open.map_or(o.name.span.end as usize, |s| s.end as usize);
+                for (i, p) in o.params.iter().enumerate() {
+                    if i > 0 {
+                        let comma = self.tok_if(end, Token::Comma);
+                        self.tok(",", comma, Class::Closer, false);
+                    }
+                    self.name(&p.ty, true);
+                    self.name(&p.name, true);
+                    end = p.name.span.end as usize;
+                }
+                let close = self.find_tok(end, Token::RParen);
+                self.tok(")", close, Class::Closer, !o.params.is_empty());
+                let from = close.map_or(end, |s| s.end as usize);
+                self.open(self.tok_if(from, Token::LBrace));
+                for part in &o.parts {
+                    self.line_element(part.span.start as usize);
+                    self.op_part(part);
+                }
+                let close = self.last_tok_in(from, o.span.end as usize, Token::RBrace);
+                self.close(close, o.parts.is_empty());
+            }
+            PlanDef::Facts(x) => {
+                let kw = if x.goal { "goal" } else { "initial" };
+                self.tok(kw, Some(x.keyword_span), Class::Normal, true);
+                let from = x.keyword_span.end as usize;
+                self.open(self.tok_if(from, Token::LBrace));
+                // Facts and values in source order.
+                let mut entries: Vec<(usize, Result<&PlanFact, &FunctionValue>)> =
+                    x.facts.iter().map(|f| (f.span.start as usize, Ok(f))).collect();
+                entries.extend(x.values.iter().map(|v| (v.span.start as usize, Err(v))));
+                entries.sort_by_key(|e| e.0);
+                for (start, e) in &entries {
+                    self.line_element(*start);
+                    match e {
+                        Ok(f) => {
+                            self.plan_fact(f);
+                            self.semi_after(f.span.end as usize);
+                        }
+                        Err(v) => {
+                            self.name(&v.name, true);
+                            self.param_list(&v.args, v.name.span.end as usize);
+                            let eq = self.find_tok(v.name.span.end as usize, Token::Eq);
+                            self.tok("=", eq, Class::Normal, true);
+                            self.value(&v.value, true);
+                            self.semi_after(v.span.end as usize);
+                        }
+                    }
+                }
+                let close = self.last_tok_in(from, x.span.end as usize, Token::RBrace);
+                self.close(close, entries.is_empty());
+            }
+        }
+    }
+
+    fn op_part(&mut self, part: &OpPart) {
+        self.tok(part.kind.keyword(), Some(part.keyword_span), Class::Normal, true);
+        let from = part.keyword_span.end as usize;
+        let end = part.span.end as usize;
+        match &part.kind {
+            OpPartKind::Precond(v) | OpPartKind::Add(v) | OpPartKind::Del(v) => {
+                self.inline_list(from, end, v, |f| f.span.end as usize, |p, f| p.plan_fact(f))
+            }
+            OpPartKind::Expression(v) => self.inline_list(
+                from,
+                end,
+                v,
+                |x| x.span.end as usize,
+                |p, x| {
+                    p.plan_operand(&x.left, true);
+                    p.tok(&x.op, Some(x.op_span), Class::Normal, true);
+                    p.plan_operand(&x.right, true);
+                },
+            ),
+            OpPartKind::Cost(c) => {
+                self.plan_operand(c, true);
+                self.semi_after(c.span.end as usize);
+            }
+            OpPartKind::Mcl(c) => {
+                self.plan_call(c);
+                self.semi_after(c.span.end as usize);
+            }
+        }
+    }
+
+    fn pddl_map(&mut self, b: &PddlMapBlock) {
+        self.tok("pddl_map", Some(b.keyword_span), Class::Normal, true);
+        self.open(self.tok_if(b.keyword_span.end as usize, Token::LBrace));
+        for m in &b.maps {
+            self.line_element(m.span.start as usize);
+            self.name(&m.action, true);
+            self.param_list(&m.params, m.action.span.end as usize);
+            let arrow = self.find_tok(m.action.span.end as usize, Token::Arrow);
+            self.tok("->", arrow, Class::Normal, true);
+            self.plan_call(&m.call);
+            self.semi_after(m.call.span.end as usize);
+        }
+        let close = self.last_tok_in(b.keyword_span.end as usize, b.span.end as usize, Token::RBrace);
+        self.close(close, b.maps.is_empty());
     }
 }
 

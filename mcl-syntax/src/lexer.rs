@@ -36,10 +36,14 @@ pub enum Kw {
     Monitor,
     Condition,
     WhileCondition,
+    /// `planning { ... }`: the planning model (seed chapter 7).
+    Planning,
+    /// `pddl_map { ... }`: PDDL actions to MCL mission operators.
+    PddlMap,
 }
 
 impl Kw {
-    pub const ALL: [Kw; 26] = [
+    pub const ALL: [Kw; 28] = [
         Kw::Import,
         Kw::Actions,
         Kw::Events,
@@ -66,6 +70,8 @@ impl Kw {
         Kw::Monitor,
         Kw::Condition,
         Kw::WhileCondition,
+        Kw::Planning,
+        Kw::PddlMap,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -96,6 +102,8 @@ impl Kw {
             Kw::Monitor => "monitor",
             Kw::Condition => "condition",
             Kw::WhileCondition => "while_condition",
+            Kw::Planning => "planning",
+            Kw::PddlMap => "pddl_map",
         }
     }
 
@@ -116,6 +124,8 @@ impl Kw {
                 | Kw::Mission
                 | Kw::PlanOp
                 | Kw::Constraints
+                | Kw::Planning
+                | Kw::PddlMap
         )
     }
 }
@@ -142,6 +152,8 @@ pub enum Token<'src> {
     Eq,
     /// `->` or `→`.
     Arrow,
+    /// A comparison of a planning expression: `!=`, `==`, `<`, `<=`, `>`, `>=`.
+    Cmp(&'src str),
 }
 
 impl fmt::Display for Token<'_> {
@@ -163,6 +175,7 @@ impl fmt::Display for Token<'_> {
             Token::Dot => f.write_str("`.`"),
             Token::Eq => f.write_str("`=`"),
             Token::Arrow => f.write_str("`->`"),
+            Token::Cmp(s) => write!(f, "`{s}`"),
         }
     }
 }
@@ -345,6 +358,16 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
             }
             _ => {}
         }
+        // Comparisons (planning expressions, docs/planning.md).
+        let cmp_len = match (b, bytes.get(i + 1).copied()) {
+            (b'!' | b'=' | b'<' | b'>', Some(b'=')) => 2,
+            (b'<' | b'>', _) => 1,
+            _ => 0,
+        };
+        if cmp_len > 0 {
+            out.tokens.push((Token::Cmp(&src[i..i + cmp_len]), Span::new(i, i + cmp_len)));
+            return i + cmp_len;
+        }
         let punct = match b {
             b'{' => Some(Token::LBrace),
             b'}' => Some(Token::RBrace),
@@ -418,7 +441,7 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
         let mut end = i + c.len_utf8();
         while end < bytes.len() {
             let c2 = src[end..].chars().next().expect("boundary");
-            if c2.is_whitespace() || c2.is_ascii_alphanumeric() || "{}()[];:,.=\"_$/".contains(c2) || c2 == '→' {
+            if c2.is_whitespace() || c2.is_ascii_alphanumeric() || "{}()[];:,.=<>\"_$/".contains(c2) || c2 == '→' {
                 break;
             }
             end += c2.len_utf8();
@@ -524,6 +547,27 @@ mod tests {
     fn arrows_end_identifiers() {
         assert_eq!(kinds("begin->T0"), vec![Token::Ident("begin"), Token::Arrow, Token::Ident("T0")]);
         assert_eq!(kinds("a → b"), vec![Token::Ident("a"), Token::Arrow, Token::Ident("b")]);
+        // Comparisons of planning expressions; `=` alone stays `Eq`.
+        assert_eq!(
+            kinds("a!=b<=c<d>=e>f==g=h"),
+            vec![
+                Token::Ident("a"),
+                Token::Cmp("!="),
+                Token::Ident("b"),
+                Token::Cmp("<="),
+                Token::Ident("c"),
+                Token::Cmp("<"),
+                Token::Ident("d"),
+                Token::Cmp(">="),
+                Token::Ident("e"),
+                Token::Cmp(">"),
+                Token::Ident("f"),
+                Token::Cmp("=="),
+                Token::Ident("g"),
+                Token::Eq,
+                Token::Ident("h"),
+            ]
+        );
     }
 
     #[test]

@@ -145,6 +145,8 @@ impl Shift for Item {
                     }
                 }
             }
+            Item::Planning(b) => b.spans_mut(&mut |s| s.shift(by)),
+            Item::PddlMap(b) => b.spans_mut(&mut |s| s.shift(by)),
         }
     }
 }

@@ -850,4 +850,73 @@ fn a_keyword_as_a_mission_name_is_one_error() {
     assert!(p.errors[0].message.contains("`while` is a keyword"), "{}", p.errors[0].message);
     assert_eq!(text("mission : while { A() ; B() }", p.errors[0].span), "while");
     assert_eq!(t, "(mission while {A(); B()})");
+
+#[test]
+fn planning_blocks() {
+    let src = "planning {
+        type location { x; y; z; }
+        type auv : vehicle;
+        entity location dock { x = 0; y = -2.5; z = \"deep\"; }
+        entity auv ictineu;
+        function distance( location, location );
+        operator move( vehicle v, location l1, location l2 ) {
+            precond { v in l1; not v busy; }
+            add { v in l2; }
+            del { v in l1; }
+            expression { l1 != l2; l2.z <= v.max_depth; distance( l1, l2 ) < 100; }
+            cost distance( l1, l2 );
+            mcl MclMove( l2.x, l2.y, l2.z, \"keep\", 3, timeout );
+        }
+        initial { ictineu in dock; cable not_found; distance( dock, dock ) = 0; }
+        goal { ictineu in dock; not cable not_found; }
+    }
+    pddl_map { move( v, a, b ) -> MclMove( b.x, 1 ); }";
+    let p = ok(src);
+    let Item::Planning(b) = &p.file.items[0] else { panic!() };
+    assert_eq!(b.defs.len(), 8);
+    let PlanDef::Type(t) = &b.defs[1] else { panic!() };
+    assert_eq!((t.name.text.as_str(), t.parent.as_ref().map(|n| n.text.as_str())), ("auv", Some("vehicle")));
+    let PlanDef::Operator(o) = &b.defs[5] else { panic!() };
+    assert_eq!(o.params.len(), 3);
+    assert_eq!(o.parts.len(), 6);
+    let OpPartKind::Precond(pre) = &o.parts[0].kind else { panic!() };
+    assert!(pre[1].negated.is_some() && pre[1].object.is_none(), "`not v busy`: a negated quality");
+    let OpPartKind::Expression(x) = &o.parts[3].kind else { panic!() };
+    assert_eq!(x.iter().map(|e| e.op.as_str()).collect::<Vec<_>>(), ["!=", "<=", "<"]);
+    assert!(matches!(&x[1].left.kind, OperandKind::Attr(e, a) if e.text == "l2" && a.text == "z"));
+    assert!(matches!(&x[2].left.kind, OperandKind::Function(f, args) if f.text == "distance" && args.len() == 2));
+    let OpPartKind::Mcl(c) = &o.parts[5].kind else { panic!() };
+    assert_eq!(c.args.len(), 6);
+    let PlanDef::Facts(init) = &b.defs[6] else { panic!() };
+    assert_eq!((init.goal, init.facts.len(), init.values.len()), (false, 2, 1));
+    let Item::PddlMap(m) = &p.file.items[1] else { panic!() };
+    assert_eq!(m.maps[0].params.len(), 3);
+    assert_eq!(m.maps[0].call.name.text, "MclMove");
+}
+
+#[test]
+fn a_broken_planning_definition_does_not_hide_the_next_ones() {
+    let src = "planning {
+        type location { x; }
+        entity location;
+        operator move( vehicle v ) { precond { v in; } add { v at 3; } mcl M(); }
+        goal { a in b; }
+    }";
+    let p = parse(src);
+    check_invariants(src, &p);
+    assert!(!p.errors.is_empty());
+    assert!(p.errors.iter().all(|e| e.code == "E0010"), "{}", render_errors(src, &p));
+    let Item::Planning(b) = &p.file.items[0] else { panic!() };
+    let kinds: Vec<&str> = b
+        .defs
+        .iter()
+        .map(|d| match d {
+            PlanDef::Type(_) => "type",
+            PlanDef::Entity(_) => "entity",
+            PlanDef::Function(_) => "function",
+            PlanDef::Operator(_) => "operator",
+            PlanDef::Facts(_) => "facts",
+        })
+        .collect();
+    assert_eq!(kinds, ["type", "operator", "facts"], "{}", render_errors(src, &p));
 }

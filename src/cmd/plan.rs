@@ -116,16 +116,47 @@ pub fn run(o: Options) -> u8 {
             return 2;
         }
     }
-    let beside = |name: &str| operators.as_ref().map(|m| m.parent().unwrap_or(Path::new(".")).join(name));
-    let Some(domain_path) = o.domain.clone().or_else(|| beside("domain.pddl")) else {
-        eprintln!("error: no domain: give --domain D.pddl (or FILE.mcl with domain.pddl beside it)");
-        return 2;
+    // The .mcl program: its compiler diagnostics first, then its planning
+    // blocks (`planning { ... }`: the problem is written in MCL) and its
+    // mappings of PDDL actions (`pddl_map { ... }`).
+    let mut prog = None;
+    if let Some(ops_path) = &operators {
+        if let Err(report) = check_mcl(ops_path) {
+            eprint!("{report}");
+            eprintln!("error: the mission operators in `{}` have errors", ops_path.display());
+            return 2;
+        }
+        match mcl_plan::model::McProgram::load(ops_path) {
+            Ok(p) => prog = Some(p),
+            Err(e) => {
+                print_errors(&e);
+                return 2;
+            }
+        }
+    }
+    // The MCL planning model, unless PDDL files are given explicitly.
+    let from_mcl = o.domain.is_none() && o.problem.is_none() && prog.as_ref().is_some_and(|p| p.has_planning());
+    let loaded = if from_mcl {
+        mcl_plan::model::to_model(prog.as_ref().expect("from_mcl implies a program"))
+    } else {
+        let beside = |name: &str| operators.as_ref().map(|m| m.parent().unwrap_or(Path::new(".")).join(name));
+        let Some(domain_path) = o.domain.clone().or_else(|| beside("domain.pddl")) else {
+            eprintln!("error: no domain: give --domain D.pddl (or FILE.mcl with domain.pddl beside it, or a `planning` block in FILE.mcl)");
+            return 2;
+        };
+        let Some(problem_path) = o.problem.clone().or_else(|| beside("problem.pddl")) else {
+            eprintln!("error: no problem: give --problem P.pddl (or FILE.mcl with problem.pddl beside it, or a `planning` block in FILE.mcl)");
+            return 2;
+        };
+        mcl_plan::load(&domain_path, &problem_path).and_then(|(mut d, p)| {
+            if let Some(prog) = &prog {
+                mcl_plan::model::apply_pddl_map(prog, &mut d)?;
+            }
+            Ok((d, p))
+        })
     };
-    let Some(problem_path) = o.problem.clone().or_else(|| beside("problem.pddl")) else {
-        eprintln!("error: no problem: give --problem P.pddl (or FILE.mcl with problem.pddl beside it)");
-        return 2;
-    };
-    let (domain, problem) = match mcl_plan::load(&domain_path, &problem_path) {
+    let mut run_ops: Option<PathBuf> = None;
+    let (domain, problem) = match loaded {
         Ok(x) => x,
         Err(e) => {
             print_errors(&e);
@@ -133,11 +164,6 @@ pub fn run(o: Options) -> u8 {
         }
     };
     if let Some(ops_path) = &operators {
-        if let Err(report) = check_mcl(ops_path) {
-            eprint!("{report}");
-            eprintln!("error: the mission operators in `{}` have errors", ops_path.display());
-            return 2;
-        }
         let ops = match mcl_plan::mcl::load_operators(ops_path) {
             Ok(ops) => ops,
             Err(errs) => {
@@ -155,6 +181,31 @@ pub fn run(o: Options) -> u8 {
             print_errors(&errors);
             return 2;
         }
+        // A run plays the missions of one file: the one that defines the
+        // mission operators (FILE.mcl itself, or the file it imports them from).
+        let mut files: Vec<&Path> = Vec::new();
+        for a in &domain.actions {
+            if let Some(f) =
+                a.mcl.as_ref().and_then(|m| ops.iter().find(|o| o.name == m.name)).map(|o| o.file.as_path())
+            {
+                if !files.contains(&f) {
+                    files.push(f);
+                }
+            }
+        }
+        match files[..] {
+            [] => {}
+            [f] => run_ops = Some(f.to_path_buf()),
+            _ if o.execute.is_some() => {
+                let list: Vec<String> = files.iter().map(|f| format!("`{}`", f.display())).collect();
+                eprintln!(
+                    "error: --run plays the mission operators of one file, but they are defined in {}: move them into one file",
+                    list.join(" and ")
+                );
+                return 2;
+            }
+            _ => {}
+        }
     }
     if let Some(x) = o.execute {
         if o.validate.is_some() {
@@ -165,7 +216,8 @@ pub fn run(o: Options) -> u8 {
             eprintln!("error: --run needs the mission operators: give FILE.mcl (or --operators FILE.mcl)");
             return 2;
         };
-        return execute(domain, problem, &ops, algorithm(o.search, o.heuristic), o.max_states, x);
+        let run_ops = run_ops.unwrap_or_else(|| ops.clone());
+        return execute(domain, problem, &ops, &run_ops, algorithm(o.search, o.heuristic), o.max_states, x);
     }
     if let Some(plan_path) = &o.validate {
         let text = match std::fs::read_to_string(plan_path) {
@@ -388,6 +440,7 @@ const AAC_CONNECT_WAIT: std::time::Duration = std::time::Duration::from_secs(10)
 fn execute(
     domain: mcl_plan::Domain,
     problem: mcl_plan::Problem,
+    file: &Path,
     ops: &Path,
     alg: Algorithm,
     max_states: u64,
@@ -415,7 +468,7 @@ fn execute(
         eprintln!("error: --time-limit must be a number of seconds ≥ 0");
         return 2;
     }
-    let world_path = x.world.clone().unwrap_or_else(|| ops.parent().unwrap_or(Path::new(".")).join("world.xml"));
+    let world_path = x.world.clone().unwrap_or_else(|| file.parent().unwrap_or(Path::new(".")).join("world.xml"));
     let xml = match std::fs::read_to_string(&world_path) {
         Ok(t) => t,
         Err(e) => {
@@ -486,7 +539,7 @@ fn execute(
     let report = match &x.aac {
         None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
         Some(addr) => {
-            let stem = ops.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+            let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
             let mut aac = match connect_aac(addr, x.token.clone(), format!("plan:{stem}"), AAC_CONNECT_WAIT) {
                 Ok(a) => a,
                 Err(e) => {

@@ -72,6 +72,7 @@ test('the grammar scopes every construct', async () => {
     '}',
     'mcl_plan_op GotoOp( x, y ) { Goto( [x, y] ) }',
     'constraints { _mutex_ { sonar, auv:usbl } = 1 order { asc:a, auv:b } }',
+    'planning { operator move( vehicle v ) { precond { v in l1; } expression { l1 != l2; } } }',
   ].join('\n');
   const tokens = tokenize(grammar, src);
   expectScope(tokens, 'import', 'keyword.control.import');
@@ -98,6 +99,10 @@ test('the grammar scopes every construct', async () => {
   expectScope(tokens, '-12.5', 'constant.numeric');
   expectScope(tokens, 'first', 'entity.name.label');
   expectScope(tokens, 'path', 'entity.name.type.tag');
+  expectScope(tokens, 'planning', 'storage.type.block');
+  expectScope(tokens, 'operator', 'storage.type.planning');
+  expectScope(tokens, 'precond', 'keyword.other.planning');
+  expectScope(tokens, '!=', 'keyword.operator.comparison');
   expectScope(tokens, 'while', 'keyword.control.loop');
   expectScope(tokens, 'while_condition', 'keyword.control.loop');
   expectScope(tokens, 'not', 'keyword.operator.logical');

@@ -7,6 +7,7 @@ mod constraints;
 mod definitions;
 mod missions;
 mod patterns;
+mod planning;
 mod tasks;
 mod unused;
 
@@ -60,6 +61,10 @@ pub fn check_item<'db>(db: &'db dyn Db, key: ItemCheckKey<'db>) -> LocalDiagnost
     // Constraints read every mission: only their own item pays for it.
     if matches!(parsed.file.items.first(), Some(mcl_syntax::ast::Item::Constraints(_))) {
         constraints::check(&mut cx);
+    }
+    if matches!(parsed.file.items.first(), Some(mcl_syntax::ast::Item::Planning(_) | mcl_syntax::ast::Item::PddlMap(_)))
+    {
+        planning::check(&mut cx);
     }
     unused::check_params(&mut cx);
     blocks::check(&mut cx);

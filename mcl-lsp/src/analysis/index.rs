@@ -238,6 +238,23 @@ fn file_occurrences(db: &dyn Db, file: SourceFile) -> Vec<Occ> {
                     }
                 }
             }
+            // The MCL mission operators that planning operators and PDDL actions run.
+            Item::Planning(b) => {
+                for d in &b.defs {
+                    if let PlanDef::Operator(o) = d {
+                        for p in &o.parts {
+                            if let OpPartKind::Mcl(c) = &p.kind {
+                                push(c.name.span, &c.name.text, Role::Ref(DefKind::Mission));
+                            }
+                        }
+                    }
+                }
+            }
+            Item::PddlMap(b) => {
+                for m in &b.maps {
+                    push(m.call.name.span, &m.call.name.text, Role::Ref(DefKind::Mission));
+                }
+            }
         }
     }
     out.sort_by_key(|o| (o.span.start, o.span.end));

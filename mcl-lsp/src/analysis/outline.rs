@@ -224,6 +224,33 @@ pub fn document_symbols(a: &Analysis<'_>, file: SourceFile) -> Vec<DocumentSymbo
                     kids,
                 ));
             }
+            Item::Planning(b) => {
+                let kids = b
+                    .defs
+                    .iter()
+                    .filter_map(|d| {
+                        let (word, name, kind) = match d {
+                            PlanDef::Type(t) => ("type", &t.name, SymbolKind::CLASS),
+                            PlanDef::Entity(x) => ("entity", &x.name, SymbolKind::OBJECT),
+                            PlanDef::Function(x) => ("function", &x.name, SymbolKind::FUNCTION),
+                            PlanDef::Operator(o) => ("operator", &o.name, SymbolKind::METHOD),
+                            PlanDef::Facts(_) => return None,
+                        };
+                        Some(sym(a, file, name.text.clone(), Some(word.into()), kind, d.span(), name.span, vec![]))
+                    })
+                    .collect();
+                out.push(sym(a, file, "planning".into(), None, SymbolKind::NAMESPACE, b.span, b.keyword_span, kids));
+            }
+            Item::PddlMap(b) => {
+                let kids = b
+                    .maps
+                    .iter()
+                    .map(|m| {
+                        sym(a, file, m.action.text.clone(), None, SymbolKind::METHOD, m.span, m.action.span, vec![])
+                    })
+                    .collect();
+                out.push(sym(a, file, "pddl_map".into(), None, SymbolKind::NAMESPACE, b.span, b.keyword_span, kids));
+            }
         }
     }
     out
@@ -331,6 +358,13 @@ pub fn folding_ranges(a: &Analysis<'_>, file: SourceFile) -> Vec<FoldingRange> {
                 });
             }
             Item::Constraints(b) => add(b.span, None),
+            Item::Planning(b) => {
+                add(b.span, None);
+                for d in &b.defs {
+                    add(d.span(), None);
+                }
+            }
+            Item::PddlMap(b) => add(b.span, None),
         }
     }
     // Consecutive imports.

@@ -97,7 +97,7 @@ pub fn classified(a: &Analysis<'_>, file: SourceFile) -> Vec<(Span, u32, u32)> {
             Token::Kw(_) => Some((0, 0)),
             Token::Str(_) => Some((2, 0)),
             Token::Num(_) => Some((3, 0)),
-            Token::Arrow => Some((4, 0)),
+            Token::Arrow | Token::Cmp(_) => Some((4, 0)),
             Token::Ident(word) => match by_start.get(&span.start) {
                 Some(o) => classify(a, file, o),
                 None => {

@@ -111,6 +111,10 @@ pub fn item(i: &Item) -> String {
                 .collect();
             format!("(constraints{})", prefixed(&cs))
         }
+        Item::Planning(_) | Item::PddlMap(_) => {
+            let f = mcl_syntax::format::normalize(&SourceFile { items: vec![i.clone()] });
+            format!("{:?}", f.items[0])
+        }
     }
 }
 
