@@ -20,6 +20,7 @@ pub fn hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Hover>
     let occ = occurrence_at(&occs, offset)?;
     let md = match &occ.role {
         Role::Structure(s) => structure_text(s),
+        Role::ConstraintKeyword(k) => constraint_text(*k),
         Role::Symbolic => format!("```mcl\n{}\n```\nA symbolic value, passed to the vehicle as it is.", occ.name),
         Role::Primitive => primitive_text(a, file, &occ.name),
         Role::Command => format!("```mcl\nc: {}\n```\nThe command sent to the primitive.", occ.name),
@@ -58,6 +59,30 @@ pub fn structure_text(s: &Structure) -> String {
         Structure::Monitor(_) => "monitor { A } condition ( B ) do { C }",
     };
     format!("```mcl\n{form}\n```\n**{}** (control structure)\n\n{}", s.name(), s.describe())
+}
+
+/// What a coordination constraint asks (docs/language.md, seed 6.1).
+pub fn constraint_text(k: ConstraintKind) -> String {
+    let (form, name, what) = match k {
+        ConstraintKind::Mutex => (
+            "mutex { m1:a, m2:b, ... } = N",
+            "mutex",
+            "At most N of the listed calls run at the same time; a call that would exceed N waits before it starts.",
+        ),
+        ConstraintKind::Order => (
+            "order { m1:a, m2:b }",
+            "order",
+            "The call `m2:b` does not start before the call `m1:a` has ended; repeated calls are counted (the n-th start of `m2:b` waits for the n-th end of `m1:a`).",
+        ),
+        ConstraintKind::Sync => (
+            "sync { m1:a, m2:b, ... }",
+            "sync",
+            "The listed calls start together: each waits until all the others are ready to start.",
+        ),
+    };
+    format!(
+        "```mcl\n{form}\n```\n**{name}** (coordination constraint)\n\n{what} The compiler enforces it with supervisor places between the vehicles' nets (see `mcl explain E0406` for deadlocks)."
+    )
 }
 
 fn primitive_text(a: &Analysis<'_>, file: SourceFile, name: &str) -> String {
@@ -104,7 +129,7 @@ pub fn leading_comment(a: &Analysis<'_>, file: SourceFile, start: usize) -> Opti
         if !between.chars().all(char::is_whitespace) || between.matches('\n').count() > 1 {
             break;
         }
-        let line_start = text[..c.span.start as usize].rfind('\n').map_or(0, |i| i + 1);
+        let line_start = text[..c.span.start as usize].rfind(['\n', '\r']).map_or(0, |i| i + 1);
         if !text[line_start..c.span.start as usize].chars().all(char::is_whitespace) {
             break; // a comment after code on the line above
         }
