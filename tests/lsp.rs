@@ -415,8 +415,6 @@ fn rename_across_files() {
     params["newName"] = json!("Depth");
     let r = lsp.request_full("textDocument/rename", params.clone());
     assert_eq!(r["error"]["message"], "there is already a task named `Depth`", "{r}");
-    params["newName"] = json!("AchieveOneGoal");
-    assert!(lsp.request_full("textDocument/rename", params.clone())["error"].is_object());
     // Another kind may share the name: an action named `Goto` is no task.
     params["newName"] = json!("enableGoto");
     assert!(lsp.request_full("textDocument/rename", params.clone())["error"].is_null());
@@ -758,8 +756,8 @@ fn line_ends_and_astral_characters_map_positions() {
         // An edit at a column past the end of a line goes before its line end.
         let line = lsp_position(&text, label)["line"].clone();
         let past = json!({"line": line, "character": 999});
-        lsp.change("mission.mcl", 2, json!([{"range": {"start": past, "end": past}, "text": "Nope()"}]));
-        let edited = text.replacen("wait ;", "wait ;Nope()", 1);
+        lsp.change("mission.mcl", 2, json!([{"range": {"start": past, "end": past}, "text": "Nope() ;"}]));
+        let edited = text.replacen("wait ;", "wait ;Nope() ;", 1);
         let d = lsp.diagnostics("mission.mcl", Some(2));
         let e = d["diagnostics"].as_array().unwrap().iter().find(|x| x["code"] == "E0101").expect("E0101").clone();
         let nope = edited.find("Nope()").unwrap();
@@ -778,7 +776,7 @@ fn line_ends_and_astral_characters_map_positions() {
         // Formatting keeps the document's line ends.
         let params = json!({"textDocument": {"uri": lsp.uri("mission.mcl")}, "options": {"tabSize": 4, "insertSpaces": true}});
         let edits = lsp.request("textDocument/formatting", params);
-        for e in edits.as_array().unwrap() {
+        for e in edits.as_array().unwrap_or_else(|| panic!("{name}: not formatted: {edits}")) {
             let t = e["newText"].as_str().unwrap();
             match name {
                 "crlf" => assert_eq!(t.matches('\n').count(), t.matches("\r\n").count(), "{t:?}"),
@@ -997,13 +995,13 @@ fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
     }
     // An unused task in the same file changes nothing either.
     let end = lsp_position(&moved, moved.len());
-    lsp.change("mission.mcl", 3, json!([{"range": {"start": end, "end": end}, "text": "tasks {\n    Idle(): Instant { }\n}\n"}]));
+    lsp.change("mission.mcl", 3, json!([{"range": {"start": end, "end": end}, "text": "tasks {\n    _Idle(): Instant { }\n}\n"}]));
     for p in publications(&mut lsp, 3) {
         assert!(has_e0406(&p), "{p}");
     }
     // Removing one order fixes it: the verdict goes away.
     let fixed = moved.replace("    order { v2:p5, v1:p2 }\n", "");
-    let fixed = format!("{fixed}tasks {{\n    Idle(): Instant {{ }}\n}}\n");
+    let fixed = format!("{fixed}tasks {{\n    _Idle(): Instant {{ }}\n}}\n");
     lsp.change("mission.mcl", 4, json!([{"text": fixed}]));
     assert_eq!(lsp.diagnostics("mission.mcl", Some(4))["diagnostics"], json!([]));
     assert_eq!(lsp.shutdown(), 0);

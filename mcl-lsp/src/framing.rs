@@ -90,11 +90,6 @@ fn first_json_value(bytes: &[u8]) -> Value {
     }
 }
 
-fn skip_ws(bytes: &[u8]) -> &[u8] {
-    let n = bytes.iter().take_while(|b| b.is_ascii_whitespace()).count();
-    &bytes[n..]
-}
-
 impl Framer {
     pub fn new() -> Self {
         Self::default()
