@@ -769,8 +769,11 @@ fn completion_in_every_context() {
         completion_labels(&format!("{}$0{}", &APPENDIX_C[..i], &APPENDIX_C[i + word..]))
     };
     // Labels after `mission :` (spaces allowed) and bare labels in `_sync_ {`.
-    assert_eq!(at("_order_ { m2 : ", "asc_ready"), ["asc_ready", "usbl", "receive"]);
-    let refs = at("_sync_ { ", "send ,");
+    assert_eq!(at("order { m2:", "asc_ready"), ["asc_ready", "usbl", "receive"]);
+    let spaced = APPENDIX_C.replace("order { m2:asc_ready", "_order_ { m2 : asc_ready");
+    let i = spaced.find("m2 : asc_ready").unwrap() + 5;
+    assert_eq!(completion_labels(&format!("{}$0{}", &spaced[..i], &spaced[i + 9..])), ["asc_ready", "usbl", "receive"]);
+    let refs = at("sync { ", "send,");
     assert!(refs.contains(&"m1:send".to_string()) && refs.contains(&"m2:".to_string()), "{refs:?}");
     // Transitions in task bodies, after `->` and after `,`.
     let trs = ["TT0", "TT1", "TT2", "TT3", "T0", "T1", "T2", "T3", "T6", "T7"];
@@ -778,8 +781,8 @@ fn completion_in_every_context() {
     assert_eq!(at("e: eventInitOk -> ", "T2;"), trs);
     assert_eq!(at("a: disableInit -> T1, ", "T6, T7"), trs);
     // Arcs: a place is followed by a transition, a transition by a place.
-    assert_eq!(at("begin.1 -> ", "TT0; off"), trs);
-    let places = at("T0 -> ", "exe; exe");
+    assert_eq!(at("begin.1 -> ", "TT0;\n            off"), trs);
+    let places = at("T0 -> ", "exe;\n            exe");
     assert!(places.contains(&"exe".to_string()) && !places.contains(&"T1".to_string()), "{places:?}");
     let any = at("arcs {\n            ", "begin.1 -> TT0");
     assert!(any.contains(&"exe".to_string()) && any.contains(&"T1".to_string()), "{any:?}");
