@@ -425,7 +425,10 @@ fn rename_across_files() {
         lsp.request_full("textDocument/rename", params)
     };
     let r = rename(&mut lsp, "go\n", "dive");
-    assert_eq!(r["error"]["message"], "this mission already has a call labelled `dive` (constraints would name both)", "{r}");
+    assert_eq!(
+        r["error"]["message"], "this mission already has a call labelled `dive` (constraints would name both)",
+        "{r}"
+    );
     assert!(rename(&mut lsp, "go\n", "wait")["error"].is_null(), "a label of another mission");
     let r = rename(&mut lsp, "auv {", "asc");
     assert_eq!(r["error"]["message"], "there is already a mission named `asc`", "{r}");
@@ -639,7 +642,9 @@ fn raw_request(lsp: &mut Lsp, raw: &[u8], header: &str, method: &str, params: Va
     let _ = lsp.stdin.flush();
     let deadline = Instant::now() + TIMEOUT;
     loop {
-        let m = lsp.recv(deadline).unwrap_or_else(|| panic!("no answer after {:?} / {header:?}", String::from_utf8_lossy(raw)));
+        let m = lsp
+            .recv(deadline)
+            .unwrap_or_else(|| panic!("no answer after {:?} / {header:?}", String::from_utf8_lossy(raw)));
         if m.get("id") == Some(&json!(id)) && m.get("method").is_none() {
             return m;
         }
@@ -774,7 +779,8 @@ fn line_ends_and_astral_characters_map_positions() {
         final_text.push_str("mission { Void() }");
         assert_eq!(e["range"]["start"], lsp_position(&final_text, final_text.find("Nope()").unwrap()), "{name}: {d}");
         // Formatting keeps the document's line ends.
-        let params = json!({"textDocument": {"uri": lsp.uri("mission.mcl")}, "options": {"tabSize": 4, "insertSpaces": true}});
+        let params =
+            json!({"textDocument": {"uri": lsp.uri("mission.mcl")}, "options": {"tabSize": 4, "insertSpaces": true}});
         let edits = lsp.request("textDocument/formatting", params);
         for e in edits.as_array().unwrap_or_else(|| panic!("{name}: not formatted: {edits}")) {
             let t = e["newText"].as_str().unwrap();
@@ -974,7 +980,8 @@ fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
     lsp.wait_for("textDocument/publishDiagnostics", |p| p["uri"] == uri.as_str() && has_e0406(p));
     // Every publication for `version` within a while.
     let publications = |lsp: &mut Lsp, version: i64| {
-        let first = lsp.wait_for("textDocument/publishDiagnostics", |p| p["uri"] == uri.as_str() && p["version"] == version);
+        let first =
+            lsp.wait_for("textDocument/publishDiagnostics", |p| p["uri"] == uri.as_str() && p["version"] == version);
         let mut all = vec![first];
         let deadline = Instant::now() + Duration::from_millis(500);
         while let Some(m) = lsp.recv(deadline) {
@@ -995,7 +1002,11 @@ fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
     }
     // An unused task in the same file changes nothing either.
     let end = lsp_position(&moved, moved.len());
-    lsp.change("mission.mcl", 3, json!([{"range": {"start": end, "end": end}, "text": "tasks {\n    _Idle(): Instant { }\n}\n"}]));
+    lsp.change(
+        "mission.mcl",
+        3,
+        json!([{"range": {"start": end, "end": end}, "text": "tasks {\n    _Idle(): Instant { }\n}\n"}]),
+    );
     for p in publications(&mut lsp, 3) {
         assert!(has_e0406(&p), "{p}");
     }
@@ -1010,10 +1021,7 @@ fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
 #[test]
 fn pulled_diagnostics_refresh_for_the_verdict_and_cancel_when_stale() {
     let big = mcl_syntax::gen::program(400, 7);
-    let root = workspace(
-        "pull-refresh",
-        &[("vehicle.mcl", VEHICLE), ("mission.mcl", ORDER_CYCLE), ("big.mcl", &big)],
-    );
+    let root = workspace("pull-refresh", &[("vehicle.mcl", VEHICLE), ("mission.mcl", ORDER_CYCLE), ("big.mcl", &big)]);
     let mut lsp = Lsp::start(&root);
     let mut caps = client_caps();
     caps["textDocument"]["diagnostic"] = json!({"dynamicRegistration": false});
@@ -1021,7 +1029,8 @@ fn pulled_diagnostics_refresh_for_the_verdict_and_cancel_when_stale() {
     lsp.initialize(caps);
     lsp.open("mission.mcl", ORDER_CYCLE);
     let uri = lsp.uri("mission.mcl");
-    let pull = |lsp: &mut Lsp, uri: &str| lsp.request_full("textDocument/diagnostic", json!({"textDocument": {"uri": uri}}));
+    let pull =
+        |lsp: &mut Lsp, uri: &str| lsp.request_full("textDocument/diagnostic", json!({"textDocument": {"uri": uri}}));
     // The answer comes without waiting for the deadlock analysis; once it
     // is done the server asks the client to pull again.
     let r = pull(&mut lsp, &uri);
@@ -1127,9 +1136,42 @@ fn mutated_examples_and_edit_sequences_never_kill_the_server() {
     let seed = std::env::var("MCL_LSP_FUZZ_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0xfa57_c0de_u64);
     let mut rng = Rng(seed | 1);
     let pieces = [
-        "{", "}", "(", ")", ";", "->", "→", "𝄞", "é", "\r", "\r\n", "/*", "*/", "//", "\"", "\\", "\u{0}", "mission", "tasks {",
-        "parallel {", "} or {", "monitor {", "} condition (", ") do {", "while (", "try {", "} catch {", "mutex {", "order {",
-        "sync {", "} = 2", ":", ",", "import \"vehicle.mcl\";", "import \"nowhere.mcl\";", "import \"mission-operators.mcl\";",
+        "{",
+        "}",
+        "(",
+        ")",
+        ";",
+        "->",
+        "→",
+        "𝄞",
+        "é",
+        "\r",
+        "\r\n",
+        "/*",
+        "*/",
+        "//",
+        "\"",
+        "\\",
+        "\u{0}",
+        "mission",
+        "tasks {",
+        "parallel {",
+        "} or {",
+        "monitor {",
+        "} condition (",
+        ") do {",
+        "while (",
+        "try {",
+        "} catch {",
+        "mutex {",
+        "order {",
+        "sync {",
+        "} = 2",
+        ":",
+        ",",
+        "import \"vehicle.mcl\";",
+        "import \"nowhere.mcl\";",
+        "import \"mission-operators.mcl\";",
     ];
     let methods = [
         "textDocument/hover",

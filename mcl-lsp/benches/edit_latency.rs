@@ -300,16 +300,28 @@ fn end_to_end(bin: &str, text: &str) {
             None if i < 500 => {
                 let (l, ch) = idx.utf16_position(text, sites[rng.below(sites.len())]);
                 undo = Some((l, ch, "", true));
-                (json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch}}, "text": " "}), false, true)
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch}}, "text": " "}),
+                    false,
+                    true,
+                )
             }
             None => {
                 let (l, ch) = idx.utf16_position(text, calls[rng.below(calls.len())]);
                 undo = Some((l, ch, "G", false));
-                (json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch + 1}}, "text": "W"}), true, false)
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch + 1}}, "text": "W"}),
+                    true,
+                    false,
+                )
             }
             Some((l, ch, back, is_blank)) => {
                 let end = ch + 1;
-                (json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": end}}, "text": back}), false, is_blank)
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": end}}, "text": back}),
+                    false,
+                    is_blank,
+                )
             }
         };
         let t = Instant::now();

@@ -281,8 +281,11 @@ mod tests {
     #[test]
     fn well_framed_messages_pass_untouched() {
         check(&format!("{}{}", framed(&msg(1)), framed(&msg(2))), &[1, 2], false);
-        let with_type =
-            format!("Content-Length: {}\r\nContent-Type: application/vscode-jsonrpc; charset=utf-8\r\n\r\n{}", msg(1).len(), msg(1));
+        let with_type = format!(
+            "Content-Length: {}\r\nContent-Type: application/vscode-jsonrpc; charset=utf-8\r\n\r\n{}",
+            msg(1).len(),
+            msg(1)
+        );
         check(&with_type, &[1], false);
     }
 
@@ -303,7 +306,9 @@ mod tests {
     fn wrong_lengths_use_the_json_value() {
         let m = msg(1);
         // Not a number, negative, too small, too large, huge.
-        for len in ["abc".to_string(), "-3".into(), "10".into(), format!("{}", m.len() + 40), "99999999999999999".into()] {
+        for len in
+            ["abc".to_string(), "-3".into(), "10".into(), format!("{}", m.len() + 40), "99999999999999999".into()]
+        {
             check(&format!("Content-Length: {len}\r\n\r\n{m}{}", framed(&msg(2))), &[1, 2], true);
             // Alone, with the client waiting for an answer.
             check(&format!("Content-Length: {len}\r\n\r\n{m}"), &[1], true);
@@ -321,8 +326,16 @@ mod tests {
                 x ^= x << 13;
                 x ^= x >> 7;
                 x ^= x << 17;
-                let pieces: [&[u8]; 8] =
-                    [b"Content-Length: ", b"12", b"\r\n", b"\r\n\r\n", b"{", b"}", b"\"", br#"{"jsonrpc":"2.0","method":"x"}"#];
+                let pieces: [&[u8]; 8] = [
+                    b"Content-Length: ",
+                    b"12",
+                    b"\r\n",
+                    b"\r\n\r\n",
+                    b"{",
+                    b"}",
+                    b"\"",
+                    br#"{"jsonrpc":"2.0","method":"x"}"#,
+                ];
                 bytes.extend_from_slice(pieces[(x % 8) as usize]);
                 bytes.push((x >> 20) as u8);
             }

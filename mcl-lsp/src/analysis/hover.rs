@@ -76,17 +76,42 @@ fn section_hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Ho
         _ => None,
     })?;
     let (form, what) = match kw {
-        Kw::Import => ("import \"file.mcl\";", "Reads the definitions of another MCL file (a path relative to this one)."),
-        Kw::Actions => ("actions { name = Primitive( c: command, v: param ); }", "The actions: each sends one command to one primitive of the vehicle."),
+        Kw::Import => {
+            ("import \"file.mcl\";", "Reads the definitions of another MCL file (a path relative to this one).")
+        }
+        Kw::Actions => (
+            "actions { name = Primitive( c: command, v: param ); }",
+            "The actions: each sends one command to one primitive of the vehicle.",
+        ),
         Kw::Events => ("events { name; }", "The events the vehicle sends back (a primitive ended ok, failed, ...)."),
-        Kw::Pattern | Kw::Patterns => ("pattern { Name { places {...} transitions {...} arcs {...} } }", "Petri net patterns of tasks: the net every task of the pattern instantiates."),
-        Kw::Places => ("places { begin.1; abort.1; ok.1; fail.1; p(1); }", "The places of the pattern: `.N` puts a place in interface N, `(k)` gives it k tokens."),
-        Kw::Transitions => ("transitions { T0; TO(delay); }", "The transitions of the pattern: `(delay)` makes one timed (seconds, or a task parameter)."),
-        Kw::Arcs => ("arcs { place -> transition; transition -> place; }", "The arcs of the pattern, each from a place to a transition or back."),
-        Kw::Tasks => ("tasks { Name( params ): Pattern { a: action -> T0; e: event -> T2; } }", "The tasks: a pattern whose transitions send the given actions and fire on the given events."),
+        Kw::Pattern | Kw::Patterns => (
+            "pattern { Name { places {...} transitions {...} arcs {...} } }",
+            "Petri net patterns of tasks: the net every task of the pattern instantiates.",
+        ),
+        Kw::Places => (
+            "places { begin.1; abort.1; ok.1; fail.1; p(1); }",
+            "The places of the pattern: `.N` puts a place in interface N, `(k)` gives it k tokens.",
+        ),
+        Kw::Transitions => (
+            "transitions { T0; TO(delay); }",
+            "The transitions of the pattern: `(delay)` makes one timed (seconds, or a task parameter).",
+        ),
+        Kw::Arcs => (
+            "arcs { place -> transition; transition -> place; }",
+            "The arcs of the pattern, each from a place to a transition or back.",
+        ),
+        Kw::Tasks => (
+            "tasks { Name( params ): Pattern { a: action -> T0; e: event -> T2; } }",
+            "The tasks: a pattern whose transitions send the given actions and fire on the given events.",
+        ),
         Kw::Mission => ("mission : name { ... }", "A mission: the control structures and task calls one vehicle runs."),
-        Kw::PlanOp => ("mcl_plan_op Name( params ) { ... }", "A mission operator the planner sequences (seed chapter 7)."),
-        Kw::Constraints => ("constraints { mutex {...} = N  order {...}  sync {...} }", "Coordination constraints between the labelled calls of several missions."),
+        Kw::PlanOp => {
+            ("mcl_plan_op Name( params ) { ... }", "A mission operator the planner sequences (seed chapter 7).")
+        }
+        Kw::Constraints => (
+            "constraints { mutex {...} = N  order {...}  sync {...} }",
+            "Coordination constraints between the labelled calls of several missions.",
+        ),
         _ => return None,
     };
     let md = format!("```mcl\n{form}\n```\n**{}** (block)\n\n{what}", kw.as_str());

@@ -277,9 +277,9 @@ fn collision(a: &Analysis<'_>, sym: &Sym, occs: &[(SourceFile, Occ)], new_name: 
             }
         }
         Sym::Param { file, item, .. } => {
-            let taken = occurrences(a.db, *file).iter().any(|o| {
-                o.name == new_name && matches!(o.role, Role::MissionParam { mission } if mission == *item)
-            });
+            let taken = occurrences(a.db, *file)
+                .iter()
+                .any(|o| o.name == new_name && matches!(o.role, Role::MissionParam { mission } if mission == *item));
             if taken {
                 return Err(RenameError(format!("this mission already has a parameter `{new_name}`")));
             }

@@ -672,7 +672,16 @@ fn hover_on_every_keyword() {
             mcl_syntax::lexer::Token::Kw(_) if !matches!(word, "at") => {
                 if matches!(
                     word,
-                    "import" | "actions" | "events" | "pattern" | "places" | "transitions" | "arcs" | "tasks" | "mission" | "constraints"
+                    "import"
+                        | "actions"
+                        | "events"
+                        | "pattern"
+                        | "places"
+                        | "transitions"
+                        | "arcs"
+                        | "tasks"
+                        | "mission"
+                        | "constraints"
                 ) {
                     "(block)"
                 } else {
@@ -689,11 +698,28 @@ fn hover_on_every_keyword() {
         }
         seen.insert(word.to_string());
     }
-    for w in ["monitor", "condition", "while_condition", "do", "try", "catch", "while", "not", "if", "else", "parallel", "or", "and"] {
+    for w in [
+        "monitor",
+        "condition",
+        "while_condition",
+        "do",
+        "try",
+        "catch",
+        "while",
+        "not",
+        "if",
+        "else",
+        "parallel",
+        "or",
+        "and",
+    ] {
         assert!(seen.contains(w), "{w} not in the example");
     }
     // The usual constraint spellings, and `then` written for `else` (seed Table B.4).
-    let text = MISSION.replace("order { auv:go, asc:wait }", "order { auv:go, asc:wait }\n    mutex { auv:dive, asc:wait } = 1\n    sync { auv:go, asc:wait }");
+    let text = MISSION.replace(
+        "order { auv:go, asc:wait }",
+        "order { auv:go, asc:wait }\n    mutex { auv:dive, asc:wait } = 1\n    sync { auv:go, asc:wait }",
+    );
     assert!(hover_at(&text, "order {", 2).contains("**order** (coordination constraint)"));
     assert!(hover_at(&text, "mutex {", 0).contains("At most N of the listed calls"));
     assert!(hover_at(&text, "sync {", 4).contains("**sync**"));
@@ -787,6 +813,9 @@ fn completion_in_every_context() {
     let any = at("arcs {\n            ", "begin.1 -> TT0");
     assert!(any.contains(&"exe".to_string()) && any.contains(&"T1".to_string()), "{any:?}");
     // Patterns after `):`, tasks in a monitor's condition.
-    assert_eq!(at("Init(): ", "P_TASK {\n        a: enableInit"), ["AchieveOneGoal", "AchieveOneGoalTimed", "Instant", "P_TASK", "P_TIMEOUT"]);
+    assert_eq!(
+        at("Init(): ", "P_TASK {\n        a: enableInit"),
+        ["AchieveOneGoal", "AchieveOneGoalTimed", "Instant", "P_TASK", "P_TIMEOUT"]
+    );
     assert!(at("} while_condition ( ", "SonarDetect( object )").contains(&"SonarDetect".to_string()));
 }
