@@ -139,6 +139,15 @@ fn the_examples_keep_checking_after_formatting() {
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
 }
 
+#[test]
+fn the_bundled_examples_are_formatted() {
+    // `mcl fmt --check examples/` in the repository: what CI and the
+    // pre-commit hook run (format them with `mcl fmt examples/`).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let o = mcl(root, &["fmt", "--check", "examples/"]);
+    assert_eq!(o.status.code(), Some(0), "not formatted:\n{}{}", stdout(&o), stderr(&o));
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {

@@ -223,12 +223,8 @@ fn rss_kib(pid: u32) -> u64 {
     s.lines().find(|l| l.starts_with("VmRSS:")).and_then(|l| l.split_whitespace().nth(1)?.parse().ok()).unwrap_or(0)
 }
 
-fn end_to_end(bin: &str, text: &str) {
-    let dir = std::env::temp_dir().join(format!("mcl-lsp-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("program.mcl");
-    std::fs::write(&file, text).unwrap();
-    let uri = format!("file://{}", file.display());
+/// A server started and initialized over stdio.
+fn start(bin: &str, dir: &std::path::Path) -> (std::process::Child, Client) {
     let mut child = Command::new(bin)
         .arg("lsp")
         .env("XDG_CACHE_HOME", dir.join("cache"))
@@ -237,44 +233,106 @@ fn end_to_end(bin: &str, text: &str) {
         .stderr(Stdio::inherit())
         .spawn()
         .expect("start the server");
-    let pid = child.id();
     let mut c = Client { stdin: child.stdin.take().unwrap(), out: BufReader::new(child.stdout.take().unwrap()) };
     c.send(&json!({"jsonrpc": "2.0", "id": 1, "method": "initialize", "params": {"processId": null, "rootUri": null, "capabilities": {}}}));
     while c.recv().get("id") != Some(&json!(1)) {}
     c.send(&json!({"jsonrpc": "2.0", "method": "initialized", "params": {}}));
-    let rss_start = rss_kib(pid);
-    c.send(&json!({"jsonrpc": "2.0", "method": "textDocument/didOpen", "params": {"textDocument": {"uri": uri, "languageId": "mcl", "version": 1, "text": text}}}));
-    let wait = |c: &mut Client, version: i64| loop {
+    (child, c)
+}
+
+/// Waits for the first diagnostics of `version`; checks that they are the
+/// expected ones (none, or one E0101: the compiler's checks ran on the edit).
+fn wait(c: &mut Client, version: i64, error: bool) {
+    loop {
         let m = c.recv();
         if m["method"] == "textDocument/publishDiagnostics" && m["params"]["version"] == version {
-            assert_eq!(m["params"]["diagnostics"], json!([]), "{m}");
+            let d = m["params"]["diagnostics"].as_array().unwrap();
+            if error {
+                assert!(d.len() == 1 && d[0]["code"] == "E0101", "{m}");
+            } else {
+                assert!(d.is_empty(), "{m}");
+            }
             return;
         }
-    };
-    wait(&mut c, 1);
+    }
+}
+
+fn end_to_end(bin: &str, text: &str) {
+    let dir = std::env::temp_dir().join(format!("mcl-lsp-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("program.mcl");
+    std::fs::write(&file, text).unwrap();
+    let uri = format!("file://{}", file.display());
+    let open = json!({"jsonrpc": "2.0", "method": "textDocument/didOpen", "params": {"textDocument": {"uri": uri, "languageId": "mcl", "version": 1, "text": text}}});
+
+    // From scratch: a fresh server opens the file (every parse and check).
+    let mut scratch = Vec::new();
+    for _ in 0..5 {
+        let (mut child, mut c) = start(bin, &dir);
+        let t = Instant::now();
+        c.send(&open);
+        wait(&mut c, 1, false);
+        scratch.push(t.elapsed().as_secs_f64() * 1e3);
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+
+    let (mut child, mut c) = start(bin, &dir);
+    let pid = child.id();
+    let rss_start = rss_kib(pid);
+    c.send(&open);
+    wait(&mut c, 1, false);
     let rss_open = rss_kib(pid);
     let sites = mission_sites(text);
+    // Task calls inside missions: `Goto(` at the start of a statement.
+    let calls: Vec<usize> = text.match_indices("    Goto( ").map(|(i, _)| i + 4).filter(|&i| i > sites[0]).collect();
     let idx = mcl_syntax::LineIndex::new(text);
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-    let mut lat = Vec::new();
+    let (mut blank, mut semantic) = (Vec::new(), Vec::new());
     let mut rss = Vec::new();
-    let mut inserted: Option<(u32, u32)> = None;
+    let mut undo: Option<(u32, u32, &str, bool)> = None;
     for i in 0..1000i64 {
         let version = i + 2;
-        let change = match inserted.take() {
-            None => {
-                let (l, c) = idx.utf16_position(text, sites[rng.below(sites.len())]);
-                inserted = Some((l, c));
-                json!({"range": {"start": {"line": l, "character": c}, "end": {"line": l, "character": c}}, "text": " "})
+        // Edits 0..500: a space inserted inside a mission, then removed (the
+        // checks' results do not change). Edits 500..1000: a call's task
+        // renamed `Goto` -> `Woto` (E0101 appears), then back (it goes).
+        let (change, error, is_blank) = match undo.take() {
+            None if i < 500 => {
+                let (l, ch) = idx.utf16_position(text, sites[rng.below(sites.len())]);
+                undo = Some((l, ch, "", true));
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch}}, "text": " "}),
+                    false,
+                    true,
+                )
             }
-            Some((l, c)) => {
-                json!({"range": {"start": {"line": l, "character": c}, "end": {"line": l, "character": c + 1}}, "text": ""})
+            None => {
+                let (l, ch) = idx.utf16_position(text, calls[rng.below(calls.len())]);
+                undo = Some((l, ch, "G", false));
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch + 1}}, "text": "W"}),
+                    true,
+                    false,
+                )
+            }
+            Some((l, ch, back, is_blank)) => {
+                let end = ch + 1;
+                (
+                    json!({"range": {"start": {"line": l, "character": ch}, "end": {"line": l, "character": end}}, "text": back}),
+                    false,
+                    is_blank,
+                )
             }
         };
         let t = Instant::now();
         c.send(&json!({"jsonrpc": "2.0", "method": "textDocument/didChange", "params": {"textDocument": {"uri": uri, "version": version}, "contentChanges": [change]}}));
-        wait(&mut c, version);
-        lat.push(t.elapsed().as_secs_f64() * 1e3);
+        wait(&mut c, version, error);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        if is_blank {
+            blank.push(ms);
+        } else {
+            semantic.push(ms);
+        }
         if (i + 1) % 100 == 0 {
             rss.push(rss_kib(pid));
         }
@@ -284,13 +342,22 @@ fn end_to_end(bin: &str, text: &str) {
     c.send(&json!({"jsonrpc": "2.0", "method": "exit", "params": null}));
     let status = child.wait().unwrap();
     let _ = std::fs::remove_dir_all(&dir);
+    let sp50 = percentile(&mut scratch, 0.5);
+    let s50 = percentile(&mut semantic, 0.5);
     println!("end to end (`{bin} lsp` over stdio, 1,000 edits, each waited for):");
+    println!("  from scratch (fresh server, didOpen -> diagnostics): p50 {sp50:.2} ms (5 runs)");
     println!(
-        "  edit -> publishDiagnostics:     p50 {:.2} ms  p99 {:.2} ms  max {:.2} ms",
-        percentile(&mut lat, 0.5),
-        percentile(&mut lat, 0.99),
-        lat.iter().cloned().fold(0.0, f64::max)
+        "  blank edit -> publishDiagnostics:        p50 {:.2} ms  p99 {:.2} ms  max {:.2} ms",
+        percentile(&mut blank, 0.5),
+        percentile(&mut blank, 0.99),
+        blank.iter().cloned().fold(0.0, f64::max)
     );
+    println!(
+        "  E0101 made/fixed -> publishDiagnostics:  p50 {s50:.2} ms  p99 {:.2} ms  max {:.2} ms",
+        percentile(&mut semantic, 0.99),
+        semantic.iter().cloned().fold(0.0, f64::max)
+    );
+    println!("  speed-up of a semantic edit over scratch (p50): {:.1}x", sp50 / s50);
     println!("  resident memory: {} MiB after start, {} MiB after open", rss_start / 1024, rss_open / 1024);
     println!(
         "  resident memory every 100 edits (MiB): {}",

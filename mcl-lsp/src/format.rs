@@ -16,6 +16,8 @@ pub const AVAILABLE: bool = true;
 pub fn format_document(a: &Analysis<'_>, file: SourceFile) -> Option<Vec<TextEdit>> {
     let text = a.text(file);
     let formatted = mcl_syntax::format::format_parse(text, parse(a.db, file)).ok()?;
+    // Keep the document's line ends (the formatter writes `\n`).
+    let formatted = crate::analysis::with_line_ends(&formatted, text).0;
     if formatted == text {
         return Some(Vec::new());
     }

@@ -19,6 +19,7 @@
 
 pub mod analysis;
 mod format;
+pub mod framing;
 pub mod host;
 mod server;
 

@@ -12,6 +12,7 @@
 //!   syntax errors first when there are any, then every diagnostic of
 //!   `check_file`, each tagged with the document version it was computed on.
 
+use crate::analysis::coordination::{self, Verdict};
 use crate::analysis::{self, Analysis};
 use crate::host::{Edit, Host, Snapshot};
 use mcl_compiler::queries::program;
@@ -47,9 +48,65 @@ struct Shared {
     /// `exit` was received: stop at once, even with handlers still waiting
     /// for the client (a registration it never answered).
     exit: tokio::sync::Notify,
+    /// The last coordination verdict of each file (see
+    /// [`analysis::coordination`]), written by the analysis thread.
+    verdicts: std::sync::Mutex<HashMap<PathBuf, Verdict>>,
+}
+
+/// Where a file's coordination verdict stands on a snapshot.
+enum Coord {
+    /// No analysis: no constraints, or errors in the program.
+    None,
+    /// The last verdict is still valid: its diagnostics, placed in the current text.
+    Valid(Vec<mcl_syntax::Diagnostic>),
+    /// To be computed; the input's fingerprint.
+    Stale(u64),
 }
 
 impl Shared {
+    fn verdicts(&self) -> std::sync::MutexGuard<'_, HashMap<PathBuf, Verdict>> {
+        self.verdicts.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The last verdict of `file`, if it had diagnostics, placed in the
+    /// current text without checking that it still holds (cheap: the parse).
+    fn carried(&self, a: &Analysis<'_>, file: mcl_compiler::SourceFile) -> Option<Vec<mcl_syntax::Diagnostic>> {
+        let last = self.verdicts().get(a.path(file)).filter(|v| !v.diags.is_empty()).cloned()?;
+        coordination::place(a, file, &last, &coordination::anchors(a, file))
+    }
+
+    /// Whether the last verdict of `file` still holds (compiles its missions).
+    fn coord(&self, a: &Analysis<'_>, file: mcl_compiler::SourceFile) -> Coord {
+        let Some(fp) = coordination::fingerprint(a, file) else {
+            self.verdicts().remove(a.path(file));
+            return Coord::None;
+        };
+        let last = self.verdicts().get(a.path(file)).cloned();
+        match last.and_then(|v| coordination::reuse(a, file, &v, fp)) {
+            Some(v) => {
+                let diags = v.diags.clone();
+                self.verdicts().insert(a.path(file).to_path_buf(), v);
+                Coord::Valid(diags)
+            }
+            None => Coord::Stale(fp),
+        }
+    }
+
+    /// Runs the analysis and keeps its verdict; returns it and whether it
+    /// differs from the previous one.
+    fn compute_verdict(
+        &self,
+        a: &Analysis<'_>,
+        file: mcl_compiler::SourceFile,
+        fingerprint: u64,
+    ) -> (Vec<mcl_syntax::Diagnostic>, bool) {
+        let v = coordination::compute(a, file, fingerprint);
+        let diags = v.diags.clone();
+        let old = self.verdicts().insert(a.path(file).to_path_buf(), v);
+        let changed = old.is_none_or(|o| o.diags != diags);
+        (diags, changed)
+    }
+
     fn enqueue(&self, edit: Edit) {
         // Numbered under the lock, so that the queue is in numbering order.
         let tx = self.edits.lock().unwrap_or_else(|e| e.into_inner());
@@ -68,6 +125,16 @@ fn content_modified() -> Error {
     Error::new(ErrorCode::ContentModified)
 }
 
+/// `ServerCancelled` (-32802) asking the client to pull again, as the
+/// protocol says a server cancels a stale `textDocument/diagnostic`.
+fn server_cancelled() -> Error {
+    Error {
+        code: ErrorCode::ServerError(-32802),
+        message: "the document changed; pull its diagnostics again".into(),
+        data: Some(serde_json::json!({ "retriggerRequest": true })),
+    }
+}
+
 impl Backend {
     /// Waits until every edit received so far is applied.
     async fn settled(&self) {
@@ -83,6 +150,15 @@ impl Backend {
         T: Send + 'static,
         F: FnOnce(&Analysis<'_>) -> T + Send + 'static,
     {
+        self.analyse_or(content_modified, f).await
+    }
+
+    /// [`Self::analyse`], answering `stale()` when an edit cancels it.
+    async fn analyse_or<T, F>(&self, stale: fn() -> Error, f: F) -> Result<T>
+    where
+        T: Send + 'static,
+        F: FnOnce(&Analysis<'_>) -> T + Send + 'static,
+    {
         self.settled().await;
         let shared = self.shared.clone();
         let res = tokio::task::spawn_blocking(move || {
@@ -93,7 +169,7 @@ impl Backend {
         .await;
         match res {
             Ok(Ok(v)) => Ok(v),
-            Ok(Err(_cancelled)) => Err(content_modified()),
+            Ok(Err(_cancelled)) => Err(stale()),
             Err(e) => {
                 let mut err = Error::internal_error();
                 err.message = format!("the request failed: {e}").into();
@@ -366,12 +442,29 @@ impl LanguageServer for Backend {
     }
 
     async fn diagnostic(&self, p: DocumentDiagnosticParams) -> Result<DocumentDiagnosticReportResult> {
+        // The compiler's diagnostics, and the coordination verdict when it
+        // is still valid. Otherwise the analysis thread computes it and asks
+        // the client to pull again; a client that cannot be asked waits for it.
+        let refresh = self.shared.caps.diagnostic_refresh.load(Ordering::SeqCst);
+        let shared = self.shared.clone();
+        let seen = self.shared.enqueued.load(Ordering::SeqCst);
         let items = self
-            .analyse(move |a| {
+            .analyse_or(server_cancelled, move |a| {
                 let file = a.file(&p.text_document.uri);
-                analysis::diagnostics::full(a, file)
+                let mut items = analysis::diagnostics::semantic(a, file);
+                let verdict = match shared.coord(a, file) {
+                    Coord::Valid(d) => d,
+                    Coord::Stale(fp) if !refresh => shared.compute_verdict(a, file, fp).0,
+                    Coord::Stale(_) | Coord::None => Vec::new(),
+                };
+                items.extend(verdict.iter().map(|d| analysis::diagnostics::to_lsp(a, file, d)));
+                items
             })
             .await?;
+        // An edit came while this was computed: the client pulls again.
+        if self.shared.enqueued.load(Ordering::SeqCst) > seen {
+            return Err(server_cancelled());
+        }
         Ok(DocumentDiagnosticReportResult::Report(DocumentDiagnosticReport::Full(
             RelatedFullDocumentDiagnosticReport {
                 related_documents: None,
@@ -474,7 +567,7 @@ fn analysis_loop(shared: Arc<Shared>, wake: mpsc::Receiver<()>, out: tmpsc::Unbo
         let generation = snap.generation;
         let pull = shared.caps.pull_diagnostics.load(Ordering::SeqCst);
         let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            diagnostics_pass(&snap, &pending, &closed, pull, &shown, &out)
+            diagnostics_pass(&shared, &snap, &pending, &closed, pull, &shown, &out)
         }));
         drop(snap); // before locking the host again: an edit may be waiting for it
         let result = match result {
@@ -510,6 +603,7 @@ struct Pass {
 }
 
 fn diagnostics_pass(
+    shared: &Shared,
     snap: &Snapshot,
     pending: &[(u64, PathBuf)],
     closed: &[(u64, Uri)],
@@ -536,8 +630,16 @@ fn diagnostics_pass(
     affected.sort_by_key(|f| !changed.contains(&a.path(*f).to_path_buf()));
     if pull {
         // The client asks for each document's diagnostics; tell it to ask
-        // again when a change reaches documents other than the edited ones.
-        let refresh = affected.iter().any(|f| !changed.contains(&a.path(*f).to_path_buf()));
+        // again when a change reaches documents other than the edited ones,
+        // or when a new coordination verdict is ready.
+        let mut refresh = affected.iter().any(|f| !changed.contains(&a.path(*f).to_path_buf()));
+        for &f in &affected {
+            // A request may have answered without this verdict meanwhile.
+            if let Coord::Stale(fp) = shared.coord(&a, f) {
+                let (verdict, changed) = shared.compute_verdict(&a, f, fp);
+                refresh |= changed || !verdict.is_empty();
+            }
+        }
         return Pass { refresh, shown: HashMap::new() };
     }
     let gen = snap.generation;
@@ -566,23 +668,44 @@ fn diagnostics_pass(
             }
         }
     }
-    // Then the compiler's checks of every affected file, and last the
-    // coordination analyses, which can take seconds: a stage waits for none
-    // of the slower ones, and an edit cancels them part-way.
+    // Then the compiler's checks of every affected file, with the last
+    // coordination verdict while it is still valid (an edit elsewhere in
+    // the file does not hide it), and last the coordination analyses that
+    // must run again, which can take seconds: a stage waits for none of the
+    // slower ones, and an edit cancels them part-way.
+    let to_lsp = |f, d: &[mcl_syntax::Diagnostic]| -> Vec<Diagnostic> {
+        d.iter().map(|d| analysis::diagnostics::to_lsp(&a, f, d)).collect()
+    };
     let mut semantic = Vec::with_capacity(affected.len());
     for &f in &affected {
         let diags = analysis::diagnostics::semantic(&a, f);
+        // The last verdict, carried to the current text; checked below.
+        let carried = shared.carried(&a, f);
+        let mut shown = diags.clone();
+        shown.extend(to_lsp(f, carried.as_deref().unwrap_or_default()));
         if let Some(uri) = a.uri(f) {
-            send(uri, a.world.version_of(a.path(f)), 1, diags.clone());
+            send(uri, a.world.version_of(a.path(f)), 1, shown);
         }
-        semantic.push(diags);
+        semantic.push((diags, carried.is_some()));
     }
-    for (&f, mut diags) in affected.iter().zip(semantic) {
-        let coordination = analysis::diagnostics::coordination(&a, f);
-        if coordination.is_empty() {
+    for (&f, (mut diags, carried)) in affected.iter().zip(semantic) {
+        let fingerprint = match shared.coord(&a, f) {
+            Coord::Valid(_) => continue, // shown as carried (or empty)
+            Coord::None => None,
+            Coord::Stale(fp) => Some(fp),
+        };
+        // The carried verdict no longer holds: withdraw it at once.
+        if carried {
+            if let Some(uri) = a.uri(f) {
+                send(uri, a.world.version_of(a.path(f)), 1, diags.clone());
+            }
+        }
+        let Some(fp) = fingerprint else { continue };
+        let (verdict, _) = shared.compute_verdict(&a, f, fp);
+        if verdict.is_empty() {
             continue;
         }
-        diags.extend(coordination);
+        diags.extend(to_lsp(f, &verdict));
         if let Some(uri) = a.uri(f) {
             send(uri, a.world.version_of(a.path(f)), 2, diags);
         }
@@ -645,6 +768,7 @@ pub fn service() -> (Ordered, tower_lsp_server::ClientSocket) {
         edits: std::sync::Mutex::new(edit_tx),
         shut_down: AtomicBool::new(false),
         exit: tokio::sync::Notify::new(),
+        verdicts: Default::default(),
     });
     let (applied_tx, applied_rx) = watch::channel(0u64);
     let (wake_tx, wake_rx) = mpsc::channel();
@@ -671,76 +795,6 @@ pub fn service() -> (Ordered, tower_lsp_server::ClientSocket) {
     (Ordered { inner, shared }, socket)
 }
 
-/// Largest message accepted (a bigger `Content-Length` ends the session).
-const MAX_MESSAGE: usize = 256 << 20;
-
-/// What replaces a message that is not JSON-RPC: a notification every
-/// server ignores (`$/` methods are optional).
-const PLACEHOLDER: &[u8] = br#"{"jsonrpc":"2.0","method":"$/mcl/malformedMessage"}"#;
-
-fn is_jsonrpc(body: &[u8]) -> bool {
-    serde_json::from_slice::<Request>(body).is_ok() || serde_json::from_slice::<Response>(body).is_ok()
-}
-
-/// Re-frames the input so that a malformed message cannot end the session:
-/// the transport stops reading after the first undecodable message, so
-/// bodies that are not JSON-RPC are replaced by an ignored notification and
-/// headers without a length are skipped.
-fn sanitized<R>(input: R) -> tokio::io::DuplexStream
-where
-    R: tokio::io::AsyncRead + Unpin + Send + 'static,
-{
-    use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt};
-    let (mut w, r) = tokio::io::duplex(1 << 16);
-    tokio::spawn(async move {
-        let mut rd = tokio::io::BufReader::new(input);
-        let mut line = Vec::new();
-        loop {
-            let mut len: Option<usize> = None;
-            loop {
-                line.clear();
-                match rd.read_until(b'\n', &mut line).await {
-                    Ok(0) | Err(_) => return,
-                    Ok(_) => {}
-                }
-                let text = String::from_utf8_lossy(&line);
-                let t = text.trim();
-                if t.is_empty() {
-                    if len.is_some() {
-                        break;
-                    }
-                    continue;
-                }
-                if let Some((name, value)) = t.split_once(':') {
-                    if name.trim().eq_ignore_ascii_case("content-length") {
-                        len = value.trim().parse().ok();
-                    }
-                }
-            }
-            let len = len.unwrap_or(0);
-            if len > MAX_MESSAGE {
-                eprintln!("mcl-lsp: a message of {len} bytes is too large; ending the session");
-                return;
-            }
-            let mut body = vec![0u8; len];
-            if rd.read_exact(&mut body).await.is_err() {
-                return;
-            }
-            let body: &[u8] = if is_jsonrpc(&body) {
-                &body
-            } else {
-                eprintln!("mcl-lsp: ignoring a message that is not JSON-RPC ({len} bytes)");
-                PLACEHOLDER
-            };
-            let header = format!("Content-Length: {}\r\n\r\n", body.len());
-            if w.write_all(header.as_bytes()).await.is_err() || w.write_all(body).await.is_err() {
-                return;
-            }
-        }
-    });
-    r
-}
-
 /// Serves the protocol on the given streams until `exit` (or the end of the
 /// input). Returns whether the client asked for `shutdown` first.
 pub async fn serve<I, O>(input: I, output: O) -> bool
@@ -751,7 +805,7 @@ where
     let (service, socket) = service();
     let shared = service.shared.clone();
     tokio::select! {
-        _ = Server::new(sanitized(input), output, socket).serve(service) => {}
+        _ = Server::new(crate::framing::resync(input), output, socket).serve(service) => {}
         _ = shared.exit.notified() => {}
     }
     shared.shut_down.load(Ordering::SeqCst)

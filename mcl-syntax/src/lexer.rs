@@ -262,7 +262,8 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
                 return i;
             }
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
+                // To the line end: `\n`, `\r\n` or a lone `\r`.
+                while i < bytes.len() && bytes[i] != b'\n' && bytes[i] != b'\r' {
                     i += 1;
                 }
                 let end = if i > start && bytes[i - 1] == b'\r' { i - 1 } else { i };
@@ -426,7 +427,7 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
         // `#` is a comment in many languages: report it and skip the line.
         if c == '#' {
             let mut end = i;
-            while end < bytes.len() && bytes[end] != b'\n' {
+            while end < bytes.len() && bytes[end] != b'\n' && bytes[end] != b'\r' {
                 end += 1;
             }
             out.errors.push(
@@ -586,6 +587,10 @@ mod tests {
         assert_eq!(l.tokens.len(), 2);
         assert_eq!(l.comments.len(), 3);
         assert!(l.errors.is_empty());
+        // A line comment ends at `\r\n` or a lone `\r` too (old Mac files).
+        let l = lex("a // x\rb // y\r\nc");
+        assert_eq!(l.tokens.len(), 3);
+        assert_eq!(l.comments.iter().map(|c| c.span.range()).collect::<Vec<_>>(), [2..6, 9..13]);
     }
 
     #[test]

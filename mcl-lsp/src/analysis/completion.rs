@@ -52,6 +52,9 @@ pub enum Context {
     /// Inside a pattern's arcs.
     Node {
         pattern: Option<String>,
+        /// After `X ->`: the arc's source (then a transition follows a
+        /// place, a place a transition).
+        from: Option<String>,
     },
     None,
 }
@@ -236,7 +239,18 @@ pub fn context(a: &Analysis<'_>, file: SourceFile, offset: usize) -> (Context, u
             let lb = toks.iter().rposition(|t| t.0 == Token::LBrace);
             let in_arcs = lb.is_some_and(|i| i > 0 && toks[i - 1].0 == Token::Kw(Kw::Arcs));
             if in_arcs && matches!(last, Some(Token::LBrace | Token::Semi | Token::Arrow)) {
-                Context::Node { pattern: pattern_at(a, file, offset) }
+                // The source of `X ->` or `X.1 ->`.
+                let from = (last == Some(Token::Arrow))
+                    .then(|| {
+                        toks.iter()
+                            .rev()
+                            .skip(1)
+                            .find(|t| !matches!(t.0, Token::Dot | Token::Num(_)))
+                            .and_then(|t| ident(Some(t)))
+                            .map(str::to_string)
+                    })
+                    .flatten();
+                Context::Node { pattern: pattern_at(a, file, offset), from }
             } else {
                 Context::None
             }
@@ -576,17 +590,24 @@ pub fn completion(a: &Analysis<'_>, file: SourceFile, offset: usize, snippets: b
                 b.item(c, CompletionItemKind::ENUM_MEMBER, Some("command".into()), None, None, 1);
             }
         }
-        Context::Node { pattern } => {
+        Context::Node { pattern, from } => {
             let pat = a.ast(file).items.iter().find_map(|i| match i {
                 Item::Patterns(bk) => bk.patterns.iter().find(|p| Some(&p.name.text) == pattern.as_ref()),
                 _ => None,
             });
             if let Some(mcl_syntax::ast::Pattern { body: PatternBody::Net(n), .. }) = pat {
-                for p in &n.places {
-                    b.item(&p.name.text, CompletionItemKind::FIELD, Some("place".into()), None, None, 1);
+                // An arc joins a place and a transition.
+                let from_place = from.as_ref().map(|f| n.places.iter().any(|p| &p.name.text == f));
+                let from_transition = from.as_ref().map(|f| n.transitions.iter().any(|t| &t.name.text == f));
+                if from_place != Some(true) {
+                    for p in &n.places {
+                        b.item(&p.name.text, CompletionItemKind::FIELD, Some("place".into()), None, None, 1);
+                    }
                 }
-                for t in &n.transitions {
-                    b.item(&t.name.text, CompletionItemKind::PROPERTY, Some("transition".into()), None, None, 1);
+                if from_transition != Some(true) {
+                    for t in &n.transitions {
+                        b.item(&t.name.text, CompletionItemKind::PROPERTY, Some("transition".into()), None, None, 1);
+                    }
                 }
             }
         }

@@ -25,7 +25,9 @@ impl<'x> Edits<'x> {
     }
     fn add(mut self, file: SourceFile, span: Span, text: impl Into<String>) -> Self {
         if let Some(uri) = self.a.uri(file) {
-            self.map.entry(uri).or_default().push(TextEdit { range: self.a.range(file, span), new_text: text.into() });
+            // New lines in the document's own line ends.
+            let new_text = super::with_line_ends(&text.into(), self.a.text(file)).0;
+            self.map.entry(uri).or_default().push(TextEdit { range: self.a.range(file, span), new_text });
         }
         self
     }
@@ -105,7 +107,7 @@ fn block_for(a: &Analysis<'_>, file: SourceFile, want: fn(&Item) -> Option<Span>
 fn append_to_block(a: &Analysis<'_>, file: SourceFile, block: Span, line: &str) -> (Span, String) {
     let text = a.text(file);
     let close = (block.end as usize).saturating_sub(1);
-    let line_start = text[..close].rfind('\n').map_or(0, |i| i + 1);
+    let line_start = text[..close].rfind(['\n', '\r']).map_or(0, |i| i + 1);
     if text[line_start..close].chars().all(char::is_whitespace) {
         // `}` alone on its line: insert a new line before it, indented one
         // level deeper than the `}`.
@@ -208,7 +210,7 @@ fn create_task(a: &Analysis<'_>, file: SourceFile, span: Span, name: &str, diag:
         Some((f, block)) => {
             let src = a.text(f);
             let close = (block.end as usize).saturating_sub(1);
-            let line_start = src[..close].rfind('\n').map_or(0, |i| i + 1);
+            let line_start = src[..close].rfind(['\n', '\r']).map_or(0, |i| i + 1);
             let indent =
                 if src[line_start..close].chars().all(char::is_whitespace) { &src[line_start..close] } else { "" };
             let inner = format!("{indent}    ");

@@ -17,9 +17,12 @@ use tower_lsp_server::ls_types::{Hover, HoverContents, MarkupContent, MarkupKind
 
 pub fn hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Hover> {
     let occs = occurrences(a.db, file);
-    let occ = occurrence_at(&occs, offset)?;
+    let Some(occ) = occurrence_at(&occs, offset) else {
+        return section_hover(a, file, offset);
+    };
     let md = match &occ.role {
         Role::Structure(s) => structure_text(s),
+        Role::ConstraintKeyword(k) => constraint_text(*k),
         Role::Symbolic => format!("```mcl\n{}\n```\nA symbolic value, passed to the vehicle as it is.", occ.name),
         Role::Primitive => primitive_text(a, file, &occ.name),
         Role::Command => format!("```mcl\nc: {}\n```\nThe command sent to the primitive.", occ.name),
@@ -58,6 +61,89 @@ pub fn structure_text(s: &Structure) -> String {
         Structure::Monitor(_) => "monitor { A } condition ( B ) do { C }",
     };
     format!("```mcl\n{form}\n```\n**{}** (control structure)\n\n{}", s.name(), s.describe())
+}
+
+/// The keywords that open a block of a file, and what the block holds.
+fn section_hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Hover> {
+    use mcl_syntax::lexer::{lex, Kw, Token};
+    let text = a.text(file);
+    // Only the token under the cursor: lex the line around it.
+    let start = text[..offset.min(text.len())].rfind(['\n', '\r']).map_or(0, |i| i + 1);
+    let end = text[start..].find(['\n', '\r']).map_or(text.len(), |i| start + i);
+    let lexed = lex(&text[start..end]);
+    let (kw, sp) = lexed.tokens.iter().find_map(|(t, sp)| match t {
+        Token::Kw(k) if start + sp.start as usize <= offset && offset <= start + sp.end as usize => Some((*k, *sp)),
+        _ => None,
+    })?;
+    let (form, what) = match kw {
+        Kw::Import => {
+            ("import \"file.mcl\";", "Reads the definitions of another MCL file (a path relative to this one).")
+        }
+        Kw::Actions => (
+            "actions { name = Primitive( c: command, v: param ); }",
+            "The actions: each sends one command to one primitive of the vehicle.",
+        ),
+        Kw::Events => ("events { name; }", "The events the vehicle sends back (a primitive ended ok, failed, ...)."),
+        Kw::Pattern | Kw::Patterns => (
+            "pattern { Name { places {...} transitions {...} arcs {...} } }",
+            "Petri net patterns of tasks: the net every task of the pattern instantiates.",
+        ),
+        Kw::Places => (
+            "places { begin.1; abort.1; ok.1; fail.1; p(1); }",
+            "The places of the pattern: `.N` puts a place in interface N, `(k)` gives it k tokens.",
+        ),
+        Kw::Transitions => (
+            "transitions { T0; TO(delay); }",
+            "The transitions of the pattern: `(delay)` makes one timed (seconds, or a task parameter).",
+        ),
+        Kw::Arcs => (
+            "arcs { place -> transition; transition -> place; }",
+            "The arcs of the pattern, each from a place to a transition or back.",
+        ),
+        Kw::Tasks => (
+            "tasks { Name( params ): Pattern { a: action -> T0; e: event -> T2; } }",
+            "The tasks: a pattern whose transitions send the given actions and fire on the given events.",
+        ),
+        Kw::Mission => ("mission : name { ... }", "A mission: the control structures and task calls one vehicle runs."),
+        Kw::PlanOp => {
+            ("mcl_plan_op Name( params ) { ... }", "A mission operator the planner sequences (seed chapter 7).")
+        }
+        Kw::Constraints => (
+            "constraints { mutex {...} = N  order {...}  sync {...} }",
+            "Coordination constraints between the labelled calls of several missions.",
+        ),
+        _ => return None,
+    };
+    let md = format!("```mcl\n{form}\n```\n**{}** (block)\n\n{what}", kw.as_str());
+    let span = Span::new(start + sp.start as usize, start + sp.end as usize);
+    Some(Hover {
+        contents: HoverContents::Markup(MarkupContent { kind: MarkupKind::Markdown, value: md }),
+        range: Some(a.range(file, span)),
+    })
+}
+
+/// What a coordination constraint asks (docs/language.md, seed 6.1).
+pub fn constraint_text(k: ConstraintKind) -> String {
+    let (form, name, what) = match k {
+        ConstraintKind::Mutex => (
+            "mutex { m1:a, m2:b, ... } = N",
+            "mutex",
+            "At most N of the listed calls run at the same time; a call that would exceed N waits before it starts.",
+        ),
+        ConstraintKind::Order => (
+            "order { m1:a, m2:b }",
+            "order",
+            "The call `m2:b` does not start before the call `m1:a` has ended; repeated calls are counted (the n-th start of `m2:b` waits for the n-th end of `m1:a`).",
+        ),
+        ConstraintKind::Sync => (
+            "sync { m1:a, m2:b, ... }",
+            "sync",
+            "The listed calls start together: each waits until all the others are ready to start.",
+        ),
+    };
+    format!(
+        "```mcl\n{form}\n```\n**{name}** (coordination constraint)\n\n{what} The compiler enforces it with supervisor places between the vehicles' nets (see `mcl explain E0406` for deadlocks)."
+    )
 }
 
 fn primitive_text(a: &Analysis<'_>, file: SourceFile, name: &str) -> String {
@@ -104,7 +190,7 @@ pub fn leading_comment(a: &Analysis<'_>, file: SourceFile, start: usize) -> Opti
         if !between.chars().all(char::is_whitespace) || between.matches('\n').count() > 1 {
             break;
         }
-        let line_start = text[..c.span.start as usize].rfind('\n').map_or(0, |i| i + 1);
+        let line_start = text[..c.span.start as usize].rfind(['\n', '\r']).map_or(0, |i| i + 1);
         if !text[line_start..c.span.start as usize].chars().all(char::is_whitespace) {
             break; // a comment after code on the line above
         }

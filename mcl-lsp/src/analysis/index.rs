@@ -64,9 +64,12 @@ pub enum Role {
     Primitive,
     /// The `c:` command of an action definition.
     Command,
-    /// The keyword of a control structure (also `and`/`or` of a parallel and
-    /// `condition`/`while_condition` of a monitor).
+    /// The keyword of a control structure (also `and`/`or` of a parallel,
+    /// `else` (or `then`) of an if, `catch` of a try, `condition`,
+    /// `while_condition` and `do` of a monitor).
     Structure(Structure),
+    /// `mutex`, `order` or `sync` (or `_mutex_`, ...) of a constraint.
+    ConstraintKeyword(ConstraintKind),
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -121,6 +124,7 @@ pub fn occurrences(db: &Database, file: SourceFile) -> &[Occ] {
 #[salsa::tracked(returns(ref))]
 fn file_occurrences(db: &dyn Db, file: SourceFile) -> Vec<Occ> {
     let ast = &parse(db, file).file;
+    let text = file.text(db).as_deref().unwrap_or("");
     let mut out = Vec::new();
     let mut push = |span: Span, name: &str, role: Role| {
         if !name.is_empty() {
@@ -216,7 +220,8 @@ fn file_occurrences(db: &dyn Db, file: SourceFile) -> Vec<Occ> {
                         }
                     }
                     kind => {
-                        if let Some((structure, spans)) = structure_of(kind) {
+                        if let Some((structure, mut spans)) = structure_of(kind) {
+                            spans.extend(joining_keywords(text, kind));
                             for (sp, word) in spans {
                                 push(sp, word, Role::Structure(structure.clone()));
                             }
@@ -226,6 +231,8 @@ fn file_occurrences(db: &dyn Db, file: SourceFile) -> Vec<Occ> {
             }
             Item::Constraints(b) => {
                 for c in &b.constraints {
+                    let word = text.get(c.keyword_span.range()).unwrap_or("");
+                    push(c.keyword_span, word, Role::ConstraintKeyword(c.kind));
                     for r in &c.refs {
                         if let Some(m) = &r.mission {
                             push(m.span, &m.text, Role::Ref(DefKind::Mission));
@@ -297,6 +304,35 @@ pub fn structure_of(kind: &StmtKind) -> Option<(Structure, Vec<(Span, &'static s
         }
         StmtKind::Call(_) | StmtKind::Error => return None,
     })
+}
+
+/// The keywords written between a structure's blocks (`else`, `then`,
+/// `catch`, `do`), which the syntax tree does not keep.
+fn joining_keywords(text: &str, kind: &StmtKind) -> Vec<(Span, &'static str)> {
+    let gaps: Vec<(Span, Span)> = match kind {
+        StmtKind::If { cond, then, otherwise, .. } => {
+            let mut g = vec![(cond.span, then.span)];
+            g.extend(otherwise.iter().map(|o| (then.span, o.span)));
+            g
+        }
+        StmtKind::While { cond, body, .. } => vec![(cond.span, body.span)],
+        StmtKind::Try { body, catch, .. } => vec![(body.span, catch.span)],
+        StmtKind::Monitor { handlers, .. } => handlers.iter().map(|h| (h.condition.span, h.action.span)).collect(),
+        _ => vec![],
+    };
+    let mut out = Vec::new();
+    for (before, after) in gaps {
+        let (s, e) = (before.end as usize, after.start as usize);
+        let Some(gap) = text.get(s..e) else { continue };
+        for (tok, sp) in mcl_syntax::lexer::lex(gap).tokens {
+            if let mcl_syntax::lexer::Token::Kw(k) = tok {
+                if matches!(k.as_str(), "else" | "then" | "catch" | "do") {
+                    out.push((Span::new(s + sp.start as usize, s + sp.end as usize), k.as_str()));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The occurrence under `offset` (a cursor just after a name still counts).
@@ -431,7 +467,8 @@ pub fn resolve(db: &Database, file: SourceFile, occ: &Occ) -> Option<Sym> {
         | Role::DelayParam
         | Role::Primitive
         | Role::Command
-        | Role::Structure(_) => None,
+        | Role::Structure(_)
+        | Role::ConstraintKeyword(_) => None,
     }
 }
 

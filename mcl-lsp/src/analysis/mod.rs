@@ -7,6 +7,7 @@
 //! that and answers `ContentModified`.
 
 pub mod completion;
+pub mod coordination;
 pub mod diagnostics;
 pub mod fixes;
 pub mod hover;
@@ -243,3 +244,20 @@ pub fn uri(text: &str) -> Uri {
 pub(crate) mod fixture;
 #[cfg(test)]
 mod tests;
+
+/// `text` (written with `\n`) in the line ends of `like` (`\r\n` if it has
+/// one, else a lone `\r` if it has one and no `\n`), and those line ends.
+pub fn with_line_ends(text: &str, like: &str) -> (String, &'static str) {
+    let eol = if like.contains("\r\n") {
+        "\r\n"
+    } else if like.contains('\r') && !like.contains('\n') {
+        "\r"
+    } else {
+        "\n"
+    };
+    if eol == "\n" {
+        (text.to_string(), eol)
+    } else {
+        (text.replace("\r\n", "\n").replace('\n', eol), eol)
+    }
+}

@@ -231,8 +231,10 @@ pub fn rename(a: &Analysis<'_>, file: SourceFile, offset: usize, new_name: &str)
             return Err(RenameError("a mission name cannot be empty".into()));
         }
     }
+    let occs = all_occurrences(a, &sym);
+    collision(a, &sym, &occs, new_name)?;
     let mut changes: HashMap<Uri, Vec<TextEdit>> = HashMap::new();
-    for (f, occ) in all_occurrences(a, &sym) {
+    for (f, occ) in occs {
         if a.is_std(f) {
             continue;
         }
@@ -240,6 +242,60 @@ pub fn rename(a: &Analysis<'_>, file: SourceFile, offset: usize, new_name: &str)
         changes.entry(uri).or_default().push(TextEdit { range: a.range(f, occ.span), new_text: new_name.to_string() });
     }
     Ok(WorkspaceEdit { changes: Some(changes), ..Default::default() })
+}
+
+/// Refuses a new name that another symbol of the same kind already has
+/// where the renamed one is visible: the rename would merge them.
+fn collision(a: &Analysis<'_>, sym: &Sym, occs: &[(SourceFile, Occ)], new_name: &str) -> Result<(), RenameError> {
+    if sym_name(a.db, sym) == new_name {
+        return Ok(()); // nothing changes
+    }
+    match sym {
+        Sym::Def(d) => {
+            let mut files: Vec<SourceFile> = occs.iter().map(|(f, _)| *f).collect();
+            files.push(d.file);
+            files.sort_by_key(|f| a.path(*f).to_path_buf());
+            files.dedup();
+            for f in files {
+                if let Some(other) = mcl_compiler::scope::scope(a.db, f).get(d.kind, new_name).first() {
+                    let whose = if other.in_stdlib { " in the standard library" } else { "" };
+                    return Err(RenameError(format!(
+                        "there is already a {} named `{new_name}`{whose}",
+                        d.kind.as_str()
+                    )));
+                }
+            }
+        }
+        Sym::Label { file, item, .. } => {
+            let taken = occurrences(a.db, *file)
+                .iter()
+                .any(|o| o.name == new_name && matches!(o.role, Role::LabelDef { mission } if mission == *item));
+            if taken {
+                return Err(RenameError(format!(
+                    "this mission already has a call labelled `{new_name}` (constraints would name both)"
+                )));
+            }
+        }
+        Sym::Param { file, item, .. } => {
+            let taken = occurrences(a.db, *file)
+                .iter()
+                .any(|o| o.name == new_name && matches!(o.role, Role::MissionParam { mission } if mission == *item));
+            if taken {
+                return Err(RenameError(format!("this mission already has a parameter `{new_name}`")));
+            }
+        }
+        Sym::Node { pattern, .. } => {
+            if let Some(net) = written_net(a.db, *pattern) {
+                if net.places.iter().any(|p| p.name.text == new_name) {
+                    return Err(RenameError(format!("this pattern already has a place `{new_name}`")));
+                }
+                if net.transitions.iter().any(|t| t.name.text == new_name) {
+                    return Err(RenameError(format!("this pattern already has a transition `{new_name}`")));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The pattern a symbol belongs to, for hover texts.

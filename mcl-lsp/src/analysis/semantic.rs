@@ -78,7 +78,7 @@ fn classify(a: &Analysis<'_>, file: SourceFile, occ: &Occ) -> Option<(u32, u32)>
         Role::ParamUse { .. } | Role::ActionParam | Role::DelayParam => (12, 0),
         Role::Symbolic | Role::Command => (15, 0),
         Role::Primitive => (14, 0),
-        Role::Structure(_) => (0, 0),
+        Role::Structure(_) | Role::ConstraintKeyword(_) => (0, 0),
     })
 }
 
@@ -134,7 +134,7 @@ pub fn semantic_tokens(a: &Analysis<'_>, file: SourceFile) -> Vec<SemanticToken>
         let mut start = span.start as usize;
         let end = (span.end as usize).min(text.len());
         while start < end {
-            let line_end = text[start..end].find('\n').map_or(end, |i| start + i);
+            let line_end = text[start..end].find(['\n', '\r']).map_or(end, |i| start + i);
             let (line, col) = idx.utf16_position(text, start);
             let len: u32 = text.get(start..line_end).map_or(0, |s| s.chars().map(|c| c.len_utf16() as u32).sum());
             if len > 0 {
@@ -150,7 +150,7 @@ pub fn semantic_tokens(a: &Analysis<'_>, file: SourceFile) -> Vec<SemanticToken>
                 prev_line = line;
                 prev_col = col;
             }
-            start = line_end + 1;
+            start = line_end + if text[line_end..].starts_with("\r\n") { 2 } else { 1 };
         }
     }
     out

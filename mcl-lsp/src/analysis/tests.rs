@@ -2,6 +2,7 @@
 
 use super::fixture::{apply_edits, Fixture, VEHICLE};
 use super::*;
+use mcl_syntax::ast::Item;
 use tower_lsp_server::ls_types::*;
 
 const MISSION: &str = r#"import "vehicle.mcl";
@@ -646,4 +647,175 @@ fn transitions_of_a_pnml_pattern_go_to_the_pnml_file() {
     let h = hover::hover(&a, file, at).unwrap();
     let HoverContents::Markup(m) = h.contents else { panic!() };
     assert!(m.value.starts_with("```mcl\nT2\n```\ntransition of pattern `P_SONAR`"), "{}", m.value);
+}
+
+const APPENDIX_C: &str = include_str!("../../../examples/appendix-c.mcl");
+
+/// The hover text at the first `needle` of `text` (plus `delta` bytes).
+fn hover_at(text: &str, needle: &str, delta: usize) -> String {
+    let i = text.find(needle).unwrap_or_else(|| panic!("`{needle}`")) + delta;
+    let f = Fixture::new(&[("a.mcl", &format!("{}$0{}", &text[..i], &text[i..])), ("vehicle.mcl", VEHICLE)]);
+    hover_text(&f)
+}
+
+#[test]
+fn hover_on_every_keyword() {
+    // Every keyword of Appendix C's program (every control structure, the
+    // `_mutex_` spellings, every block).
+    let f = Fixture::new(&[("a.mcl", APPENDIX_C)]);
+    let a = f.analysis();
+    let file = f.file("a.mcl");
+    let mut seen = std::collections::BTreeSet::new();
+    for (tok, span) in mcl_syntax::lexer::lex(APPENDIX_C).tokens {
+        let word = &APPENDIX_C[span.range()];
+        let expected = match tok {
+            mcl_syntax::lexer::Token::Kw(_) if !matches!(word, "at") => {
+                if matches!(
+                    word,
+                    "import"
+                        | "actions"
+                        | "events"
+                        | "pattern"
+                        | "places"
+                        | "transitions"
+                        | "arcs"
+                        | "tasks"
+                        | "mission"
+                        | "constraints"
+                ) {
+                    "(block)"
+                } else {
+                    "(control structure)"
+                }
+            }
+            mcl_syntax::lexer::Token::Ident("_mutex_" | "_order_" | "_sync_") => "(coordination constraint)",
+            _ => continue,
+        };
+        for at in [span.start, span.end - 1] {
+            let h = hover::hover(&a, file, at as usize).unwrap_or_else(|| panic!("no hover on `{word}` at {at}"));
+            let HoverContents::Markup(m) = h.contents else { panic!() };
+            assert!(m.value.contains(expected), "`{word}`: {}", m.value);
+        }
+        seen.insert(word.to_string());
+    }
+    for w in [
+        "monitor",
+        "condition",
+        "while_condition",
+        "do",
+        "try",
+        "catch",
+        "while",
+        "not",
+        "if",
+        "else",
+        "parallel",
+        "or",
+        "and",
+    ] {
+        assert!(seen.contains(w), "{w} not in the example");
+    }
+    // The usual constraint spellings, and `then` written for `else` (seed Table B.4).
+    let text = MISSION.replace(
+        "order { auv:go, asc:wait }",
+        "order { auv:go, asc:wait }\n    mutex { auv:dive, asc:wait } = 1\n    sync { auv:go, asc:wait }",
+    );
+    assert!(hover_at(&text, "order {", 2).contains("**order** (coordination constraint)"));
+    assert!(hover_at(&text, "mutex {", 0).contains("At most N of the listed calls"));
+    assert!(hover_at(&text, "sync {", 4).contains("**sync**"));
+    let text = MISSION.replace("Void() : wait ;", "if ( Void() ) { Void() } then { Void() } ;");
+    assert!(hover_at(&text, "then {", 1).contains("**if-then-else**"), "{}", hover_at(&text, "then {", 1));
+    assert!(hover_at(&text, "if (", 0).contains("**if-then-else**"));
+    // Not on names, nor on the structure's blocks.
+    assert!(!hover_at(&text, "} then", 0).contains("control structure"));
+}
+
+#[test]
+fn folding_covers_every_block_kind() {
+    for (name, text) in [("appendix-c", APPENDIX_C), ("mission", MISSION)] {
+        let f = Fixture::new(&[("a.mcl", text), ("vehicle.mcl", VEHICLE)]);
+        let a = f.analysis();
+        let file = f.file("a.mcl");
+        let idx = a.line_index(file);
+        let folds = outline::folding_ranges(&a, file);
+        let starts: std::collections::HashSet<u32> = folds.iter().map(|r| r.start_line).collect();
+        let line = |s: Span| idx.line_of(s.start as usize) as u32;
+        let mut want = |s: Span, what: &str| {
+            let (l1, l2) = (line(s), idx.line_of(s.end as usize) as u32);
+            if l2 > l1 + 1 {
+                assert!(starts.contains(&l1), "{name}: {what} at line {l1} has no fold: {folds:?}");
+            }
+        };
+        for item in &a.ast(file).items {
+            match item {
+                Item::Actions(b) => want(b.span, "actions"),
+                Item::Events(b) => want(b.span, "events"),
+                Item::Patterns(b) => {
+                    want(b.span, "pattern block");
+                    b.patterns.iter().for_each(|p| want(p.span, "pattern"));
+                }
+                Item::Tasks(b) => {
+                    want(b.span, "tasks");
+                    b.tasks.iter().for_each(|t| want(t.span, "task"));
+                }
+                Item::Mission(m) => {
+                    want(m.span, "mission");
+                    mcl_syntax::visit::walk_block(&m.body, &mut |s| {
+                        for c in mcl_syntax::visit::child_blocks(s) {
+                            want(c.span, "structure block");
+                        }
+                    });
+                }
+                Item::Constraints(b) => want(b.span, "constraints"),
+                Item::Import(_) => {}
+            }
+        }
+        for c in &mcl_compiler::queries::parse(a.db, file).comments {
+            if c.kind == mcl_syntax::lexer::CommentKind::Block {
+                want(c.span, "block comment");
+            }
+        }
+    }
+    // Runs of line comments, a block comment, nested structures of every kind.
+    let text = "// a\n// b\n// c\nmission {\n    /* x\n       y\n    */\n    monitor {\n        while ( Void() ) {\n            Void()\n        }\n    } condition ( Void() ) do {\n        not ( Void() )\n    }\n}\n";
+    let f = Fixture::new(&[("a.mcl", text)]);
+    let a = f.analysis();
+    let r: Vec<(u32, u32)> =
+        outline::folding_ranges(&a, f.file("a.mcl")).into_iter().map(|r| (r.start_line, r.end_line)).collect();
+    for want in [(0, 2), (3, 13), (4, 6), (7, 10), (8, 9), (11, 12)] {
+        assert!(r.contains(&want), "{want:?} in {r:?}");
+    }
+}
+
+#[test]
+fn completion_in_every_context() {
+    let at = |before: &str, after: &str| -> Vec<String> {
+        let i = APPENDIX_C.find(&format!("{before}{after}")).unwrap_or_else(|| panic!("{before}")) + before.len();
+        let word = after.split([' ', ';', ',', '\n']).next().unwrap().len();
+        completion_labels(&format!("{}$0{}", &APPENDIX_C[..i], &APPENDIX_C[i + word..]))
+    };
+    // Labels after `mission :` (spaces allowed) and bare labels in `_sync_ {`.
+    assert_eq!(at("order { m2:", "asc_ready"), ["asc_ready", "usbl", "receive"]);
+    let spaced = APPENDIX_C.replace("order { m2:asc_ready", "_order_ { m2 : asc_ready");
+    let i = spaced.find("m2 : asc_ready").unwrap() + 5;
+    assert_eq!(completion_labels(&format!("{}$0{}", &spaced[..i], &spaced[i + 9..])), ["asc_ready", "usbl", "receive"]);
+    let refs = at("sync { ", "send,");
+    assert!(refs.contains(&"m1:send".to_string()) && refs.contains(&"m2:".to_string()), "{refs:?}");
+    // Transitions in task bodies, after `->` and after `,`.
+    let trs = ["TT0", "TT1", "TT2", "TT3", "T0", "T1", "T2", "T3", "T6", "T7"];
+    assert_eq!(at("a: disableInit -> ", "T1, T6"), trs);
+    assert_eq!(at("e: eventInitOk -> ", "T2;"), trs);
+    assert_eq!(at("a: disableInit -> T1, ", "T6, T7"), trs);
+    // Arcs: a place is followed by a transition, a transition by a place.
+    assert_eq!(at("begin.1 -> ", "TT0;\n            off"), trs);
+    let places = at("T0 -> ", "exe;\n            exe");
+    assert!(places.contains(&"exe".to_string()) && !places.contains(&"T1".to_string()), "{places:?}");
+    let any = at("arcs {\n            ", "begin.1 -> TT0");
+    assert!(any.contains(&"exe".to_string()) && any.contains(&"T1".to_string()), "{any:?}");
+    // Patterns after `):`, tasks in a monitor's condition.
+    assert_eq!(
+        at("Init(): ", "P_TASK {\n        a: enableInit"),
+        ["AchieveOneGoal", "AchieveOneGoalTimed", "Instant", "P_TASK", "P_TIMEOUT"]
+    );
+    assert!(at("} while_condition ( ", "SonarDetect( object )").contains(&"SonarDetect".to_string()));
 }
