@@ -442,3 +442,96 @@ fn deadlocking_constraints_are_refused() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("deadlock"), "{}", stderr(&out));
 }
+
+/// Runs the vehicle nets `vnets` in real time (`speed` times faster) over an
+/// in-process transport that delays every message by `delay` of wall-clock
+/// time; returns the trace (records in the order they happened) as JSON.
+fn run_delayed(vnets: Vec<mcl_coord::VehicleNet>, delay_ms: u64, speed: f64) -> (Vec<Value>, u8) {
+    use mcl_runtime::multi::{run_real_time, SharedSink, Vehicle};
+    let names: Vec<String> = vnets.iter().map(|v| v.mission.clone()).collect();
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    let sink = std::sync::Arc::new(std::sync::Mutex::new(mcl_runtime::driver::Collect::default()));
+    let shared: SharedSink = sink.clone();
+    let end = rt.block_on(async {
+        let ends = mcl_runtime::coord::delayed_in_process(&names, std::time::Duration::from_millis(delay_ms));
+        let mut sources = mcl_runtime::trace::SourceMap::new();
+        let mut vs = Vec::new();
+        for (v, tr) in vnets.into_iter().zip(ends) {
+            let net = std::sync::Arc::new(v.net);
+            let scenario = mcl_runtime::scenario::Scenario { default_duration: Some(2.0), ..Default::default() };
+            let tracer = mcl_runtime::trace::Tracer::new(&net, Some(v.mission.clone()), &mut sources);
+            let mock = mcl_runtime::mock::MockVehicle::from_net(&net, scenario, 1);
+            vs.push(Vehicle::new(&v.mission, net, Default::default(), tracer, mock, Box::new(tr)).unwrap());
+        }
+        let limits = mcl_runtime::driver::Limits::real_time(Some(600.0));
+        run_real_time(vs, shared, mcl_runtime::clock::Clock::new(speed, 0.0), limits).await.unwrap()
+    });
+    let records = std::mem::take(&mut sink.lock().unwrap().0);
+    (records.iter().map(|r| serde_json::to_value(r).unwrap()).collect(), end.exit_code())
+}
+
+/// The missions of a mutex file and the supervisors of its analysis.
+fn coordinated(path: &Path) -> (Vec<mcl_coord::Mission>, Vec<mcl_coord::Supervisor>) {
+    let db = mcl_compiler::Database::new();
+    let file = mcl_compiler::Db::file(&db, path);
+    let (missions, constraints) = mcl_coord::source::load(&db, file).unwrap();
+    let report = mcl_coord::analyze(&missions, &constraints).unwrap();
+    (missions, report.supervisors)
+}
+
+/// How many of `missions`' `label` calls are running at once, at most
+/// (trace order).
+fn most_at_once(tr: &[Value], missions: &[&str], label: &str) -> usize {
+    let mut events: Vec<(usize, i32)> = Vec::new();
+    for m in missions {
+        for (s, e) in intervals(tr, m, label) {
+            events.push((s, 1));
+            events.push((e, -1));
+        }
+    }
+    events.sort();
+    let (mut running, mut most) = (0i32, 0i32);
+    for (_, d) in events {
+        running += d;
+        most = most.max(running);
+    }
+    most as usize
+}
+
+#[test]
+fn a_mutex_between_vehicles_holds_when_messages_take_time() {
+    // Both ask at 0; every message takes 40 ms (2 s of mission time at
+    // speed 50), as long as a call.
+    let file = mutex_file("mutex-delay.mcl", 1, false);
+    let (missions, sups) = coordinated(&file);
+    let names = ["a", "b", "c"];
+
+    // Copies of the supervisor in every vehicle (the synchronous
+    // communication of Iordache and Antsaklis) let all of them take it on
+    // stale information...
+    let plant = mcl_coord::centralize(&missions).unwrap();
+    let costs = mcl_coord::decentral::Costs::default();
+    let comm = mcl_coord::decentral::minimize_communication(&plant, &sups, &costs).unwrap();
+    let copies = mcl_coord::decentral::vehicle_nets(&missions, &plant, &sups, &comm).unwrap();
+    let (tr, _) = run_delayed(copies, 40, 50.0);
+    assert!(most_at_once(&tr, &names, "survey") > 1, "copies kept the mutex although messages crossed");
+
+    // ...a single holder with requests, grants and returns does not.
+    let vnets = mcl_coord::decentralize(&missions, &sups).unwrap();
+    let (tr, code) = run_delayed(vnets, 40, 50.0);
+    assert_eq!(code, 0, "{tr:#?}");
+    assert_eq!(most_at_once(&tr, &names, "survey"), 1);
+    for m in names {
+        assert_eq!(intervals(&tr, m, "survey").len(), 1, "{m}");
+    }
+    assert_eq!(check_order(&tr, ("c", "survey"), ("a", "up")), 1);
+    // b and c each asked a (the holder) once, were granted once and gave
+    // the token back at the end of their call.
+    let summary = tr.last().unwrap();
+    assert_eq!(summary["kind"], "coord_summary");
+    let sent = |t: &str| of(&tr, "coord_send").iter().filter(|r| r["transition"].as_str().unwrap().starts_with(t)).count();
+    assert_eq!((sent("coord.request."), sent("coord.lend.")), (2, 2));
+    assert_eq!(summary["value"]["requests"], 2);
+    assert_eq!(summary["value"]["grants"], 2);
+    assert_eq!(summary["value"]["returns"], 2);
+}

@@ -43,6 +43,7 @@
 pub mod analysis;
 pub mod central;
 pub mod check;
+pub mod conflict;
 pub mod compact;
 pub mod decentral;
 pub mod error;

@@ -671,8 +671,16 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             count(&sink.records, name, "coord_receive"),
         );
     }
+    let mutex = if end.mutex.total() > 0 {
+        format!(
+            "; mutex protocol: {} requests, {} grants, {} returns",
+            end.mutex.requests, end.mutex.grants, end.mutex.returns
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "coordination: {} missions, {} messages sent ({} transport)",
+        "coordination: {} missions, {} messages sent ({} transport{mutex})",
         end.ends.len(),
         end.messages,
         match o.transport {
