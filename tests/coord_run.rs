@@ -235,9 +235,8 @@ fn one_mission_alone_and_usage() {
 
 /// Three vehicles under `mutex { a:survey, b:survey, c:survey } = bound`
 /// and, unless `staggered`, `order { c:survey, a:up }`. `staggered`: b and
-/// c ask for the mutex 5 and 10 s later than a (real time keeps a
-/// cross-vehicle mutex only when requests do not cross in flight:
-/// docs/coordination.md); otherwise all ask at 0.
+/// c ask for the mutex 5 and 10 s later than a; otherwise all ask at 0 (a,
+/// the holder, takes it; b and c ask a for it).
 fn mutex_file(name: &str, bound: u32, staggered: bool) -> PathBuf {
     let vehicle = root().join("examples/vehicle.mcl");
     let (b, c) =
@@ -269,11 +268,14 @@ fn intervals(tr: &[Value], mission: &str, label: &str) -> Vec<(usize, usize)> {
 fn mutexes_never_overlap() {
     let at_once = mutex_file("mutex.mcl", 1, false);
     let staggered = mutex_file("mutex-staggered.mcl", 1, true);
-    let runs: [(&Path, &[&str]); 4] = [
+    let runs: [(&Path, &[&str]); 6] = [
         (&at_once, &["--virtual-time"]),
         (&at_once, &["--virtual-time", "--transport", "tcp"]),
         (&staggered, &["--virtual-time"]),
         (&staggered, &["--speed", "50", "-q"]),
+        // Real time, all asking at once: the holder grants one at a time.
+        (&at_once, &["--speed", "50", "-q"]),
+        (&at_once, &["--speed", "50", "-q", "--transport", "tcp"]),
     ];
     for (file, extra) in runs {
         let (code, tr, out) = run(file.to_str().unwrap(), extra, "mutex.jsonl");
@@ -534,4 +536,38 @@ fn a_mutex_between_vehicles_holds_when_messages_take_time() {
     assert_eq!(summary["value"]["requests"], 2);
     assert_eq!(summary["value"]["grants"], 2);
     assert_eq!(summary["value"]["returns"], 2);
+}
+
+#[test]
+fn a_withdrawn_sync_arrival_does_not_let_the_other_call_start() {
+    // a reaches its sync call at 0, and its parallel-or withdraws it when
+    // Surface() ends (one default duration); b reaches its own after two
+    // tasks. Without the withdrawal, b would start on a's stale arrival.
+    let vehicle = root().join("examples/vehicle.mcl");
+    let text = format!(
+        "import \"{}\";\n\
+         mission : a {{ parallel {{ Surface() }} or {{ ReceiveData() : s }} }}\n\
+         mission : b {{ InitializeVehicle() ; StopVehicle() ; SendData() : s }}\n\
+         constraints {{\n    sync {{ a:s, b:s }}\n}}\n",
+        vehicle.display()
+    );
+    let path = tmp("sync-withdrawn.mcl");
+    std::fs::write(&path, text).unwrap();
+    for extra in [&["--virtual-time"][..], &["--speed", "50", "-q"][..]] {
+        let mut args = extra.to_vec();
+        args.extend(["--time-limit", "100"]);
+        let (code, tr, out) = run(path.to_str().unwrap(), &args, "sync-withdrawn.jsonl");
+        assert!(call(&tr, "a", "s").starts.is_empty(), "{extra:?}");
+        assert!(call(&tr, "b", "s").starts.is_empty(), "{extra:?}: b started on a withdrawn arrival");
+        // a withdrew its call (cancel) and told b, which dropped the credit.
+        let fired = |m: &str, suffix: &str| {
+            tr.iter().any(|r| {
+                r["kind"] == "fire" && r["mission"] == m && r["transition"].as_str().unwrap().ends_with(suffix)
+            })
+        };
+        assert!(fired("a", ".cancel"), "{extra:?}");
+        assert!(fired("b", ".withdraw"), "{extra:?}");
+        // b waits for ever: stuck (or the time limit).
+        assert_eq!(code, 3, "{extra:?}: {}", stderr(&out));
+    }
 }
