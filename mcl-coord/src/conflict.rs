@@ -109,13 +109,15 @@ pub fn conflicts(cs: &[ast::Constraint]) -> Vec<Diagnostic> {
         if !seen[u] {
             continue;
         }
-        let mut cycle = vec![k];
+        // k, then the path from v back to u.
+        let mut path = Vec::new();
         let mut x = u;
         while x != v {
             let Some((a, e)) = prev[x] else { break };
-            cycle.push(e);
+            path.push(e);
             x = a;
         }
+        let cycle: Vec<usize> = std::iter::once(k).chain(path.into_iter().rev()).collect();
         let mut orders = cycle.clone();
         orders.sort_unstable();
         orders.dedup();
