@@ -571,3 +571,64 @@ fn a_withdrawn_sync_arrival_does_not_let_the_other_call_start() {
         assert_eq!(code, 3, "{extra:?}: {}", stderr(&out));
     }
 }
+
+/// A free loopback port (bound then released).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+#[test]
+fn each_vehicle_in_its_own_process_over_tcp() {
+    // a holds the mutex; b asks for it; b's survey ends before a goes up.
+    let vehicle = root().join("examples/vehicle.mcl");
+    let text = format!(
+        "import \"{}\";\n\
+         mission : a {{ Goto( [0, 0] ) : survey ; Surface() : up }}\n\
+         mission : b {{ Goto( [5, 5] ) : survey }}\n\
+         constraints {{\n    mutex {{ a:survey, b:survey }} = 1\n    order {{ b:survey, a:up }}\n}}\n",
+        vehicle.display()
+    );
+    let path = tmp("two-processes.mcl");
+    std::fs::write(&path, text).unwrap();
+    let (pa, pb) = (free_port(), free_port());
+    let spawn = |me: &str, listen: u16, peer: &str, port: u16| {
+        let tp = tmp(&format!("proc-{me}.jsonl"));
+        let child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+            .args(["run", "--mock", path.to_str().unwrap(), "--vehicle", me])
+            .args(["--coord-listen", &format!("127.0.0.1:{listen}")])
+            .args(["--coord-peer", &format!("{peer}=127.0.0.1:{port}")])
+            .args(["--speed", "50", "--time-limit", "600", "-q", "--trace", tp.to_str().unwrap()])
+            .current_dir(root())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("run mcl");
+        (child, tp)
+    };
+    let (a, ta) = spawn("a", pa, "b", pb);
+    let (b, tb) = spawn("b", pb, "a", pa);
+    let (oa, ob) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    assert_eq!(oa.status.code(), Some(0), "a: {}", stderr(&oa));
+    assert_eq!(ob.status.code(), Some(0), "b: {}", stderr(&ob));
+    let (tra, trb) = (trace(&ta), trace(&tb));
+    assert!(tra.iter().all(|r| r["mission"] == "a" || r["mission"] == "*"));
+    assert!(trb.iter().all(|r| r["mission"] == "b" || r["mission"] == "*"));
+    // What one sends, the other receives; b asked a for the mutex.
+    let sends = |tr: &[Value]| of(tr, "coord_send").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
+    let receives = |tr: &[Value]| of(tr, "coord_receive").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
+    assert_eq!(sends(&tra), receives(&trb));
+    assert_eq!(sends(&trb), receives(&tra));
+    assert!(sends(&trb).iter().any(|t| t == "coord.request.mutex1"), "{:?}", sends(&trb));
+    assert!(stderr(&oa).contains("coordination: `a` listens on 127.0.0.1:"), "{}", stderr(&oa));
+    // Each did its call once; a went up after b's survey ended (b told it).
+    assert_eq!(call(&tra, "a", "survey").starts.len(), 1);
+    assert_eq!(call(&trb, "b", "survey").ends.len(), 1);
+    assert_eq!(call(&tra, "a", "up").starts.len(), 1);
+    // Usage errors.
+    let out = mcl(&["run", "--mock", path.to_str().unwrap(), "--vehicle", "b"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--coord-peer a=HOST:PORT"), "{}", stderr(&out));
+    let out = mcl(&["run", "--mock", "--virtual-time", path.to_str().unwrap(), "--vehicle", "b"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = mcl(&["run", "--mock", path.to_str().unwrap(), "--vehicle", "z"]);
+    assert!(stderr(&out).contains("no mission `z`"), "{}", stderr(&out));
+}

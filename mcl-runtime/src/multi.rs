@@ -612,6 +612,11 @@ struct Global {
     sent_to: Vec<u64>,
     received: Vec<u64>,
     stop: tokio::sync::watch::Sender<bool>,
+    /// Vehicles in other processes, and how many of them said they ended.
+    peers: usize,
+    peers_ended: usize,
+    /// Messages sent to vehicles in other processes.
+    sent_remote: u64,
 }
 
 impl Global {
@@ -619,9 +624,19 @@ impl Global {
     /// vehicle is (an ended one is) and no message is in flight.
     fn set_idle(&mut self, i: usize, idle: bool) {
         self.idle[i] = idle;
-        let quiet = (0..self.idle.len()).all(|j| self.idle[j] && self.sent_to[j] == self.received[j]);
+        let quiet = (0..self.idle.len()).all(|j| self.idle[j] && self.sent_to[j] == self.received[j])
+            && self.peers_ended >= self.peers;
         if quiet {
             let _ = self.stop.send(true);
+        }
+    }
+}
+
+fn count_sent(g: &mut Global, index: &HashMap<String, usize>, msgs: &[CoordMessage]) {
+    for m in msgs {
+        match index.get(&m.to) {
+            Some(&j) => g.sent_to[j] += 1,
+            None => g.sent_remote += 1,
         }
     }
 }
@@ -638,15 +653,46 @@ pub async fn run_real_time(
     clock: Clock,
     limits: Limits,
 ) -> Result<MultiEnd, String> {
+    run_real_time_with_peers(vehicles, sink, clock, limits, &[]).await
+}
+
+/// The transition of the message a vehicle sends to the vehicles of other
+/// processes when its mission has ended (not a firing: no receive
+/// transition waits for it).
+pub const ENDED: &str = "coord.ended";
+
+/// [`run_real_time`] for some vehicles of a coordinated run, the missions
+/// `peers` running in other processes (`mcl run --vehicle NAME
+/// --coord-peer NAME=ADDR`): messages to them go over the transport like
+/// the others; each vehicle tells every peer when its mission has ended
+/// (message [`ENDED`]), and the run ends only once every peer has (a
+/// vehicle still serves its supervisor places after its own end: a holder
+/// still lends its mutex), or at the time limit.
+pub async fn run_real_time_with_peers(
+    vehicles: Vec<Vehicle>,
+    sink: SharedSink,
+    clock: Clock,
+    limits: Limits,
+    peers: &[String],
+) -> Result<MultiEnd, String> {
+    let peers: Arc<Vec<String>> = Arc::new(peers.to_vec());
     let n = vehicles.len();
     let (stop_tx, stop_rx) = tokio::sync::watch::channel(false);
     let index: Arc<HashMap<String, usize>> =
         Arc::new(vehicles.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect());
-    let global =
-        Arc::new(Mutex::new(Global { idle: vec![false; n], sent_to: vec![0; n], received: vec![0; n], stop: stop_tx }));
+    let global = Arc::new(Mutex::new(Global {
+        idle: vec![false; n],
+        sent_to: vec![0; n],
+        received: vec![0; n],
+        stop: stop_tx,
+        peers: peers.len() * n,
+        peers_ended: 0,
+        sent_remote: 0,
+    }));
     let mut tasks = Vec::new();
     for (i, v) in vehicles.into_iter().enumerate() {
         let (sink, global, mut stop, index) = (sink.clone(), global.clone(), stop_rx.clone(), index.clone());
+        let peers = peers.clone();
         let on_error = global.clone();
         tasks.push(tokio::spawn(async move {
             let r = async move {
@@ -656,14 +702,7 @@ pub async fn run_real_time(
                 let mut outs = v.start(clock.now())?;
                 let result: Result<End, String> = loop {
                     let msgs = v.after(&outs)?;
-                    {
-                        let mut g = lock(&global)?;
-                        for m in &msgs {
-                            if let Some(&j) = index.get(&m.to) {
-                                g.sent_to[j] += 1;
-                            }
-                        }
-                    }
+                    count_sent(&mut *lock(&global)?, &index, &msgs);
                     outs = Vec::new();
                     if let Some(o) = v.deliver(clock.now()) {
                         outs = o;
@@ -683,10 +722,15 @@ pub async fn run_real_time(
                     };
                     tokio::select! {
                         m = v.transport.recv() => match m {
+                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
+                                lock(&global)?.peers_ended += 1;
+                            }
                             Some(m) => {
                                 {
                                     let mut g = lock(&global)?;
-                                    g.received[i] += 1;
+                                    if index.contains_key(&m.from) {
+                                        g.received[i] += 1;
+                                    }
                                     g.set_idle(i, false);
                                 }
                                 v.received(m, clock.now());
@@ -723,12 +767,15 @@ pub async fn run_real_time(
                         Some(o) => v.after(&o)?,
                         None => Vec::new(),
                     };
-                    let mut g = lock(&global)?;
-                    for m in &msgs {
-                        if let Some(&j) = index.get(&m.to) {
-                            g.sent_to[j] += 1;
-                        }
+                    // Tell the vehicles of other processes.
+                    for p in peers.iter() {
+                        v.seq += 1;
+                        let t = v.s.player.now();
+                        let m = CoordMessage { from: v.name.clone(), to: p.clone(), transition: ENDED.into(), seq: v.seq, t };
+                        v.transport.send(m)?;
                     }
+                    let mut g = lock(&global)?;
+                    count_sent(&mut g, &index, &msgs);
                     g.set_idle(i, true);
                 }
                 // Keep taking messages (recorded; the mission has ended)
@@ -736,7 +783,13 @@ pub async fn run_real_time(
                 loop {
                     tokio::select! {
                         m = v.transport.recv() => match m {
+                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
+                                let mut g = lock(&global)?;
+                                g.peers_ended += 1;
+                                g.set_idle(i, true);
+                            }
                             Some(m) => {
+                                let local = index.contains_key(&m.from);
                                 v.received(m, clock.now());
                                 // A holder still lends its mutex.
                                 let msgs = match v.deliver(clock.now()) {
@@ -744,12 +797,10 @@ pub async fn run_real_time(
                                     None => Vec::new(),
                                 };
                                 let mut g = lock(&global)?;
-                                for m in &msgs {
-                                    if let Some(&j) = index.get(&m.to) {
-                                        g.sent_to[j] += 1;
-                                    }
+                                count_sent(&mut g, &index, &msgs);
+                                if local {
+                                    g.received[i] += 1;
                                 }
-                                g.received[i] += 1;
                                 g.set_idle(i, true);
                             }
                             None => break,
@@ -795,7 +846,7 @@ pub async fn run_real_time(
     if let Some(e) = error {
         return Err(e);
     }
-    let messages = global.lock().map(|g| g.sent_to.iter().sum()).unwrap_or_default();
+    let messages = global.lock().map(|g| g.sent_to.iter().sum::<u64>() + g.sent_remote).unwrap_or_default();
     let end = MultiEnd { ends, messages, fired, mutex };
     let last = end.ends.iter().map(|(_, _, t)| *t).fold(0.0, f64::max);
     summary(&sink, last, &end);
