@@ -531,7 +531,8 @@ fn a_mutex_between_vehicles_holds_when_messages_take_time() {
     // the token back at the end of their call.
     let summary = tr.last().unwrap();
     assert_eq!(summary["kind"], "coord_summary");
-    let sent = |t: &str| of(&tr, "coord_send").iter().filter(|r| r["transition"].as_str().unwrap().starts_with(t)).count();
+    let sent =
+        |t: &str| of(&tr, "coord_send").iter().filter(|r| r["transition"].as_str().unwrap().starts_with(t)).count();
     assert_eq!((sent("coord.request."), sent("coord.lend.")), (2, 2));
     assert_eq!(summary["value"]["requests"], 2);
     assert_eq!(summary["value"]["grants"], 2);

@@ -531,7 +531,8 @@ pub fn vehicle_nets_with_tokens(
                             let rid = format!("coord.recv.{from}.{id}");
                             receive.push((rid.clone(), from.clone()));
                             b.add_transition(
-                                mcl_net::Transition::new(rid).with_kind(TransitionKind::Event(message_event(&from, &id))),
+                                mcl_net::Transition::new(rid)
+                                    .with_kind(TransitionKind::Event(message_event(&from, &id))),
                             )
                         };
                         let tt = match gid {
@@ -564,13 +565,16 @@ pub fn vehicle_nets_with_tokens(
                 );
                 send.push((request.clone(), hname.clone()));
                 let ret = format!("coord.return.{key}");
-                let tr = b.add_transition(mcl_net::Transition::new(ret.clone()).with_kind(TransitionKind::Event(ret.clone())));
+                let tr = b.add_transition(
+                    mcl_net::Transition::new(ret.clone()).with_kind(TransitionKind::Event(ret.clone())),
+                );
                 b.add_input(c, tr, 1);
                 send.push((ret.clone(), hname.clone()));
                 let lend = format!("coord.lend.{key}.{}", m.name);
                 let grant = format!("coord.recv.{hname}.{lend}");
                 let tg = b.add_transition(
-                    mcl_net::Transition::new(grant.clone()).with_kind(TransitionKind::Event(message_event(&hname, &lend))),
+                    mcl_net::Transition::new(grant.clone())
+                        .with_kind(TransitionKind::Event(message_event(&hname, &lend))),
                 );
                 b.add_output(tg, c, 1);
                 receive.push((grant.clone(), hname.clone()));

@@ -43,8 +43,8 @@
 pub mod analysis;
 pub mod central;
 pub mod check;
-pub mod conflict;
 pub mod compact;
+pub mod conflict;
 pub mod decentral;
 pub mod error;
 pub mod interrupt;

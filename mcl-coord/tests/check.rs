@@ -57,13 +57,20 @@ fn figure_6_9a_in_mcl_is_an_error_on_both_orders_with_a_counterexample() {
     let all = coordination_diagnostics(&db, f);
     // The orders conflict by construction (E0408, first), and the analysis
     // proves the deadlock (E0406).
-    assert_eq!(all.iter().map(|d| d.diag.code).collect::<Vec<_>>(), [codes::CONFLICTING_CONSTRAINTS, codes::DEADLOCKING_CONSTRAINTS]);
+    assert_eq!(
+        all.iter().map(|d| d.diag.code).collect::<Vec<_>>(),
+        [codes::CONFLICTING_CONSTRAINTS, codes::DEADLOCKING_CONSTRAINTS]
+    );
     let c = &all[0].diag;
     assert_eq!(text_at(FIG_6_9A, &all[0]), "order { v1:p2, v2:p5 }");
     let labelled: Vec<&str> = c.labels.iter().map(|l| &FIG_6_9A[l.span.start as usize..l.span.end as usize]).collect();
     assert_eq!(labelled, ["order { v1:p2, v2:p5 }", "order { v2:p5, v1:p2 }"]);
     assert!(c.message.contains("constraints 1 and 2 conflict"), "{}", c.message);
-    assert!(c.notes[0].contains("`v1:p2` ends before `v2:p5` starts, `v2:p5` ends before `v1:p2` starts"), "{:?}", c.notes);
+    assert!(
+        c.notes[0].contains("`v1:p2` ends before `v2:p5` starts, `v2:p5` ends before `v1:p2` starts"),
+        "{:?}",
+        c.notes
+    );
     let diags = &all[1..];
     let d = &diags[0].diag;
     assert_eq!(d.code, codes::DEADLOCKING_CONSTRAINTS);

@@ -173,10 +173,7 @@ pub fn delayed_in_process(missions: &[String], delay: Duration) -> Vec<DelayedEn
         receivers.push((m.clone(), out_rx));
     }
     let peers = Arc::new(senders);
-    receivers
-        .into_iter()
-        .map(|(mission, inbox)| DelayedEnd { mission, delay, peers: peers.clone(), inbox })
-        .collect()
+    receivers.into_iter().map(|(mission, inbox)| DelayedEnd { mission, delay, peers: peers.clone(), inbox }).collect()
 }
 
 impl CoordTransport for DelayedEnd {
@@ -396,7 +393,8 @@ pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
         ends: Vec<String>,
     }
     let Some((_, v)) = net.properties().iter().find(|(k, _)| k == TOKENS_PROPERTY) else { return Ok(Vec::new()) };
-    let bad = |what: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names {what}, which the net does not have", net.name());
+    let bad =
+        |what: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names {what}, which the net does not have", net.name());
     let list: Vec<Entry> =
         serde_json::from_str(v).map_err(|e| format!("net `{}`: bad `{TOKENS_PROPERTY}` property: {e}", net.name()))?;
     let mut out = Vec::new();
@@ -404,7 +402,8 @@ pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
         let place = net.place_by_id(&e.place).ok_or_else(|| bad(&format!("place `{}`", e.place)))?;
         let mut starts = Vec::new();
         for s in e.starts {
-            let t = net.transition_by_id(&s.transition).ok_or_else(|| bad(&format!("transition `{}`", s.transition)))?;
+            let t =
+                net.transition_by_id(&s.transition).ok_or_else(|| bad(&format!("transition `{}`", s.transition)))?;
             starts.push((t, s.weight));
         }
         for t in [&e.request, &e.ret] {

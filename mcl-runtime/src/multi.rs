@@ -771,7 +771,13 @@ pub async fn run_real_time_with_peers(
                     for p in peers.iter() {
                         v.seq += 1;
                         let t = v.s.player.now();
-                        let m = CoordMessage { from: v.name.clone(), to: p.clone(), transition: ENDED.into(), seq: v.seq, t };
+                        let m = CoordMessage {
+                            from: v.name.clone(),
+                            to: p.clone(),
+                            transition: ENDED.into(),
+                            seq: v.seq,
+                            t,
+                        };
                         v.transport.send(m)?;
                     }
                     let mut g = lock(&global)?;

@@ -235,7 +235,9 @@ pub fn run(o: Options) -> u8 {
             return usage("--coord-listen and --coord-peer go with --vehicle NAME");
         }
         if !(several && o.mission.is_none() && o.mock && is_mcl) {
-            return usage("--vehicle runs one vehicle of an .mcl file with several missions, with --mock and without --mission");
+            return usage(
+                "--vehicle runs one vehicle of an .mcl file with several missions, with --mock and without --mission",
+            );
         }
         if o.virtual_time {
             return usage("--vehicle runs in real time (virtual time needs every vehicle in one process)");
@@ -576,7 +578,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         let missing: Vec<&String> =
             v.send.iter().map(|(_, to)| to).filter(|to| !peers.iter().any(|(n, _)| n == *to)).collect();
         if let Some(to) = missing.first() {
-            return usage(&format!("`{me}` sends coordination messages to `{to}`: give its address with --coord-peer {to}=HOST:PORT"));
+            return usage(&format!(
+                "`{me}` sends coordination messages to `{to}`: give its address with --coord-peer {to}=HOST:PORT"
+            ));
         }
         vehicles = vec![v];
         names = vec![me.clone()];
@@ -680,21 +684,21 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             vec![Box::new(end)]
         } else {
             match o.transport {
-            Transport::InProcess => mcl_runtime::coord::in_process(&names)
-                .into_iter()
-                .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
-                .collect(),
-            Transport::Tcp => match mcl_runtime::coord::tcp_mesh(&names, &o.coord_host).await {
-                Ok(ends) => {
-                    if o.verbose {
-                        for e in &ends {
-                            eprintln!("coordination: `{}` listens on {}", e.mission_name(), e.local_addr());
+                Transport::InProcess => mcl_runtime::coord::in_process(&names)
+                    .into_iter()
+                    .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
+                    .collect(),
+                Transport::Tcp => match mcl_runtime::coord::tcp_mesh(&names, &o.coord_host).await {
+                    Ok(ends) => {
+                        if o.verbose {
+                            for e in &ends {
+                                eprintln!("coordination: `{}` listens on {}", e.mission_name(), e.local_addr());
+                            }
                         }
+                        ends.into_iter().map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>).collect()
                     }
-                    ends.into_iter().map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>).collect()
-                }
-                Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
-            },
+                    Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
+                },
             }
         };
         let mut vs = Vec::new();
