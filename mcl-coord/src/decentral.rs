@@ -52,7 +52,11 @@
 //! communicated firing is delivered before the receiver fires anything else
 //! (the synchronous communication of Iordache and Antsaklis). With acoustic
 //! delays an order or a sync only waits longer; a mutex between vehicles
-//! needs that assumption (or a token-passing protocol in the runtime).
+//! kept by copies needs that assumption, so [`decentralize`] gives it a
+//! single holder with request / grant / return messages instead
+//! ([`vehicle_nets_with_tokens`]). A sync's arrival withdrawn by an abort
+//! is taken back by the vehicle that holds its credit when the other call
+//! has not used it yet.
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, Solution, SolverModel, Variable};
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId, TransitionKind};
