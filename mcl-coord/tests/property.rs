@@ -270,7 +270,7 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn free_means_no_deadlock_and_constraints_hold(seed in any::<u64>()) {
@@ -295,7 +295,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
 
     /// Mutex, order and sync together in every case.
     #[test]
@@ -318,7 +318,7 @@ fn fixed_seeds_with_groups_and_walks() {
 /// (`MCL_COORD_SEEDS=N` runs N of them).
 #[test]
 fn fixed_seeds() {
-    let n: u64 = std::env::var("MCL_COORD_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(40);
+    let n: u64 = std::env::var("MCL_COORD_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
     let mut free = 0;
     for seed in 0..n {
         check(seed).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
