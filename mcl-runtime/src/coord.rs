@@ -538,6 +538,46 @@ mod tests {
         assert!(rejected[1].contains("for `other`"));
     }
 
+    #[tokio::test]
+    async fn delayed_in_process_delivers_in_order() {
+        let mut ends = delayed_in_process(&["a".into(), "b".into()], Duration::from_millis(5));
+        let mut b = ends.pop().unwrap();
+        let mut a = ends.pop().unwrap();
+        for i in 1..=3 {
+            a.send(msg("a", "b", &format!("t{i}"), i)).unwrap();
+        }
+        assert!(a.send(msg("a", "zz", "t", 4)).unwrap_err().contains("zz"));
+        for i in 1..=3 {
+            assert_eq!(b.recv().await.unwrap().transition, format!("t{i}"));
+        }
+        assert_eq!(b.mission(), "b");
+    }
+
+    #[test]
+    fn token_table_reads_the_property() {
+        let net = |tokens: &str| {
+            let mut b = mcl_net::NetBuilder::new("v");
+            let p = b.add_place(mcl_net::Place::new("coord.mutex1"));
+            let t = b.add_transition(mcl_net::Transition::new("call1.start"));
+            b.add_input(p, t, 1);
+            for id in ["coord.request.mutex1", "coord.return.mutex1", "coord.recv.a.coord.lend.mutex1.v"] {
+                b.add_transition(mcl_net::Transition::new(id));
+            }
+            b.property(TOKENS_PROPERTY, tokens);
+            b.build().unwrap()
+        };
+        let entry = |start: &str| {
+            format!(
+                r#"[{{"supervisor":"coord.mutex1","holder":"a","place":"coord.mutex1","starts":[{{"transition":"{start}","weight":1}}],"request":"coord.request.mutex1","return":"coord.return.mutex1","grant":"coord.recv.a.coord.lend.mutex1.v","ends":["call1.release"]}}]"#
+            )
+        };
+        let ok = token_table(&net(&entry("call1.start"))).unwrap();
+        assert_eq!(ok.len(), 1);
+        assert_eq!((ok[0].holder.as_str(), ok[0].starts.len(), ok[0].ends.len()), ("a", 1, 1));
+        assert!(token_table(&net(&entry("nope"))).unwrap_err().contains("`nope`"));
+        assert!(token_table(&net("[")).unwrap_err().contains("bad `coord.tokens`"));
+    }
+
     #[test]
     fn send_table_reads_the_property() {
         let net = |send: &str| {
