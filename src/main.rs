@@ -138,6 +138,16 @@ enum Command {
         /// Host the TCP transport's listeners bind to (one free port per vehicle).
         #[arg(long, value_name = "HOST", default_value = "127.0.0.1")]
         coord_host: String,
+        /// Run only this vehicle (mission) of a coordinated file, in this process, over TCP with
+        /// the others (--coord-listen, --coord-peer; real time).
+        #[arg(long, value_name = "NAME")]
+        vehicle: Option<String>,
+        /// With --vehicle: the address this vehicle listens on for coordination messages.
+        #[arg(long, value_name = "HOST:PORT")]
+        coord_listen: Option<String>,
+        /// With --vehicle: where another vehicle of the file listens (repeatable).
+        #[arg(long, value_name = "NAME=HOST:PORT")]
+        coord_peer: Vec<String>,
         /// No live log.
         #[arg(short, long)]
         quiet: bool,
@@ -399,6 +409,9 @@ fn main() -> ExitCode {
             crash_after,
             transport,
             coord_host,
+            vehicle,
+            coord_listen,
+            coord_peer,
         } => cmd::run::run(cmd::run::Options {
             file,
             mock,
@@ -420,6 +433,9 @@ fn main() -> ExitCode {
             crash_after,
             transport,
             coord_host,
+            vehicle,
+            coord_listen,
+            coord_peer,
         }),
         Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {

@@ -1,6 +1,7 @@
 //! `mcl check` runs the coordination analysis: figure 6.9a of the seed,
 //! written in MCL (tests/ui/e0406_order_cycle.mcl), is an error E0406 on both
-//! orders with a counterexample, in the human and the JSON output; keeping
+//! orders with a counterexample (and E0408: the orders conflict by
+//! construction), in the human and the JSON output; keeping
 //! one order makes the file clean.
 
 use serde_json::Value;
@@ -51,7 +52,8 @@ fn figure_6_9a_in_the_human_output_and_repaired_by_keeping_one_order() {
     assert_eq!(out.status.code(), Some(1), "{s}");
     assert!(s.contains("[E0406] Error: these constraints can lead to a deadlock"), "{s}");
     assert!(s.contains("constraint 2 holds `v1:p2`"), "{s}");
-    assert!(s.contains("checked 2 files: 1 error, 0 warnings"), "{s}");
+    assert!(s.contains("[E0408] Error: constraints 1 and 2 conflict"), "{s}");
+    assert!(s.contains("checked 2 files: 2 errors, 0 warnings"), "{s}");
 
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("coord-check-fixed");
     std::fs::create_dir_all(&dir).unwrap();

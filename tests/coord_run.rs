@@ -235,9 +235,8 @@ fn one_mission_alone_and_usage() {
 
 /// Three vehicles under `mutex { a:survey, b:survey, c:survey } = bound`
 /// and, unless `staggered`, `order { c:survey, a:up }`. `staggered`: b and
-/// c ask for the mutex 5 and 10 s later than a (real time keeps a
-/// cross-vehicle mutex only when requests do not cross in flight:
-/// docs/coordination.md); otherwise all ask at 0.
+/// c ask for the mutex 5 and 10 s later than a; otherwise all ask at 0 (a,
+/// the holder, takes it; b and c ask a for it).
 fn mutex_file(name: &str, bound: u32, staggered: bool) -> PathBuf {
     let vehicle = root().join("examples/vehicle.mcl");
     let (b, c) =
@@ -269,11 +268,14 @@ fn intervals(tr: &[Value], mission: &str, label: &str) -> Vec<(usize, usize)> {
 fn mutexes_never_overlap() {
     let at_once = mutex_file("mutex.mcl", 1, false);
     let staggered = mutex_file("mutex-staggered.mcl", 1, true);
-    let runs: [(&Path, &[&str]); 4] = [
+    let runs: [(&Path, &[&str]); 6] = [
         (&at_once, &["--virtual-time"]),
         (&at_once, &["--virtual-time", "--transport", "tcp"]),
         (&staggered, &["--virtual-time"]),
         (&staggered, &["--speed", "50", "-q"]),
+        // Real time, all asking at once: the holder grants one at a time.
+        (&at_once, &["--speed", "50", "-q"]),
+        (&at_once, &["--speed", "50", "-q", "--transport", "tcp"]),
     ];
     for (file, extra) in runs {
         let (code, tr, out) = run(file.to_str().unwrap(), extra, "mutex.jsonl");
@@ -441,4 +443,193 @@ fn deadlocking_constraints_are_refused() {
     let out = mcl(&["run", "--mock", "--virtual-time", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("deadlock"), "{}", stderr(&out));
+}
+
+/// Runs the vehicle nets `vnets` in real time (`speed` times faster) over an
+/// in-process transport that delays every message by `delay` of wall-clock
+/// time; returns the trace (records in the order they happened) as JSON.
+fn run_delayed(vnets: Vec<mcl_coord::VehicleNet>, delay_ms: u64, speed: f64) -> (Vec<Value>, u8) {
+    use mcl_runtime::multi::{run_real_time, SharedSink, Vehicle};
+    let names: Vec<String> = vnets.iter().map(|v| v.mission.clone()).collect();
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    let sink = std::sync::Arc::new(std::sync::Mutex::new(mcl_runtime::driver::Collect::default()));
+    let shared: SharedSink = sink.clone();
+    let end = rt.block_on(async {
+        let ends = mcl_runtime::coord::delayed_in_process(&names, std::time::Duration::from_millis(delay_ms));
+        let mut sources = mcl_runtime::trace::SourceMap::new();
+        let mut vs = Vec::new();
+        for (v, tr) in vnets.into_iter().zip(ends) {
+            let net = std::sync::Arc::new(v.net);
+            let scenario = mcl_runtime::scenario::Scenario { default_duration: Some(2.0), ..Default::default() };
+            let tracer = mcl_runtime::trace::Tracer::new(&net, Some(v.mission.clone()), &mut sources);
+            let mock = mcl_runtime::mock::MockVehicle::from_net(&net, scenario, 1);
+            vs.push(Vehicle::new(&v.mission, net, Default::default(), tracer, mock, Box::new(tr)).unwrap());
+        }
+        let limits = mcl_runtime::driver::Limits::real_time(Some(600.0));
+        run_real_time(vs, shared, mcl_runtime::clock::Clock::new(speed, 0.0), limits).await.unwrap()
+    });
+    let records = std::mem::take(&mut sink.lock().unwrap().0);
+    (records.iter().map(|r| serde_json::to_value(r).unwrap()).collect(), end.exit_code())
+}
+
+/// The missions of a mutex file and the supervisors of its analysis.
+fn coordinated(path: &Path) -> (Vec<mcl_coord::Mission>, Vec<mcl_coord::Supervisor>) {
+    let db = mcl_compiler::Database::new();
+    let file = mcl_compiler::Db::file(&db, path);
+    let (missions, constraints) = mcl_coord::source::load(&db, file).unwrap();
+    let report = mcl_coord::analyze(&missions, &constraints).unwrap();
+    (missions, report.supervisors)
+}
+
+/// How many of `missions`' `label` calls are running at once, at most
+/// (trace order).
+fn most_at_once(tr: &[Value], missions: &[&str], label: &str) -> usize {
+    let mut events: Vec<(usize, i32)> = Vec::new();
+    for m in missions {
+        for (s, e) in intervals(tr, m, label) {
+            events.push((s, 1));
+            events.push((e, -1));
+        }
+    }
+    events.sort();
+    let (mut running, mut most) = (0i32, 0i32);
+    for (_, d) in events {
+        running += d;
+        most = most.max(running);
+    }
+    most as usize
+}
+
+#[test]
+fn a_mutex_between_vehicles_holds_when_messages_take_time() {
+    // Both ask at 0; every message takes 40 ms (2 s of mission time at
+    // speed 50), as long as a call.
+    let file = mutex_file("mutex-delay.mcl", 1, false);
+    let (missions, sups) = coordinated(&file);
+    let names = ["a", "b", "c"];
+
+    // Copies of the supervisor in every vehicle (the synchronous
+    // communication of Iordache and Antsaklis) let all of them take it on
+    // stale information...
+    let plant = mcl_coord::centralize(&missions).unwrap();
+    let costs = mcl_coord::decentral::Costs::default();
+    let comm = mcl_coord::decentral::minimize_communication(&plant, &sups, &costs).unwrap();
+    let copies = mcl_coord::decentral::vehicle_nets(&missions, &plant, &sups, &comm).unwrap();
+    let (tr, _) = run_delayed(copies, 40, 50.0);
+    assert!(most_at_once(&tr, &names, "survey") > 1, "copies kept the mutex although messages crossed");
+
+    // ...a single holder with requests, grants and returns does not.
+    let vnets = mcl_coord::decentralize(&missions, &sups).unwrap();
+    let (tr, code) = run_delayed(vnets, 40, 50.0);
+    assert_eq!(code, 0, "{tr:#?}");
+    assert_eq!(most_at_once(&tr, &names, "survey"), 1);
+    for m in names {
+        assert_eq!(intervals(&tr, m, "survey").len(), 1, "{m}");
+    }
+    assert_eq!(check_order(&tr, ("c", "survey"), ("a", "up")), 1);
+    // b and c each asked a (the holder) once, were granted once and gave
+    // the token back at the end of their call.
+    let summary = tr.last().unwrap();
+    assert_eq!(summary["kind"], "coord_summary");
+    let sent =
+        |t: &str| of(&tr, "coord_send").iter().filter(|r| r["transition"].as_str().unwrap().starts_with(t)).count();
+    assert_eq!((sent("coord.request."), sent("coord.lend.")), (2, 2));
+    assert_eq!(summary["value"]["requests"], 2);
+    assert_eq!(summary["value"]["grants"], 2);
+    assert_eq!(summary["value"]["returns"], 2);
+}
+
+#[test]
+fn a_withdrawn_sync_arrival_does_not_let_the_other_call_start() {
+    // a reaches its sync call at 0, and its parallel-or withdraws it when
+    // Surface() ends (one default duration); b reaches its own after two
+    // tasks. Without the withdrawal, b would start on a's stale arrival.
+    let vehicle = root().join("examples/vehicle.mcl");
+    let text = format!(
+        "import \"{}\";\n\
+         mission : a {{ parallel {{ Surface() }} or {{ ReceiveData() : s }} }}\n\
+         mission : b {{ InitializeVehicle() ; StopVehicle() ; SendData() : s }}\n\
+         constraints {{\n    sync {{ a:s, b:s }}\n}}\n",
+        vehicle.display()
+    );
+    let path = tmp("sync-withdrawn.mcl");
+    std::fs::write(&path, text).unwrap();
+    for extra in [&["--virtual-time"][..], &["--speed", "50", "-q"][..]] {
+        let mut args = extra.to_vec();
+        args.extend(["--time-limit", "100"]);
+        let (code, tr, out) = run(path.to_str().unwrap(), &args, "sync-withdrawn.jsonl");
+        assert!(call(&tr, "a", "s").starts.is_empty(), "{extra:?}");
+        assert!(call(&tr, "b", "s").starts.is_empty(), "{extra:?}: b started on a withdrawn arrival");
+        // a withdrew its call (cancel) and told b, which dropped the credit.
+        let fired = |m: &str, suffix: &str| {
+            tr.iter().any(|r| {
+                r["kind"] == "fire" && r["mission"] == m && r["transition"].as_str().unwrap().ends_with(suffix)
+            })
+        };
+        assert!(fired("a", ".cancel"), "{extra:?}");
+        assert!(fired("b", ".withdraw"), "{extra:?}");
+        // b waits for ever: stuck (or the time limit).
+        assert_eq!(code, 3, "{extra:?}: {}", stderr(&out));
+    }
+}
+
+/// A free loopback port (bound then released).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+#[test]
+fn each_vehicle_in_its_own_process_over_tcp() {
+    // a holds the mutex; b asks for it; b's survey ends before a goes up.
+    let vehicle = root().join("examples/vehicle.mcl");
+    let text = format!(
+        "import \"{}\";\n\
+         mission : a {{ Goto( [0, 0] ) : survey ; Surface() : up }}\n\
+         mission : b {{ Goto( [5, 5] ) : survey }}\n\
+         constraints {{\n    mutex {{ a:survey, b:survey }} = 1\n    order {{ b:survey, a:up }}\n}}\n",
+        vehicle.display()
+    );
+    let path = tmp("two-processes.mcl");
+    std::fs::write(&path, text).unwrap();
+    let (pa, pb) = (free_port(), free_port());
+    let spawn = |me: &str, listen: u16, peer: &str, port: u16| {
+        let tp = tmp(&format!("proc-{me}.jsonl"));
+        let child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+            .args(["run", "--mock", path.to_str().unwrap(), "--vehicle", me])
+            .args(["--coord-listen", &format!("127.0.0.1:{listen}")])
+            .args(["--coord-peer", &format!("{peer}=127.0.0.1:{port}")])
+            .args(["--speed", "50", "--time-limit", "600", "-q", "--trace", tp.to_str().unwrap()])
+            .current_dir(root())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("run mcl");
+        (child, tp)
+    };
+    let (a, ta) = spawn("a", pa, "b", pb);
+    let (b, tb) = spawn("b", pb, "a", pa);
+    let (oa, ob) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    assert_eq!(oa.status.code(), Some(0), "a: {}", stderr(&oa));
+    assert_eq!(ob.status.code(), Some(0), "b: {}", stderr(&ob));
+    let (tra, trb) = (trace(&ta), trace(&tb));
+    assert!(tra.iter().all(|r| r["mission"] == "a" || r["mission"] == "*"));
+    assert!(trb.iter().all(|r| r["mission"] == "b" || r["mission"] == "*"));
+    // What one sends, the other receives; b asked a for the mutex.
+    let sends = |tr: &[Value]| of(tr, "coord_send").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
+    let receives = |tr: &[Value]| of(tr, "coord_receive").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
+    assert_eq!(sends(&tra), receives(&trb));
+    assert_eq!(sends(&trb), receives(&tra));
+    assert!(sends(&trb).iter().any(|t| t == "coord.request.mutex1"), "{:?}", sends(&trb));
+    assert!(stderr(&oa).contains("coordination: `a` listens on 127.0.0.1:"), "{}", stderr(&oa));
+    // Each did its call once; a went up after b's survey ended (b told it).
+    assert_eq!(call(&tra, "a", "survey").starts.len(), 1);
+    assert_eq!(call(&trb, "b", "survey").ends.len(), 1);
+    assert_eq!(call(&tra, "a", "up").starts.len(), 1);
+    // Usage errors.
+    let out = mcl(&["run", "--mock", path.to_str().unwrap(), "--vehicle", "b"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--coord-peer a=HOST:PORT"), "{}", stderr(&out));
+    let out = mcl(&["run", "--mock", "--virtual-time", path.to_str().unwrap(), "--vehicle", "b"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = mcl(&["run", "--mock", path.to_str().unwrap(), "--vehicle", "z"]);
+    assert!(stderr(&out).contains("no mission `z`"), "{}", stderr(&out));
 }

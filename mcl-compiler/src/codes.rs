@@ -46,10 +46,12 @@ pub const CONSTRAINT_ON_OPERATOR: &str = "E0409";
 pub const DEADLOCKING_CONSTRAINTS: &str = "E0406";
 /// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
 pub const COORDINATION_INCONCLUSIVE: &str = "W0407";
+/// Reported by the coordination analysis (`mcl_coord::check`), not by `check_file`.
+pub const CONFLICTING_CONSTRAINTS: &str = "E0408";
 
 /// Codes that `check_file` never produces: the coordination analysis of
 /// `mcl-coord` reports them (its tests check their explanations).
-pub const COORDINATION: &[&str] = &[DEADLOCKING_CONSTRAINTS, COORDINATION_INCONCLUSIVE];
+pub const COORDINATION: &[&str] = &[DEADLOCKING_CONSTRAINTS, COORDINATION_INCONCLUSIVE, CONFLICTING_CONSTRAINTS];
 
 // Planning (`planning { ... }`, `pddl_map { ... }`).
 pub const PLAN_UNKNOWN_TYPE: &str = "E0701";
@@ -126,6 +128,7 @@ registry! {
     "E0405" => "wrong number of calls in a constraint",
     "E0406" => "constraints that deadlock",
     "W0407" => "coordination analysis inconclusive",
+    "E0408" => "constraints that conflict by construction",
     "E0409" => "constraint names a planning operator",
     "E0501" => "imported file not found",
     "E0502" => "import cycle",

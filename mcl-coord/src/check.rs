@@ -8,6 +8,9 @@
 //!   constraint involved, a secondary label on each other one; notes give the
 //!   counterexample in the missions' terms (which calls started, ended,
 //!   waited) and the calls that wait for ever.
+//! * [`codes::CONFLICTING_CONSTRAINTS`] (E0408, error): constraints that
+//!   contradict each other whatever the missions do (`crate::conflict`),
+//!   reported first, with a label on each constraint involved.
 //! * [`codes::COORDINATION_INCONCLUSIVE`] (W0407, warning): the analysis hit
 //!   one of its caps and proved neither.
 //!
@@ -19,7 +22,7 @@
 use mcl_compiler::codes;
 use mcl_compiler::compile::calls::{call_nodes, CallNodes};
 use mcl_compiler::{Db, FileDiagnostic, SourceFile};
-use mcl_syntax::ast::Item;
+use mcl_syntax::ast::{self, Item};
 use mcl_syntax::{Diagnostic, Span};
 
 use crate::analysis::{analyze_with, AnalyzeOptions, Problem, Verdict};
@@ -58,6 +61,19 @@ fn diagnostics_inner(db: &dyn Db, file: SourceFile, opts: &AnalyzeOptions, inter
     let Ok((missions, constraints)) = crate::source::load(db, file) else {
         return Vec::new();
     };
+    // Conflicts by construction (E0408), numbered as the analysis numbers
+    // constraints: every block in order.
+    let all: Vec<ast::Constraint> = parsed
+        .file
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Constraints(b) => Some(b.constraints.iter().cloned()),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    let conflicts = crate::conflict::conflicts(&all);
     let analysis = || analyze_with(&missions, &constraints, opts);
     let result = if interruptible {
         crate::interrupt::interruptible(|| db.unwind_if_revision_cancelled(), analysis)
@@ -68,7 +84,7 @@ fn diagnostics_inner(db: &dyn Db, file: SourceFile, opts: &AnalyzeOptions, inter
         Ok(r) => r,
         // Bad references are the checker's errors (E0401-E0405); anything
         // else cannot come from a program without errors.
-        Err(_) => return Vec::new(),
+        Err(_) => return conflicts.into_iter().map(|diag| FileDiagnostic { file, diag }).collect(),
     };
     let diags = match &report.verdict {
         Verdict::Free => Vec::new(),
@@ -104,7 +120,7 @@ fn diagnostics_inner(db: &dyn Db, file: SourceFile, opts: &AnalyzeOptions, inter
             out
         }
     };
-    diags.into_iter().map(|diag| FileDiagnostic { file, diag }).collect()
+    conflicts.into_iter().chain(diags).map(|diag| FileDiagnostic { file, diag }).collect()
 }
 
 /// The keyword that opens a constraints block (the whole block when its

@@ -52,7 +52,11 @@
 //! communicated firing is delivered before the receiver fires anything else
 //! (the synchronous communication of Iordache and Antsaklis). With acoustic
 //! delays an order or a sync only waits longer; a mutex between vehicles
-//! needs that assumption (or a token-passing protocol in the runtime).
+//! kept by copies needs that assumption, so [`decentralize`] gives it a
+//! single holder with request / grant / return messages instead
+//! ([`vehicle_nets_with_tokens`]). A sync's arrival withdrawn by an abort
+//! is taken back by the vehicle that holds its credit when the other call
+//! has not used it yet.
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, Solution, SolverModel, Variable};
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId, TransitionKind};
@@ -303,12 +307,63 @@ pub fn message_event(mission: &str, id: &str) -> String {
     format!("{mission}/{id}")
 }
 
-/// Extract 6.4 with a given communication policy.
+/// Extract 6.4 with a given communication policy: every supervisor of
+/// `comm.delta` kept as copies (see [`vehicle_nets_with_tokens`] for the
+/// mutexes between vehicles).
 pub fn vehicle_nets(
     missions: &[Mission],
     plant: &Plant,
     sups: &[Supervisor],
     comm: &Communication,
+) -> Result<Vec<VehicleNet>, DecentralizeError> {
+    vehicle_nets_with_tokens(missions, plant, sups, comm, &[])
+}
+
+/// Net property of a vehicle net: the mutex supervisors between vehicles
+/// that it implements with a single holder (see [`vehicle_nets_with_tokens`]),
+/// `[{"supervisor", "holder", "place", "starts": [{"transition", "weight"}],
+/// "request", "return", "grant", "ends"}]` for the calls of this vehicle that must
+/// ask the holder (none for the holder's own calls).
+pub const TOKENS_PROPERTY: &str = "coord.tokens";
+
+/// True when `s` is a mutex whose calls belong to several vehicles: it is
+/// implemented by a single holder with request / grant / return messages
+/// rather than by copies ([`decentralize`]).
+pub fn is_token_mutex(plant: &Plant, s: &Supervisor) -> bool {
+    matches!(s.origin, crate::supervisor::Origin::Mutex { .. })
+        && owners(plant, s.produced_by.iter().chain(&s.consumed_by).map(|&(t, _)| t)).len() > 1
+}
+
+/// Extract 6.4 with a given communication policy for the supervisors of
+/// `sups` (copies, [`vehicle_nets`]), plus the mutexes `tokens` between
+/// vehicles, each with a **single holder** (the first mission, in the order
+/// given, that has one of its calls) so that it holds however long messages
+/// take. For a mutex place `coord.mutexK` and every other vehicle `B` of it:
+///
+/// * the holder keeps `coord.mutexK` (its own starts take from it, its own
+///   ends give back), a place `coord.mutexK.lent.B` and the transitions
+///   `coord.lend.mutexK.B` (event `B/coord.request.mutexK`: one token from
+///   `coord.mutexK` to `lent.B`; its firing is sent to `B`: the *grant*),
+///   `coord.recv.B.coord.return.mutexK` and `coord.recv.B.<end>` for every
+///   end of `B`'s calls (`lent.B` back to `coord.mutexK`: the *return*);
+/// * `B` has a place `coord.mutexK` (initially empty: the tokens granted to
+///   it) that its starts take from, the transitions `coord.request.mutexK`
+///   and `coord.return.mutexK` (events of that name, which `B`'s runtime
+///   raises: no arcs / one token from `coord.mutexK`; both sent to the
+///   holder) and `coord.recv.<holder>.coord.lend.mutexK.B` (the grant: one
+///   token into `coord.mutexK`); its ends are sent to the holder.
+///
+/// `B`'s runtime asks (fires `coord.request`) when one of its calls could
+/// start but for the tokens of such mutexes (in the order of their ids, one
+/// at a time), and gives back (`coord.return`) the tokens no call can use
+/// any more (a call withdrawn after it asked); property [`TOKENS_PROPERTY`].
+/// A request waits in the holder's inbox until a token is free.
+pub fn vehicle_nets_with_tokens(
+    missions: &[Mission],
+    plant: &Plant,
+    sups: &[Supervisor],
+    comm: &Communication,
+    tokens: &[Supervisor],
 ) -> Result<Vec<VehicleNet>, DecentralizeError> {
     if let Some(&(i, t)) = comm.epsilon.first() {
         return Err(DecentralizeError::RemoteControl(format!(
@@ -321,9 +376,31 @@ pub fn vehicle_nets(
         let o = plant.owner_of_transition(t).expect("supervisor arcs touch mission transitions");
         (o, TransitionId(t.0 - plant.parts[o].transitions.start))
     };
+    // Sync credits withdrawn: (supervisor index, owner, withdrawing
+    // transition) for each copy of a sync supervisor held by a vehicle
+    // other than the one whose call arrives (see `withdraw`).
+    let mut withdrawals: Vec<(usize, usize, usize, TransitionId)> = Vec::new();
+    for &(x, k) in &comm.delta {
+        if !matches!(sups[k].origin, crate::supervisor::Origin::Sync { .. }) {
+            continue;
+        }
+        for (_, a) in &plant.activities {
+            if !a.arrived.iter().any(|t| sups[k].produced_by.iter().any(|&(p, _)| p == *t)) {
+                continue;
+            }
+            for &w in &a.withdrawn {
+                if let Some(o) = plant.owner_of_transition(w).filter(|&o| o != x) {
+                    withdrawals.push((x, k, o, w));
+                }
+            }
+        }
+    }
+    withdrawals.sort_unstable();
+    withdrawals.dedup();
     let mut out = Vec::new();
     for (i, m) in missions.iter().enumerate() {
         let mut b: NetBuilder = m.net.to_builder();
+        let mut copies: FxHashMap<usize, PlaceId> = FxHashMap::default();
         let mut recv: FxHashMap<u32, TransitionId> = FxHashMap::default();
         let mut receive = Vec::new();
         let told: Vec<TransitionId> = comm.alpha.iter().filter(|&&(x, _)| x == i).map(|&(_, t)| t).collect();
@@ -333,6 +410,7 @@ pub fn vehicle_nets(
             let c = b.add_place(
                 mcl_net::Place::new(s.id.clone()).with_tokens(u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)),
             );
+            copies.insert(k, c);
             b.property(format!("coord.supervisor:{}", s.id), s.describe(&plant.net));
             let mut arc = |t: TransitionId, w: u32, into: bool, b: &mut NetBuilder| {
                 let (o, lt) = local_t(t);
@@ -372,8 +450,151 @@ pub fn vehicle_nets(
                 send.push((id, plant.parts[x].name.clone()));
             }
         }
+        // A sync's arrival withdrawn (the call cancelled by an abort before
+        // it started): its credit is taken back if the other call has not
+        // used it yet. The cancel's message puts a token into
+        // `coord.syncK.i-j.withdrawn`; `withdraw` (priority 2, before any
+        // start) takes it with a credit, else `forget` (priority 1) drops it
+        // (the other call already started on that arrival).
+        let mut pending: FxHashMap<usize, PlaceId> = FxHashMap::default();
+        for &(x, k, o, w) in &withdrawals {
+            let (_, lw) = local_t(w);
+            let wid = missions[o].net.transition(lw).map_or_else(String::new, |t| t.id.to_string());
+            if o == i {
+                send.push((wid, plant.parts[x].name.clone()));
+                continue;
+            }
+            if x != i {
+                continue;
+            }
+            let Some(&c) = copies.get(&k) else { continue };
+            let id = &sups[k].id;
+            let p = *pending.entry(k).or_insert_with(|| {
+                let p = b.add_place(mcl_net::Place::new(format!("{id}.withdrawn")));
+                let tw = b.add_transition(mcl_net::Transition::new(format!("{id}.withdraw")).with_priority(2));
+                b.add_input(p, tw, 1).add_input(c, tw, 1);
+                let tf = b.add_transition(mcl_net::Transition::new(format!("{id}.forget")).with_priority(1));
+                b.add_input(p, tf, 1);
+                p
+            });
+            let from = plant.parts[o].name.clone();
+            let tt = *recv.entry(w.0).or_insert_with(|| {
+                let rid = format!("coord.recv.{from}.{wid}");
+                receive.push((rid.clone(), from.clone()));
+                b.add_transition(
+                    mcl_net::Transition::new(rid).with_kind(TransitionKind::Event(message_event(&from, &wid))),
+                )
+            });
+            b.add_output(tt, p, 1);
+        }
+        // Mutexes between vehicles: a single holder.
+        let mut table = Vec::new();
+        for s in tokens {
+            let all = owners(plant, s.produced_by.iter().chain(&s.consumed_by).map(|&(t, _)| t));
+            if !all.contains(&i) {
+                continue;
+            }
+            let holder = owners(plant, s.consumed_by.iter().map(|&(t, _)| t)).first().copied().unwrap_or(all[0]);
+            let hname = plant.parts[holder].name.clone();
+            b.property(format!("coord.supervisor:{}", s.id), s.describe(&plant.net));
+            let local_id = |t: TransitionId| {
+                let (_, lt) = local_t(t);
+                missions[plant.owner_of_transition(t).unwrap_or(0)]
+                    .net
+                    .transition(lt)
+                    .map_or_else(String::new, |x| x.id.to_string())
+            };
+            let key = s.id.strip_prefix("coord.").unwrap_or(&s.id).to_string();
+            if i == holder {
+                let initial = u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX);
+                let c = b.add_place(mcl_net::Place::new(s.id.clone()).with_tokens(initial));
+                for &(t, w) in s.produced_by.iter().filter(|&&(t, _)| plant.parts[i].owns_transition(t)) {
+                    b.add_output(local_t(t).1, c, w);
+                }
+                for &(t, w) in s.consumed_by.iter().filter(|&&(t, _)| plant.parts[i].owns_transition(t)) {
+                    b.add_input(c, local_t(t).1, w);
+                }
+                for &o in all.iter().filter(|&&o| o != i) {
+                    let from = plant.parts[o].name.clone();
+                    let lent = b.add_place(mcl_net::Place::new(format!("{}.lent.{from}", s.id)));
+                    let lend = format!("coord.lend.{key}.{from}");
+                    let tl = b.add_transition(
+                        mcl_net::Transition::new(lend.clone())
+                            .with_kind(TransitionKind::Event(message_event(&from, &format!("coord.request.{key}")))),
+                    );
+                    b.add_input(c, tl, 1).add_output(tl, lent, 1);
+                    receive.push((lend.clone(), from.clone()));
+                    send.push((lend, from.clone()));
+                    let back = |b: &mut NetBuilder,
+                                recv: &mut FxHashMap<u32, TransitionId>,
+                                receive: &mut Vec<(String, String)>,
+                                gid: Option<u32>,
+                                id: String,
+                                w: u32| {
+                        let mk = |b: &mut NetBuilder, receive: &mut Vec<(String, String)>| {
+                            let rid = format!("coord.recv.{from}.{id}");
+                            receive.push((rid.clone(), from.clone()));
+                            b.add_transition(
+                                mcl_net::Transition::new(rid)
+                                    .with_kind(TransitionKind::Event(message_event(&from, &id))),
+                            )
+                        };
+                        let tt = match gid {
+                            Some(g) => *recv.entry(g).or_insert_with(|| mk(b, receive)),
+                            None => mk(b, receive),
+                        };
+                        b.add_input(lent, tt, w).add_output(tt, c, w);
+                    };
+                    back(&mut b, &mut recv, &mut receive, None, format!("coord.return.{key}"), 1);
+                    for &(t, w) in s.produced_by.iter().filter(|&&(t, _)| plant.parts[o].owns_transition(t)) {
+                        back(&mut b, &mut recv, &mut receive, Some(t.0), local_id(t), w);
+                    }
+                }
+            } else {
+                let c = b.add_place(mcl_net::Place::new(s.id.clone()));
+                let mut starts = Vec::new();
+                for &(t, w) in s.consumed_by.iter().filter(|&&(t, _)| plant.parts[i].owns_transition(t)) {
+                    b.add_input(c, local_t(t).1, w);
+                    starts.push(serde_json::json!({ "transition": local_id(t), "weight": w }));
+                }
+                // Its ends give the tokens back to the holder.
+                let mut ends = Vec::new();
+                for &(t, _) in s.produced_by.iter().filter(|&&(t, _)| plant.parts[i].owns_transition(t)) {
+                    send.push((local_id(t), hname.clone()));
+                    ends.push(local_id(t));
+                }
+                let request = format!("coord.request.{key}");
+                b.add_transition(
+                    mcl_net::Transition::new(request.clone()).with_kind(TransitionKind::Event(request.clone())),
+                );
+                send.push((request.clone(), hname.clone()));
+                let ret = format!("coord.return.{key}");
+                let tr = b.add_transition(
+                    mcl_net::Transition::new(ret.clone()).with_kind(TransitionKind::Event(ret.clone())),
+                );
+                b.add_input(c, tr, 1);
+                send.push((ret.clone(), hname.clone()));
+                let lend = format!("coord.lend.{key}.{}", m.name);
+                let grant = format!("coord.recv.{hname}.{lend}");
+                let tg = b.add_transition(
+                    mcl_net::Transition::new(grant.clone())
+                        .with_kind(TransitionKind::Event(message_event(&hname, &lend))),
+                );
+                b.add_output(tg, c, 1);
+                receive.push((grant.clone(), hname.clone()));
+                table.push(serde_json::json!({
+                    "supervisor": s.id, "holder": hname, "place": s.id, "starts": starts,
+                    "request": request, "return": ret, "grant": grant, "ends": ends,
+                }));
+            }
+        }
+        if !table.is_empty() {
+            b.property(TOKENS_PROPERTY, serde_json::Value::Array(table).to_string());
+        }
         send.sort();
+        send.dedup();
         receive.sort();
+        receive.dedup();
         let json = |v: &[(String, String)], key: &str| {
             serde_json::Value::Array(
                 v.iter().map(|(t, who)| serde_json::json!({ "transition": t, key: who })).collect(),
@@ -393,8 +614,10 @@ pub fn vehicle_nets(
 /// of least communication for the default [`Costs`].
 pub fn decentralize(missions: &[Mission], sups: &[Supervisor]) -> Result<Vec<VehicleNet>, DecentralizeError> {
     let plant = centralize(missions)?;
-    let comm = minimize_communication(&plant, sups, &Costs::default())?;
-    vehicle_nets(missions, &plant, sups, &comm)
+    let (tokens, copies): (Vec<Supervisor>, Vec<Supervisor>) =
+        sups.iter().cloned().partition(|s| is_token_mutex(&plant, s));
+    let comm = minimize_communication(&plant, &copies, &Costs::default())?;
+    vehicle_nets_with_tokens(missions, &plant, &copies, &comm, &tokens)
 }
 
 /// The places of `net` that are supervisor copies (`coord.*`).

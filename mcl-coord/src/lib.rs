@@ -44,6 +44,7 @@ pub mod analysis;
 pub mod central;
 pub mod check;
 pub mod compact;
+pub mod conflict;
 pub mod decentral;
 pub mod error;
 pub mod interrupt;

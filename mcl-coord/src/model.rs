@@ -29,15 +29,17 @@ pub struct Activity {
     /// Transitions that put the call into a waiting place (`•P^wait`).
     pub arrived: Vec<TransitionId>,
     /// Transitions that take the call out of its waiting place without
-    /// starting it (an abort while waiting: the adapter's `cancel`). Recorded
-    /// for reference; no supervisor uses them (see [`crate::supervisor`]).
+    /// starting it (an abort while waiting: the adapter's `cancel`). No
+    /// supervisor of the centralized net uses them (see
+    /// [`crate::supervisor`]); the per-vehicle nets take a withdrawn sync
+    /// arrival back ([`crate::decentral`]).
     pub withdrawn: Vec<TransitionId>,
     /// Transitions that start the call (`P^wait•`; the adapter's `start`).
     pub started: Vec<TransitionId>,
     /// Places marked while the call runs (`P`; `run` and `stopping`).
     pub running: Vec<PlaceId>,
-    /// Transitions after which the call no longer runs (`P•`; `ok`, `fail`,
-    /// `release`).
+    /// Transitions after which the call no longer runs (`P•`; the adapter's
+    /// `release`: a call that completes or is aborted ends there, once).
     pub ended: Vec<TransitionId>,
 }
 

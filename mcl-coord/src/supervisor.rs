@@ -23,9 +23,11 @@
 //!   supervisors, 6.25), `Σ v(started(j)) − Σ v(arrived(i)) ≤ μ0(waiting(i))`
 //!   (6.24): j starts only after i has arrived in its waiting place as many
 //!   times. An arrival that an abort later withdraws (the adapter's `cancel`)
-//!   still counts: a supervisor may not hold an abort (the building blocks
-//!   rely on an abort being processed at once), so the credit cannot be taken
-//!   back; on the seed's compact nets nothing is ever withdrawn.
+//!   still counts here: a supervisor may not hold an abort (the building
+//!   blocks rely on an abort being processed at once), so the credit cannot
+//!   be taken back in the centralized net; the per-vehicle nets take it back
+//!   when the other call has not used it yet (`crate::decentral`). On the
+//!   seed's compact nets nothing is ever withdrawn.
 
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId};
 use serde::Serialize;

@@ -1,4 +1,5 @@
-//! Coordination diagnostics (`mcl_coord::check`): E0406 for constraints that
+//! Coordination diagnostics (`mcl_coord::check`): E0408 for constraints
+//! that conflict by construction, E0406 for constraints that
 //! deadlock, W0407 when the analysis cannot conclude, nothing for a program
 //! with errors or without constraints; the explanations of both codes (their
 //! example triggers the code, their fix removes it), and the incremental
@@ -53,8 +54,24 @@ constraints {
 fn figure_6_9a_in_mcl_is_an_error_on_both_orders_with_a_counterexample() {
     let (db, f) = db_with("fig69a", FIG_6_9A);
     assert!(mcl_compiler::check_file(&db, f).is_empty(), "the program itself is clean");
-    let diags = coordination_diagnostics(&db, f);
-    assert_eq!(diags.len(), 1, "{diags:#?}");
+    let all = coordination_diagnostics(&db, f);
+    // The orders conflict by construction (E0408, first), and the analysis
+    // proves the deadlock (E0406).
+    assert_eq!(
+        all.iter().map(|d| d.diag.code).collect::<Vec<_>>(),
+        [codes::CONFLICTING_CONSTRAINTS, codes::DEADLOCKING_CONSTRAINTS]
+    );
+    let c = &all[0].diag;
+    assert_eq!(text_at(FIG_6_9A, &all[0]), "order { v1:p2, v2:p5 }");
+    let labelled: Vec<&str> = c.labels.iter().map(|l| &FIG_6_9A[l.span.start as usize..l.span.end as usize]).collect();
+    assert_eq!(labelled, ["order { v1:p2, v2:p5 }", "order { v2:p5, v1:p2 }"]);
+    assert!(c.message.contains("constraints 1 and 2 conflict"), "{}", c.message);
+    assert!(
+        c.notes[0].contains("`v1:p2` ends before `v2:p5` starts, `v2:p5` ends before `v1:p2` starts"),
+        "{:?}",
+        c.notes
+    );
+    let diags = &all[1..];
     let d = &diags[0].diag;
     assert_eq!(d.code, codes::DEADLOCKING_CONSTRAINTS);
     assert_eq!(d.severity, Severity::Error);
@@ -84,7 +101,10 @@ fn one_order_is_free_and_editing_the_file_updates_the_query() {
     // The editor's path: the same database, new text.
     db.set_text(&dir("edit").join("m.mcl"), FIG_6_9A);
     let diags = coordination_diagnostics(&db, f);
-    assert_eq!(diags.iter().map(|d| d.diag.code).collect::<Vec<_>>(), [codes::DEADLOCKING_CONSTRAINTS]);
+    assert_eq!(
+        diags.iter().map(|d| d.diag.code).collect::<Vec<_>>(),
+        [codes::CONFLICTING_CONSTRAINTS, codes::DEADLOCKING_CONSTRAINTS]
+    );
     db.set_text(&dir("edit").join("m.mcl"), fixed.as_str());
     assert!(coordination_diagnostics(&db, f).is_empty());
 }
@@ -185,4 +205,54 @@ fn appendix_c_constraints_are_analysed_and_free() {
         mcl_coord::analyze_with(&ms, &cs, &AnalyzeOptions { structure: false, ..AnalyzeOptions::default() }).unwrap();
     assert_eq!(r.verdict, mcl_coord::Verdict::Free, "{:#?}", r.problems);
     assert!(coordination_diagnostics(&db, f).is_empty());
+}
+
+#[test]
+fn conflicts_by_construction_point_at_each_constraint() {
+    // A sync with a mutex of bound 1 on the same calls; an order inside a
+    // sync (a cycle of one order); and a longer cycle through a sync.
+    let src = "import \"vehicle.mcl\";
+mission : auv { SendData() : s ; Surface() : a ; Surface() : b }
+mission : asc { ReceiveData() : s ; StopVehicle() : c }
+constraints {
+    sync { auv:s, asc:s }
+    mutex { auv:s, asc:s } = 1
+    order { auv:s, asc:s }
+    order { auv:b, asc:c }
+    sync { asc:c, auv:a }
+    order { auv:a, auv:b }
+    mutex { auv:s, asc:s } = 2
+}
+";
+    let (db, f) = db_with("conflicts", src);
+    assert!(mcl_compiler::check_file(&db, f).is_empty());
+    let diags = coordination_diagnostics(&db, f);
+    let e: Vec<&FileDiagnostic> = diags.iter().filter(|d| d.diag.code == codes::CONFLICTING_CONSTRAINTS).collect();
+    assert_eq!(e.len(), 3, "{e:#?}");
+    let labels = |d: &FileDiagnostic| -> Vec<String> {
+        d.diag.labels.iter().map(|l| src[l.span.start as usize..l.span.end as usize].to_string()).collect()
+    };
+    // Sync and mutex (the bound 2 mutex is fine).
+    assert_eq!(e[0].diag.severity, Severity::Error);
+    assert_eq!(text_at(src, e[0]), "sync { auv:s, asc:s }");
+    assert_eq!(labels(e[0]), ["sync { auv:s, asc:s }", "mutex { auv:s, asc:s } = 1"]);
+    assert!(e[0].diag.message.contains("constraints 1 and 2 conflict"), "{}", e[0].diag.message);
+    // An order between two calls of a sync.
+    assert_eq!(labels(e[1]), ["sync { auv:s, asc:s }", "order { auv:s, asc:s }"]);
+    assert!(e[1].diag.notes[0].contains("calls of a sync start together"), "{:?}", e[1].diag.notes);
+    // Two orders and a sync.
+    assert_eq!(labels(e[2]), ["order { auv:b, asc:c }", "sync { asc:c, auv:a }", "order { auv:a, auv:b }"]);
+    assert!(e[2].diag.message.contains("constraints 4, 5 and 6 conflict"), "{}", e[2].diag.message);
+    // Without them, nothing conflicts.
+    let fine = "import \"vehicle.mcl\";
+mission : auv { SendData() : s ; Surface() : a }
+mission : asc { ReceiveData() : s ; StopVehicle() : c }
+constraints {
+    sync { auv:s, asc:s }
+    mutex { auv:s, asc:s } = 2
+    order { auv:s, asc:c }
+}
+";
+    let (db, f) = db_with("no-conflicts", fine);
+    assert!(coordination_diagnostics(&db, f).iter().all(|d| d.diag.code != codes::CONFLICTING_CONSTRAINTS));
 }

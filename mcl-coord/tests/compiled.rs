@@ -159,11 +159,29 @@ fn auv_asc_per_vehicle_nets() {
         v.sort();
         v
     };
-    assert_eq!(coord_places(&auv.net), vec!["coord.order1", "coord.order4", "coord.sync3.2-1"]);
+    // Each sync copy has a place for the arrivals the other vehicle
+    // withdraws (its call cancelled before it started).
+    assert_eq!(
+        coord_places(&auv.net),
+        vec!["coord.order1", "coord.order4", "coord.sync3.2-1", "coord.sync3.2-1.withdrawn"]
+    );
     assert_eq!(
         coord_places(&asc.net),
-        vec!["coord.order2", "coord.order5", "coord.order6", "coord.order7", "coord.sync3.1-2"]
+        vec![
+            "coord.order2",
+            "coord.order5",
+            "coord.order6",
+            "coord.order7",
+            "coord.sync3.1-2",
+            "coord.sync3.1-2.withdrawn"
+        ]
     );
+    for (v, id) in [(auv, "coord.sync3.2-1"), (asc, "coord.sync3.1-2")] {
+        let t = |s: &str| v.net.transition(v.net.transition_by_id(&format!("{id}.{s}")).unwrap()).unwrap().clone();
+        // Taking the credit back goes before any start; dropping the
+        // withdrawal (the credit was used) only when it cannot.
+        assert_eq!((t("withdraw").priority, t("forget").priority), (Some(2), Some(1)));
+    }
     // Every message sent is received, and the other way round.
     for (from, to) in [(auv, asc), (asc, auv)] {
         let mut sent: Vec<String> = from

@@ -67,14 +67,35 @@ fn stmt(r: &mut Rng, depth: usize, labels: &mut usize) -> String {
 }
 
 fn case(seed: u64) -> String {
+    case_with(seed, false)
+}
+
+/// [`case`] with a mutex, an order and a sync at least, in a random order
+/// (and maybe one more constraint).
+fn case_all(seed: u64) -> String {
+    case_with(seed, true)
+}
+
+fn case_with(seed: u64, all_kinds: bool) -> String {
     let mut r = Rng(seed);
     let (mut na, mut nb) = (0, 0);
     let a = stmt(&mut r, 2, &mut na);
     let b = stmt(&mut r, 2, &mut nb);
     let mut cs = Vec::new();
-    for _ in 0..1 + r.below(3) {
+    let mut kinds: Vec<usize> = if all_kinds {
+        let mut k = vec![0, 1 + r.below(2), 3];
+        k.extend((0..r.below(2)).map(|_| r.below(4)));
+        for i in (1..k.len()).rev() {
+            k.swap(i, r.below(i + 1));
+        }
+        k
+    } else {
+        (0..1 + r.below(3)).map(|_| usize::MAX).collect()
+    };
+    for kind in kinds.drain(..) {
         let (x, y) = (1 + r.below(na), 1 + r.below(nb));
-        let c = match r.below(4) {
+        let kind = if kind == usize::MAX { r.below(4) } else { kind };
+        let c = match kind {
             0 => format!("mutex {{ a:l{x}, b:l{y} }} = 1"),
             1 => format!("order {{ a:l{x}, b:l{y} }}"),
             2 => format!("order {{ b:l{y}, a:l{x} }}"),
@@ -249,7 +270,7 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn free_means_no_deadlock_and_constraints_hold(seed in any::<u64>()) {
@@ -273,6 +294,18 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Mutex, order and sync together in every case.
+    #[test]
+    fn free_means_no_deadlock_and_constraints_hold_with_every_kind(seed in any::<u64>()) {
+        let text = case_all(seed);
+        prop_assert!(["mutex", "order", "sync"].iter().all(|k| text.contains(k)), "{text}");
+        check_text(text, seed, &AnalyzeOptions::default())?;
+    }
+}
+
 #[test]
 fn fixed_seeds_with_groups_and_walks() {
     for seed in 0..12 {
@@ -285,7 +318,7 @@ fn fixed_seeds_with_groups_and_walks() {
 /// (`MCL_COORD_SEEDS=N` runs N of them).
 #[test]
 fn fixed_seeds() {
-    let n: u64 = std::env::var("MCL_COORD_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(40);
+    let n: u64 = std::env::var("MCL_COORD_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
     let mut free = 0;
     for seed in 0..n {
         check(seed).unwrap_or_else(|e| panic!("seed {seed}: {e}"));

@@ -138,6 +138,61 @@ impl CoordTransport for InProcessEnd {
 }
 
 // ---------------------------------------------------------------------------
+// In-process with a delay (slow links: acoustic modems)
+// ---------------------------------------------------------------------------
+
+/// An in-process end whose messages take `delay` (wall-clock time) to
+/// arrive (see [`delayed_in_process`]).
+pub struct DelayedEnd {
+    mission: String,
+    delay: Duration,
+    peers: Arc<HashMap<String, mpsc::UnboundedSender<(tokio::time::Instant, CoordMessage)>>>,
+    inbox: mpsc::UnboundedReceiver<CoordMessage>,
+}
+
+/// One connected end per mission, like [`in_process`], but every message
+/// is delivered `delay` after it was sent (in order): a slow link such as
+/// an acoustic modem, to test what the coordination keeps when messages
+/// cross. Must be called inside a tokio runtime (one forwarding task per
+/// mission).
+pub fn delayed_in_process(missions: &[String], delay: Duration) -> Vec<DelayedEnd> {
+    let mut senders = HashMap::new();
+    let mut receivers = Vec::new();
+    for m in missions {
+        let (tx, mut rx) = mpsc::unbounded_channel::<(tokio::time::Instant, CoordMessage)>();
+        let (out_tx, out_rx) = mpsc::unbounded_channel();
+        tokio::spawn(async move {
+            while let Some((due, m)) = rx.recv().await {
+                tokio::time::sleep_until(due).await;
+                if out_tx.send(m).is_err() {
+                    return;
+                }
+            }
+        });
+        senders.insert(m.clone(), tx);
+        receivers.push((m.clone(), out_rx));
+    }
+    let peers = Arc::new(senders);
+    receivers.into_iter().map(|(mission, inbox)| DelayedEnd { mission, delay, peers: peers.clone(), inbox }).collect()
+}
+
+impl CoordTransport for DelayedEnd {
+    fn mission(&self) -> &str {
+        &self.mission
+    }
+
+    fn send(&mut self, msg: CoordMessage) -> Result<(), String> {
+        let to = self.peers.get(&msg.to).ok_or_else(|| format!("no mission `{}` on this transport", msg.to))?;
+        let due = tokio::time::Instant::now() + self.delay;
+        to.send((due, msg)).map_err(|m| format!("mission `{}` no longer receives", m.0 .1.to))
+    }
+
+    fn recv(&mut self) -> RecvFuture<'_> {
+        Box::pin(self.inbox.recv())
+    }
+}
+
+// ---------------------------------------------------------------------------
 // TCP
 // ---------------------------------------------------------------------------
 
@@ -288,6 +343,114 @@ pub async fn tcp_mesh(missions: &[String], host: &str) -> std::io::Result<Vec<Tc
     Ok(ends)
 }
 
+/// Net property of a vehicle net: the mutexes between vehicles whose tokens
+/// it must ask a holder for (`mcl_coord::decentral::TOKENS_PROPERTY`).
+pub const TOKENS_PROPERTY: &str = "coord.tokens";
+
+/// A mutex between vehicles held by another vehicle (the *holder*): this
+/// vehicle asks for its tokens (request), receives them (grant) and gives
+/// them back (its calls' ends, or `return` for a token it cannot use).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TokenMutex {
+    /// Supervisor place id (`coord.mutexK`).
+    pub supervisor: String,
+    /// The mission holding the mutex.
+    pub holder: String,
+    /// The place of the tokens granted to this vehicle.
+    pub place: mcl_net::PlaceId,
+    /// This vehicle's starts that take tokens from it, with their weights.
+    pub starts: Vec<(mcl_net::TransitionId, u32)>,
+    /// Event (and transition) that sends a request to the holder.
+    pub request: String,
+    /// Event (and transition) that gives an unused token back.
+    pub ret: String,
+    /// The receive transition of a grant.
+    pub grant: mcl_net::TransitionId,
+    /// This vehicle's ends of the calls (their firings give tokens back).
+    pub ends: Vec<String>,
+}
+
+/// The token mutexes of a vehicle net, sorted by supervisor id, from its
+/// `coord.tokens` property (empty without it). Errors on a malformed
+/// property.
+pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
+    #[derive(Deserialize)]
+    struct Start {
+        transition: String,
+        weight: u32,
+    }
+    #[derive(Deserialize)]
+    struct Entry {
+        supervisor: String,
+        holder: String,
+        place: String,
+        starts: Vec<Start>,
+        request: String,
+        #[serde(rename = "return")]
+        ret: String,
+        grant: String,
+        #[serde(default)]
+        ends: Vec<String>,
+    }
+    let Some((_, v)) = net.properties().iter().find(|(k, _)| k == TOKENS_PROPERTY) else { return Ok(Vec::new()) };
+    let bad =
+        |what: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names {what}, which the net does not have", net.name());
+    let list: Vec<Entry> =
+        serde_json::from_str(v).map_err(|e| format!("net `{}`: bad `{TOKENS_PROPERTY}` property: {e}", net.name()))?;
+    let mut out = Vec::new();
+    for e in list {
+        let place = net.place_by_id(&e.place).ok_or_else(|| bad(&format!("place `{}`", e.place)))?;
+        let mut starts = Vec::new();
+        for s in e.starts {
+            let t =
+                net.transition_by_id(&s.transition).ok_or_else(|| bad(&format!("transition `{}`", s.transition)))?;
+            starts.push((t, s.weight));
+        }
+        for t in [&e.request, &e.ret] {
+            net.transition_by_id(t).ok_or_else(|| bad(&format!("transition `{t}`")))?;
+        }
+        let grant = net.transition_by_id(&e.grant).ok_or_else(|| bad(&format!("transition `{}`", e.grant)))?;
+        out.push(TokenMutex {
+            supervisor: e.supervisor,
+            holder: e.holder,
+            place,
+            starts,
+            request: e.request,
+            ret: e.ret,
+            grant,
+            ends: e.ends,
+        });
+    }
+    out.sort_by(|a, b| a.supervisor.cmp(&b.supervisor));
+    Ok(out)
+}
+
+/// Messages of the single-holder mutex protocol, by kind (counted by their
+/// senders).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MutexMessages {
+    /// Requests for a token, sent to a holder.
+    pub requests: u64,
+    /// Tokens granted by a holder.
+    pub grants: u64,
+    /// Tokens given back to a holder (a call's end, or unused).
+    pub returns: u64,
+}
+
+impl MutexMessages {
+    /// Adds `o`'s counts.
+    pub fn add(&mut self, o: MutexMessages) {
+        self.requests += o.requests;
+        self.grants += o.grants;
+        self.returns += o.returns;
+    }
+
+    /// Their sum.
+    pub fn total(&self) -> u64 {
+        self.requests + self.grants + self.returns
+    }
+}
+
 /// The send table of a vehicle net: transition id → the missions to tell,
 /// from its `coord.send` property (empty without it). Errors on a malformed
 /// property.
@@ -373,6 +536,46 @@ mod tests {
         assert_eq!(rejected.len(), 2, "{rejected:?}");
         assert!(rejected[0].contains("not a coordination message"));
         assert!(rejected[1].contains("for `other`"));
+    }
+
+    #[tokio::test]
+    async fn delayed_in_process_delivers_in_order() {
+        let mut ends = delayed_in_process(&["a".into(), "b".into()], Duration::from_millis(5));
+        let mut b = ends.pop().unwrap();
+        let mut a = ends.pop().unwrap();
+        for i in 1..=3 {
+            a.send(msg("a", "b", &format!("t{i}"), i)).unwrap();
+        }
+        assert!(a.send(msg("a", "zz", "t", 4)).unwrap_err().contains("zz"));
+        for i in 1..=3 {
+            assert_eq!(b.recv().await.unwrap().transition, format!("t{i}"));
+        }
+        assert_eq!(b.mission(), "b");
+    }
+
+    #[test]
+    fn token_table_reads_the_property() {
+        let net = |tokens: &str| {
+            let mut b = mcl_net::NetBuilder::new("v");
+            let p = b.add_place(mcl_net::Place::new("coord.mutex1"));
+            let t = b.add_transition(mcl_net::Transition::new("call1.start"));
+            b.add_input(p, t, 1);
+            for id in ["coord.request.mutex1", "coord.return.mutex1", "coord.recv.a.coord.lend.mutex1.v"] {
+                b.add_transition(mcl_net::Transition::new(id));
+            }
+            b.property(TOKENS_PROPERTY, tokens);
+            b.build().unwrap()
+        };
+        let entry = |start: &str| {
+            format!(
+                r#"[{{"supervisor":"coord.mutex1","holder":"a","place":"coord.mutex1","starts":[{{"transition":"{start}","weight":1}}],"request":"coord.request.mutex1","return":"coord.return.mutex1","grant":"coord.recv.a.coord.lend.mutex1.v","ends":["call1.release"]}}]"#
+            )
+        };
+        let ok = token_table(&net(&entry("call1.start"))).unwrap();
+        assert_eq!(ok.len(), 1);
+        assert_eq!((ok[0].holder.as_str(), ok[0].starts.len(), ok[0].ends.len()), ("a", 1, 1));
+        assert!(token_table(&net(&entry("nope"))).unwrap_err().contains("`nope`"));
+        assert!(token_table(&net("[")).unwrap_err().contains("bad `coord.tokens`"));
     }
 
     #[test]

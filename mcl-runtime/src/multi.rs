@@ -39,7 +39,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use crate::clock::Clock;
-use crate::coord::{send_table, CoordMessage, CoordTransport};
+use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, MutexMessages, TokenMutex};
 use crate::driver::{feed_mock, perception_or_event, End, Limits, SameInstant, Session, Sink};
 use crate::journal::Input;
 use crate::mock::MockVehicle;
@@ -75,6 +75,7 @@ pub struct Vehicle {
     mock: MockVehicle,
     transport: Box<dyn CoordTransport>,
     sends: HashMap<String, Vec<String>>,
+    tokens: Vec<TokenMutex>,
 }
 
 impl Vehicle {
@@ -90,9 +91,10 @@ impl Vehicle {
         transport: Box<dyn CoordTransport>,
     ) -> Result<Self, String> {
         let sends = send_table(&net)?;
+        let tokens = token_table(&net)?;
         mock.initial();
         let player = Player::new(net, opts.clone());
-        Ok(Vehicle { name: name.to_string(), player, opts, tracer, mock, transport, sends })
+        Ok(Vehicle { name: name.to_string(), player, opts, tracer, mock, transport, sends, tokens })
     }
 
     /// The mission name.
@@ -110,6 +112,8 @@ pub struct MultiEnd {
     pub messages: u64,
     /// Firings per mission (same order).
     pub fired: Vec<u64>,
+    /// Of the messages sent, those of the single-holder mutex protocol.
+    pub mutex: MutexMessages,
 }
 
 impl MultiEnd {
@@ -141,32 +145,184 @@ struct Live<'a> {
     inbox: VecDeque<CoordMessage>,
     seq: u64,
     end: Option<End>,
+    /// Mutexes held by other vehicles, with the requests not yet granted.
+    tokens: Vec<(TokenMutex, u32)>,
+    mutex: MutexMessages,
+    /// Once the mission has ended: the marking, whose supervisor places
+    /// still serve the other vehicles (a holder still lends its mutex).
+    after_end: Option<Vec<u32>>,
 }
 
 impl Live<'_> {
     /// Feeds the actions of `outs` to the mock and sends the messages its
-    /// firings require; returns them (already sent).
+    /// firings require, then asks for or gives back the tokens of mutexes
+    /// held by other vehicles ([`Live::arbitrate`]); returns the messages
+    /// (already sent).
     fn after(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
+        let mut sent = self.send_for(outs)?;
+        let now = self.s.player.now();
+        for event in self.arbitrate(&mut sent)? {
+            let outs = self.s.step(Input::Event(now, event, None))?;
+            sent.extend(self.send_for(&outs)?);
+        }
+        Ok(sent)
+    }
+
+    fn send_one(&mut self, to: String, transition: String, t: f64) -> Result<CoordMessage, String> {
+        self.seq += 1;
+        let m = CoordMessage { from: self.name.clone(), to, transition, seq: self.seq, t };
+        if m.transition.starts_with("coord.request.") {
+            self.mutex.requests += 1;
+        } else if m.transition.starts_with("coord.lend.") {
+            self.mutex.grants += 1;
+        } else if m.transition.starts_with("coord.return.")
+            || self.tokens.iter().any(|(k, _)| k.holder == m.to && k.ends.contains(&m.transition))
+        {
+            self.mutex.returns += 1;
+        }
+        let mut r = Record::new(t, "coord_send");
+        r.to = Some(m.to.clone());
+        r.transition = Some(m.transition.clone());
+        r.seq = Some(m.seq);
+        self.s.emit_record(r);
+        self.transport.send(m.clone())?;
+        Ok(m)
+    }
+
+    fn send_for(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
         let now = self.s.player.now();
         feed_mock(&mut self.s, &mut self.mock, now, outs);
         let mut sent = Vec::new();
         for o in outs {
             let Output::Fired { t, transition, .. } = o else { continue };
+            for (k, asked) in &mut self.tokens {
+                if k.grant == *transition {
+                    *asked = asked.saturating_sub(1);
+                }
+            }
             let id = self.s.player.net().transitions()[transition.index()].id.to_string();
             let Some(to) = self.sends.get(&id) else { continue };
             for to in to.clone() {
-                self.seq += 1;
-                let m = CoordMessage { from: self.name.clone(), to, transition: id.clone(), seq: self.seq, t: *t };
-                let mut r = Record::new(*t, "coord_send");
-                r.to = Some(m.to.clone());
-                r.transition = Some(m.transition.clone());
-                r.seq = Some(m.seq);
-                self.s.emit_record(r);
-                self.transport.send(m.clone())?;
-                sent.push(m);
+                sent.push(self.send_one(to, id.clone(), *t)?);
             }
         }
         Ok(sent)
+    }
+
+    /// The single-holder mutex protocol, on this vehicle's side: for each
+    /// mutex held by another vehicle (in the order of their ids), the
+    /// tokens that its calls which could start but for such tokens need
+    /// (a call asks for the mutex of a larger id only once it has those of
+    /// the smaller ones: no two vehicles each keep a token the other
+    /// waits for) are asked for (events `coord.request.*`, one per token),
+    /// and the tokens no such call needs are given back (`coord.return.*`).
+    /// Returns the events to raise. Once the mission has ended, unused
+    /// tokens are given back by a message alone (added to `sent`).
+    fn arbitrate(&mut self, sent: &mut Vec<CoordMessage>) -> Result<Vec<String>, String> {
+        if self.tokens.is_empty() || !self.s.player.is_started() {
+            return Ok(Vec::new());
+        }
+        if self.s.player.outcome().is_some() {
+            // The player takes no more events: a message alone returns
+            // each unused token (nothing else can use it).
+            let t = self.s.player.now();
+            let mut tokens = self.ended_marking();
+            let back: Vec<(String, String, u32)> = self
+                .tokens
+                .iter()
+                .map(|(k, _)| (k.holder.clone(), k.ret.clone(), std::mem::take(&mut tokens[k.place.index()])))
+                .collect();
+            self.after_end = Some(tokens);
+            for (to, ret, n) in back {
+                for _ in 0..n {
+                    sent.push(self.send_one(to.clone(), ret.clone(), t)?);
+                }
+            }
+            return Ok(Vec::new());
+        }
+        let net = self.s.player.net().clone();
+        let m = self.s.player.marking().clone();
+        let places: Vec<mcl_net::PlaceId> = self.tokens.iter().map(|(k, _)| k.place).collect();
+        let mut events = Vec::new();
+        for (i, (k, asked)) in self.tokens.iter_mut().enumerate() {
+            let mut need = 0u32;
+            for &(t, w) in &k.starts {
+                let ready = net.pre(t).iter().all(|&(p, pw)| match places.iter().position(|&q| q == p) {
+                    Some(j) if j >= i => true,
+                    _ => m.get(p) >= pw,
+                });
+                if ready {
+                    need += w;
+                }
+            }
+            let have = m.get(k.place);
+            if have + *asked < need {
+                for _ in 0..need - have - *asked {
+                    events.push(k.request.clone());
+                }
+                *asked = need - have;
+            } else if have > need {
+                for _ in 0..have - need {
+                    events.push(k.ret.clone());
+                }
+            }
+        }
+        Ok(events)
+    }
+
+    fn ended_marking(&self) -> Vec<u32> {
+        self.after_end.clone().unwrap_or_else(|| self.s.player.marking().0.clone())
+    }
+
+    /// Once the mission has ended, its supervisor places still serve the
+    /// others: the messages of the inbox whose receive transitions touch
+    /// only supervisor places fire on the final marking (a holder grants
+    /// and takes back its mutex), recorded as events and firings. None when
+    /// none can.
+    fn serve_ended(&mut self, t: f64) -> Option<Vec<Output>> {
+        let net = self.s.player.net().clone();
+        let mut tokens = self.ended_marking();
+        let mut outs = Vec::new();
+        loop {
+            let mut kept = VecDeque::new();
+            let before = outs.len();
+            for m in std::mem::take(&mut self.inbox) {
+                let event = m.event();
+                let tr = net.event_transitions(&event).iter().copied().find(|&tr| {
+                    net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
+                        && net
+                            .post(tr)
+                            .iter()
+                            .chain(net.pre(tr))
+                            .all(|&(p, _)| net.place(p).is_some_and(|x| x.id.starts_with("coord.")))
+                });
+                match tr {
+                    Some(tr) => {
+                        for &(p, w) in net.pre(tr) {
+                            tokens[p.index()] -= w;
+                        }
+                        for &(p, w) in net.post(tr) {
+                            tokens[p.index()] += w;
+                        }
+                        outs.push(Output::Event { t, event, transition: tr, call_site: None, activation: None });
+                        outs.push(Output::Fired { t, transition: tr, call_site: None });
+                    }
+                    None => kept.push_back(m),
+                }
+            }
+            self.inbox = kept;
+            if outs.len() == before || self.inbox.is_empty() {
+                break;
+            }
+        }
+        self.after_end = Some(tokens);
+        if outs.is_empty() {
+            return None;
+        }
+        for o in &outs {
+            self.s.emit(o);
+        }
+        Some(outs)
     }
 
     /// Records `m`, taken from the transport at time `t`, and keeps it.
@@ -194,7 +350,8 @@ impl Live<'_> {
             for m in std::mem::take(&mut self.inbox) {
                 let event = m.event();
                 let enabled = net.event_transitions(&event).iter().copied().find(|&tr| {
-                    net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
+                    !self.sends.contains_key(net.transitions()[tr.index()].id.as_str())
+                        && net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
                         && net
                             .post(tr)
                             .iter()
@@ -239,8 +396,11 @@ impl Live<'_> {
     /// messages of the inbox whose receive transitions can fire; the others
     /// stay. None when none can.
     fn deliver(&mut self, t: f64) -> Option<Vec<Output>> {
-        if !self.s.player.is_started() || self.s.player.outcome().is_some() || self.inbox.is_empty() {
+        if !self.s.player.is_started() || self.inbox.is_empty() {
             return None;
+        }
+        if self.s.player.outcome().is_some() {
+            return self.serve_ended(t.max(self.s.player.now()));
         }
         let awaited = self.s.player.awaited_events();
         if !self.inbox.iter().any(|m| awaited.binary_search(&m.event()).is_ok()) {
@@ -268,7 +428,8 @@ impl Live<'_> {
     }
 
     fn stuck(&mut self, t: f64) -> End {
-        let awaited = self.s.player.awaited_events();
+        let mut awaited = self.s.player.awaited_events();
+        awaited.retain(|e| !e.starts_with("coord."));
         let waiting: Vec<&String> = awaited.iter().filter(|e| e.contains('/')).collect();
         self.s.end_by_driver(
             t,
@@ -302,6 +463,9 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
             inbox: VecDeque::new(),
             seq: 0,
             end: None,
+            tokens: v.tokens.into_iter().map(|k| (k, 0)).collect(),
+            mutex: MutexMessages::default(),
+            after_end: None,
         })
         .collect()
 }
@@ -313,6 +477,9 @@ fn summary(sink: &SharedSink, t: f64, end: &MultiEnd) {
     let mut r = Record::new(t, "coord_summary");
     r.mission = Some(ALL_MISSIONS.to_string());
     r.messages = Some(end.messages);
+    if end.mutex.total() > 0 {
+        r.value = serde_json::to_value(end.mutex).ok();
+    }
     r.result = Some(end.result().to_string());
     if let Ok(mut s) = sink.lock() {
         s.record(&r);
@@ -331,6 +498,10 @@ fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
             .collect(),
         fired: vs.iter().map(|v| v.s.player.fired_count()).collect(),
         messages,
+        mutex: vs.iter().fold(MutexMessages::default(), |mut a, v| {
+            a.add(v.mutex);
+            a
+        }),
     }
 }
 
@@ -441,6 +612,11 @@ struct Global {
     sent_to: Vec<u64>,
     received: Vec<u64>,
     stop: tokio::sync::watch::Sender<bool>,
+    /// Vehicles in other processes, and how many of them said they ended.
+    peers: usize,
+    peers_ended: usize,
+    /// Messages sent to vehicles in other processes.
+    sent_remote: u64,
 }
 
 impl Global {
@@ -448,9 +624,19 @@ impl Global {
     /// vehicle is (an ended one is) and no message is in flight.
     fn set_idle(&mut self, i: usize, idle: bool) {
         self.idle[i] = idle;
-        let quiet = (0..self.idle.len()).all(|j| self.idle[j] && self.sent_to[j] == self.received[j]);
+        let quiet = (0..self.idle.len()).all(|j| self.idle[j] && self.sent_to[j] == self.received[j])
+            && self.peers_ended >= self.peers;
         if quiet {
             let _ = self.stop.send(true);
+        }
+    }
+}
+
+fn count_sent(g: &mut Global, index: &HashMap<String, usize>, msgs: &[CoordMessage]) {
+    for m in msgs {
+        match index.get(&m.to) {
+            Some(&j) => g.sent_to[j] += 1,
+            None => g.sent_remote += 1,
         }
     }
 }
@@ -467,15 +653,46 @@ pub async fn run_real_time(
     clock: Clock,
     limits: Limits,
 ) -> Result<MultiEnd, String> {
+    run_real_time_with_peers(vehicles, sink, clock, limits, &[]).await
+}
+
+/// The transition of the message a vehicle sends to the vehicles of other
+/// processes when its mission has ended (not a firing: no receive
+/// transition waits for it).
+pub const ENDED: &str = "coord.ended";
+
+/// [`run_real_time`] for some vehicles of a coordinated run, the missions
+/// `peers` running in other processes (`mcl run --vehicle NAME
+/// --coord-peer NAME=ADDR`): messages to them go over the transport like
+/// the others; each vehicle tells every peer when its mission has ended
+/// (message [`ENDED`]), and the run ends only once every peer has (a
+/// vehicle still serves its supervisor places after its own end: a holder
+/// still lends its mutex), or at the time limit.
+pub async fn run_real_time_with_peers(
+    vehicles: Vec<Vehicle>,
+    sink: SharedSink,
+    clock: Clock,
+    limits: Limits,
+    peers: &[String],
+) -> Result<MultiEnd, String> {
+    let peers: Arc<Vec<String>> = Arc::new(peers.to_vec());
     let n = vehicles.len();
     let (stop_tx, stop_rx) = tokio::sync::watch::channel(false);
     let index: Arc<HashMap<String, usize>> =
         Arc::new(vehicles.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect());
-    let global =
-        Arc::new(Mutex::new(Global { idle: vec![false; n], sent_to: vec![0; n], received: vec![0; n], stop: stop_tx }));
+    let global = Arc::new(Mutex::new(Global {
+        idle: vec![false; n],
+        sent_to: vec![0; n],
+        received: vec![0; n],
+        stop: stop_tx,
+        peers: peers.len() * n,
+        peers_ended: 0,
+        sent_remote: 0,
+    }));
     let mut tasks = Vec::new();
     for (i, v) in vehicles.into_iter().enumerate() {
         let (sink, global, mut stop, index) = (sink.clone(), global.clone(), stop_rx.clone(), index.clone());
+        let peers = peers.clone();
         let on_error = global.clone();
         tasks.push(tokio::spawn(async move {
             let r = async move {
@@ -485,14 +702,7 @@ pub async fn run_real_time(
                 let mut outs = v.start(clock.now())?;
                 let result: Result<End, String> = loop {
                     let msgs = v.after(&outs)?;
-                    {
-                        let mut g = lock(&global)?;
-                        for m in &msgs {
-                            if let Some(&j) = index.get(&m.to) {
-                                g.sent_to[j] += 1;
-                            }
-                        }
-                    }
+                    count_sent(&mut *lock(&global)?, &index, &msgs);
                     outs = Vec::new();
                     if let Some(o) = v.deliver(clock.now()) {
                         outs = o;
@@ -512,10 +722,15 @@ pub async fn run_real_time(
                     };
                     tokio::select! {
                         m = v.transport.recv() => match m {
+                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
+                                lock(&global)?.peers_ended += 1;
+                            }
                             Some(m) => {
                                 {
                                     let mut g = lock(&global)?;
-                                    g.received[i] += 1;
+                                    if index.contains_key(&m.from) {
+                                        g.received[i] += 1;
+                                    }
                                     g.set_idle(i, false);
                                 }
                                 v.received(m, clock.now());
@@ -547,7 +762,26 @@ pub async fn run_real_time(
                 };
                 v.end = Some(result?);
                 {
+                    // Messages kept in the inbox: a holder still lends its mutex.
+                    let msgs = match v.deliver(clock.now()) {
+                        Some(o) => v.after(&o)?,
+                        None => Vec::new(),
+                    };
+                    // Tell the vehicles of other processes.
+                    for p in peers.iter() {
+                        v.seq += 1;
+                        let t = v.s.player.now();
+                        let m = CoordMessage {
+                            from: v.name.clone(),
+                            to: p.clone(),
+                            transition: ENDED.into(),
+                            seq: v.seq,
+                            t,
+                        };
+                        v.transport.send(m)?;
+                    }
                     let mut g = lock(&global)?;
+                    count_sent(&mut g, &index, &msgs);
                     g.set_idle(i, true);
                 }
                 // Keep taking messages (recorded; the mission has ended)
@@ -555,10 +789,24 @@ pub async fn run_real_time(
                 loop {
                     tokio::select! {
                         m = v.transport.recv() => match m {
-                            Some(m) => {
-                                v.received(m, clock.now());
+                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
                                 let mut g = lock(&global)?;
-                                g.received[i] += 1;
+                                g.peers_ended += 1;
+                                g.set_idle(i, true);
+                            }
+                            Some(m) => {
+                                let local = index.contains_key(&m.from);
+                                v.received(m, clock.now());
+                                // A holder still lends its mutex.
+                                let msgs = match v.deliver(clock.now()) {
+                                    Some(o) => v.after(&o)?,
+                                    None => Vec::new(),
+                                };
+                                let mut g = lock(&global)?;
+                                count_sent(&mut g, &index, &msgs);
+                                if local {
+                                    g.received[i] += 1;
+                                }
                                 g.set_idle(i, true);
                             }
                             None => break,
@@ -584,6 +832,7 @@ pub async fn run_real_time(
     }
     let mut ends = Vec::new();
     let mut fired = Vec::new();
+    let mut mutex = MutexMessages::default();
     let mut transports = Vec::new();
     let mut error = None;
     for t in tasks {
@@ -591,6 +840,7 @@ pub async fn run_real_time(
             Ok((e, tr)) => {
                 ends.extend(e.ends);
                 fired.extend(e.fired);
+                mutex.add(e.mutex);
                 transports.push(tr);
             }
             Err(e) => {
@@ -602,8 +852,8 @@ pub async fn run_real_time(
     if let Some(e) = error {
         return Err(e);
     }
-    let messages = global.lock().map(|g| g.sent_to.iter().sum()).unwrap_or_default();
-    let end = MultiEnd { ends, messages, fired };
+    let messages = global.lock().map(|g| g.sent_to.iter().sum::<u64>() + g.sent_remote).unwrap_or_default();
+    let end = MultiEnd { ends, messages, fired, mutex };
     let last = end.ends.iter().map(|(_, _, t)| *t).fold(0.0, f64::max);
     summary(&sink, last, &end);
     Ok(end)

@@ -49,6 +49,12 @@ pub struct Options {
     pub transport: Transport,
     /// Host the TCP transport listens on.
     pub coord_host: String,
+    /// Run only this vehicle of a coordinated file (others in other processes).
+    pub vehicle: Option<String>,
+    /// With `vehicle`: the address it listens on.
+    pub coord_listen: Option<String>,
+    /// With `vehicle`: `NAME=HOST:PORT` of the other vehicles.
+    pub coord_peer: Vec<String>,
 }
 
 /// How the vehicles of a coordinated run exchange messages.
@@ -224,6 +230,19 @@ pub fn run(o: Options) -> u8 {
     let several = missions.len() > 1;
     let names: Vec<String> = missions.iter().map(|m| m.name.clone()).collect();
     let is_mcl = !o.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml"));
+    if o.vehicle.is_some() || o.coord_listen.is_some() || !o.coord_peer.is_empty() {
+        if o.vehicle.is_none() {
+            return usage("--coord-listen and --coord-peer go with --vehicle NAME");
+        }
+        if !(several && o.mission.is_none() && o.mock && is_mcl) {
+            return usage(
+                "--vehicle runs one vehicle of an .mcl file with several missions, with --mock and without --mission",
+            );
+        }
+        if o.virtual_time {
+            return usage("--vehicle runs in real time (virtual time needs every vehicle in one process)");
+        }
+    }
     if several && o.mission.is_none() && o.mock && is_mcl {
         return run_coordinated(&o, sets);
     }
@@ -524,12 +543,47 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(v) => v,
         Err(code) => return code,
     };
-    let names: Vec<String> = vehicles.iter().map(|v| v.mission.clone()).collect();
+    let mut names: Vec<String> = vehicles.iter().map(|v| v.mission.clone()).collect();
     if let Some(dup) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)).map(|(_, n)| n) {
         return usage(&format!(
             "`{}` has two missions named `{dup}`: name every mission (`mission : name {{ ... }}`) to run them together",
             o.file.display()
         ));
+    }
+    // One vehicle in this process, the others elsewhere.
+    let mut peers: Vec<(String, std::net::SocketAddr)> = Vec::new();
+    let mut vehicles = vehicles;
+    if let Some(me) = &o.vehicle {
+        let Some(k) = names.iter().position(|n| n == me) else {
+            return usage(&format!("`{}` has no mission `{me}` (missions: {})", o.file.display(), names.join(", ")));
+        };
+        for p in &o.coord_peer {
+            let Some((name, addr)) = p.split_once('=') else {
+                return usage(&format!("--coord-peer `{p}`: expected NAME=HOST:PORT"));
+            };
+            if !names.iter().any(|n| n == name) || name == me {
+                return usage(&format!(
+                    "--coord-peer `{p}`: `{name}` is not another mission of `{}` (missions: {})",
+                    o.file.display(),
+                    names.join(", ")
+                ));
+            }
+            use std::net::ToSocketAddrs;
+            match addr.to_socket_addrs().ok().and_then(|mut a| a.next()) {
+                Some(a) => peers.push((name.to_string(), a)),
+                None => return usage(&format!("--coord-peer `{p}`: cannot resolve `{addr}`")),
+            }
+        }
+        let v = vehicles.swap_remove(k);
+        let missing: Vec<&String> =
+            v.send.iter().map(|(_, to)| to).filter(|to| !peers.iter().any(|(n, _)| n == *to)).collect();
+        if let Some(to) = missing.first() {
+            return usage(&format!(
+                "`{me}` sends coordination messages to `{to}`: give its address with --coord-peer {to}=HOST:PORT"
+            ));
+        }
+        vehicles = vec![v];
+        names = vec![me.clone()];
     }
     // Scenarios.
     let text = match &o.scenario {
@@ -618,22 +672,34 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     let limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
     let shared: mcl_runtime::multi::SharedSink = sink.clone();
     let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
-        let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = match o.transport {
-            Transport::InProcess => mcl_runtime::coord::in_process(&names)
-                .into_iter()
-                .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
-                .collect(),
-            Transport::Tcp => match mcl_runtime::coord::tcp_mesh(&names, &o.coord_host).await {
-                Ok(ends) => {
-                    if o.verbose {
-                        for e in &ends {
-                            eprintln!("coordination: `{}` listens on {}", e.mission_name(), e.local_addr());
+        let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = if let Some(me) = &o.vehicle {
+            let listen = o.coord_listen.clone().unwrap_or_else(|| format!("{}:0", o.coord_host));
+            let mut end = mcl_runtime::coord::TcpEnd::bind(me, &listen)
+                .await
+                .map_err(|e| format!("cannot listen on `{listen}` for the coordination of `{me}`: {e}"))?;
+            eprintln!("coordination: `{me}` listens on {}", end.local_addr());
+            for (n, a) in &peers {
+                end.add_peer(n, *a);
+            }
+            vec![Box::new(end)]
+        } else {
+            match o.transport {
+                Transport::InProcess => mcl_runtime::coord::in_process(&names)
+                    .into_iter()
+                    .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
+                    .collect(),
+                Transport::Tcp => match mcl_runtime::coord::tcp_mesh(&names, &o.coord_host).await {
+                    Ok(ends) => {
+                        if o.verbose {
+                            for e in &ends {
+                                eprintln!("coordination: `{}` listens on {}", e.mission_name(), e.local_addr());
+                            }
                         }
+                        ends.into_iter().map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>).collect()
                     }
-                    ends.into_iter().map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>).collect()
-                }
-                Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
-            },
+                    Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
+                },
+            }
         };
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(transports) {
@@ -642,7 +708,8 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         if o.virtual_time {
             mcl_runtime::multi::run_virtual(vs, shared, limits).await
         } else {
-            mcl_runtime::multi::run_real_time(vs, shared, Clock::new(o.speed, 0.0), limits).await
+            let peers: Vec<String> = peers.iter().map(|(n, _)| n.clone()).collect();
+            mcl_runtime::multi::run_real_time_with_peers(vs, shared, Clock::new(o.speed, 0.0), limits, &peers).await
         }
     });
     let mut sink = match sink.lock() {
@@ -671,11 +738,20 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             count(&sink.records, name, "coord_receive"),
         );
     }
+    let mutex = if end.mutex.total() > 0 {
+        format!(
+            "; mutex protocol: {} requests, {} grants, {} returns",
+            end.mutex.requests, end.mutex.grants, end.mutex.returns
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "coordination: {} missions, {} messages sent ({} transport)",
+        "coordination: {} missions, {} messages sent ({} transport{mutex})",
         end.ends.len(),
         end.messages,
         match o.transport {
+            _ if o.vehicle.is_some() => "TCP",
             Transport::InProcess => "in-process",
             Transport::Tcp => "TCP",
         }
