@@ -850,6 +850,7 @@ fn a_keyword_as_a_mission_name_is_one_error() {
     assert!(p.errors[0].message.contains("`while` is a keyword"), "{}", p.errors[0].message);
     assert_eq!(text("mission : while { A() ; B() }", p.errors[0].span), "while");
     assert_eq!(t, "(mission while {A(); B()})");
+}
 
 #[test]
 fn planning_blocks() {
