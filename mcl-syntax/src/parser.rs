@@ -1554,7 +1554,7 @@ where
 {
     let end = just(Token::Semi).or_not().ignored();
     // type location { x; y; z; }  |  type robot;  |  type auv : robot;
-    let attrs = braced(semi_list(name()), Vec::new).then_ignore(end.clone()).or(just(Token::Semi).to(Vec::new()));
+    let attrs = braced(semi_list(name()), Vec::new).then_ignore(end).or(just(Token::Semi).to(Vec::new()));
     let ty =
         word("type", "`type`").then(name()).then(just(Token::Colon).ignore_then(name()).or_not()).then(attrs).map_with(
             |(((keyword_span, name), parent), attrs), e| {
@@ -1567,7 +1567,7 @@ where
         value,
         span: Span::from(e.span()),
     });
-    let values = braced(semi_list(attr_value), Vec::new).then_ignore(end.clone()).or(just(Token::Semi).to(Vec::new()));
+    let values = braced(semi_list(attr_value), Vec::new).then_ignore(end).or(just(Token::Semi).to(Vec::new()));
     let entity = word("entity", "`entity`").then(name()).then(name()).then(values).map_with(
         |(((keyword_span, ty), name), values), e| {
             PlanDef::Entity(PlanEntity { keyword_span, ty, name, values, span: Span::from(e.span()) })
@@ -1609,13 +1609,13 @@ where
             .map(|(k, c)| (k, OpPartKind::Cost(c))),
         word("mcl", "`mcl`").then(plan_call()).then_ignore(just(Token::Semi)).map(|(k, c)| (k, OpPartKind::Mcl(c))),
     ))
-    .then_ignore(end.clone())
+    .then_ignore(end)
     .map_with(|(keyword_span, kind), e| OpPart { keyword_span, kind, span: Span::from(e.span()) });
     let operator = word("operator", "`operator`")
         .then(name())
         .then(typed_params)
         .then(braced(plan_list(part_kind), Vec::new))
-        .then_ignore(end.clone())
+        .then_ignore(end)
         .map_with(|(((keyword_span, name), params), parts), e| {
             PlanDef::Operator(PlanOperator { keyword_span, name, params, parts, span: Span::from(e.span()) })
         });
@@ -1631,7 +1631,7 @@ where
     let entry = fvalue.or(plan_fact().map(Entry::Fact));
     let initial = word("initial", "`initial`")
         .then(braced(semi_list(entry), Vec::new))
-        .then_ignore(end.clone())
+        .then_ignore(end)
         .map_with(|(keyword_span, entries), e| {
             let mut facts = Vec::new();
             let mut values = Vec::new();
