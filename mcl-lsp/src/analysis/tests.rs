@@ -740,7 +740,7 @@ fn folding_covers_every_block_kind() {
         let folds = outline::folding_ranges(&a, file);
         let starts: std::collections::HashSet<u32> = folds.iter().map(|r| r.start_line).collect();
         let line = |s: Span| idx.line_of(s.start as usize) as u32;
-        let mut want = |s: Span, what: &str| {
+        let want = |s: Span, what: &str| {
             let (l1, l2) = (line(s), idx.line_of(s.end as usize) as u32);
             if l2 > l1 + 1 {
                 assert!(starts.contains(&l1), "{name}: {what} at line {l1} has no fold: {folds:?}");
