@@ -42,6 +42,8 @@ struct Shared {
     caps: Caps,
     /// Sequence number of the last edit taken off the wire.
     enqueued: AtomicU64,
+    /// Edits of texts taken off the wire (not the workspace scan).
+    text_edits: AtomicU64,
     edits: std::sync::Mutex<mpsc::Sender<(u64, Edit)>>,
     /// `shutdown` was received (the exit status is 0 only then).
     shut_down: AtomicBool,
@@ -108,6 +110,9 @@ impl Shared {
     }
 
     fn enqueue(&self, edit: Edit) {
+        if !matches!(edit, Edit::Workspace { .. }) {
+            self.text_edits.fetch_add(1, Ordering::SeqCst);
+        }
         // Numbered under the lock, so that the queue is in numbering order.
         let tx = self.edits.lock().unwrap_or_else(|e| e.into_inner());
         let seq = self.enqueued.fetch_add(1, Ordering::SeqCst) + 1;
@@ -447,7 +452,7 @@ impl LanguageServer for Backend {
         // the client to pull again; a client that cannot be asked waits for it.
         let refresh = self.shared.caps.diagnostic_refresh.load(Ordering::SeqCst);
         let shared = self.shared.clone();
-        let seen = self.shared.enqueued.load(Ordering::SeqCst);
+        let seen = self.shared.text_edits.load(Ordering::SeqCst);
         let items = self
             .analyse_or(server_cancelled, move |a| {
                 let file = a.file(&p.text_document.uri);
@@ -462,7 +467,7 @@ impl LanguageServer for Backend {
             })
             .await?;
         // An edit came while this was computed: the client pulls again.
-        if self.shared.enqueued.load(Ordering::SeqCst) > seen {
+        if self.shared.text_edits.load(Ordering::SeqCst) > seen {
             return Err(server_cancelled());
         }
         Ok(DocumentDiagnosticReportResult::Report(DocumentDiagnosticReport::Full(
@@ -765,6 +770,7 @@ pub fn service() -> (Ordered, tower_lsp_server::ClientSocket) {
         host: Host::new(),
         caps: Caps::default(),
         enqueued: AtomicU64::new(0),
+        text_edits: AtomicU64::new(0),
         edits: std::sync::Mutex::new(edit_tx),
         shut_down: AtomicBool::new(false),
         exit: tokio::sync::Notify::new(),

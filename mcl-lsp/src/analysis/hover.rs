@@ -17,7 +17,7 @@ use tower_lsp_server::ls_types::{Hover, HoverContents, MarkupContent, MarkupKind
 
 pub fn hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Hover> {
     let occs = occurrences(a.db, file);
-    let Some(occ) = occurrence_at(&occs, offset) else {
+    let Some(occ) = occurrence_at(occs, offset) else {
         return section_hover(a, file, offset);
     };
     let md = match &occ.role {
