@@ -999,7 +999,8 @@ fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
     lsp.change("mission.mcl", 2, json!([{"range": {"start": zero, "end": zero}, "text": "// two orders\n"}]));
     let moved = format!("// two orders\n{ORDER_CYCLE}");
     for p in publications(&mut lsp, 2) {
-        assert_eq!(p["diagnostics"][0]["code"], "E0406", "{p}");
+        assert_eq!(p["diagnostics"][0]["code"], "E0408", "{p}");
+        assert_eq!(p["diagnostics"][1]["code"], "E0406", "{p}");
         assert_eq!(p["diagnostics"][0]["range"]["start"], pos(&moved, "order { v1:p2", 0), "{p}");
     }
     // An unused task in the same file changes nothing either.
@@ -1039,7 +1040,8 @@ fn pulled_diagnostics_refresh_for_the_verdict_and_cancel_when_stale() {
     assert_eq!(r["result"]["kind"], "full", "{r}");
     lsp.wait_for("workspace/diagnostic/refresh", |_| true);
     let r = pull(&mut lsp, &uri);
-    assert_eq!(r["result"]["items"][0]["code"], "E0406", "{r}");
+    assert_eq!(r["result"]["items"][0]["code"], "E0408", "{r}");
+    assert_eq!(r["result"]["items"][1]["code"], "E0406", "{r}");
     // An edit elsewhere keeps it, moved.
     let zero = json!({"line": 0, "character": 0});
     lsp.change("mission.mcl", 2, json!([{"range": {"start": zero, "end": zero}, "text": "\n\n"}]));

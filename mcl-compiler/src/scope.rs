@@ -1,7 +1,7 @@
 //! Name resolution: the definitions visible in a program.
 
 use crate::db::{Db, SourceFile};
-use crate::queries::{file_items, item_start, local_item, parse_item, program, whole_file};
+use crate::queries::{chunk_text, file_items, item_start, local_item, parse_item, program, whole_file, ChunkKey};
 use mcl_syntax::ast::SourceFile as SourceFileAst;
 use mcl_syntax::ast::*;
 use mcl_syntax::{Shift, Span};
@@ -190,9 +190,11 @@ pub fn mission_names(file: &SourceFileAst) -> Vec<String> {
 /// definition, and of its uses, would only repeat that error in other words:
 /// they are skipped (the definition still defines its name).
 pub fn is_broken(db: &dyn Db, id: DefId, span: Span) -> bool {
-    let Some(c) = file_items(db, id.file).get(id.item as usize) else { return false };
+    // Through `chunk_text`, not `file_items`: a check of another item that
+    // asks must not depend on where the items are (it would rerun on every edit).
+    let Some(text) = *chunk_text(db, ChunkKey::new(db, id.file, id.item)) else { return false };
     let off = if id.local { 0 } else { item_start(db, id.file, id.item) };
-    parse_item(db, c.text)
+    parse_item(db, text)
         .errors
         .iter()
         .any(|e| e.is_error() && e.span.start + off >= span.start && e.span.start + off <= span.end)

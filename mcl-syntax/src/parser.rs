@@ -1629,10 +1629,8 @@ where
             Entry::Value(FunctionValue { name, args, value, span: Span::from(e.span()) })
         });
     let entry = fvalue.or(plan_fact().map(Entry::Fact));
-    let initial = word("initial", "`initial`")
-        .then(braced(semi_list(entry), Vec::new))
-        .then_ignore(end)
-        .map_with(|(keyword_span, entries), e| {
+    let initial = word("initial", "`initial`").then(braced(semi_list(entry), Vec::new)).then_ignore(end).map_with(
+        |(keyword_span, entries), e| {
             let mut facts = Vec::new();
             let mut values = Vec::new();
             for x in entries {
@@ -1642,7 +1640,8 @@ where
                 }
             }
             PlanDef::Facts(PlanFacts { keyword_span, goal: false, facts, values, span: Span::from(e.span()) })
-        });
+        },
+    );
     let goal = word("goal", "`goal`").then(plan_facts()).then_ignore(end).map_with(|(keyword_span, facts), e| {
         PlanDef::Facts(PlanFacts { keyword_span, goal: true, facts, values: Vec::new(), span: Span::from(e.span()) })
     });

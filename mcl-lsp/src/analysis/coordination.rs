@@ -182,7 +182,7 @@ constraints {
         let file = f.file("a.mcl");
         let before = fingerprint(&a, file).expect("constraints");
         let v = compute(&a, file, before);
-        assert_eq!(v.diags.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0406"], "{:?}", v.diags);
+        assert_eq!(v.diags.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0408", "E0406"], "{:?}", v.diags);
 
         // A comment above and an unused task changed: the same input, the
         // verdict moves with its constraint.
