@@ -186,3 +186,45 @@
   ":"
   "."
 ] @punctuation.delimiter
+
+; Planning (`planning { ... }`, `pddl_map { ... }`) ---------------------------
+
+[
+  "planning"
+  "pddl_map"
+  "type"
+  "entity"
+  "function"
+  "operator"
+  "precond"
+  "add"
+  "del"
+  "expression"
+  "cost"
+  "mcl"
+  "initial"
+  "goal"
+] @keyword
+
+(plan_type
+  name: (identifier) @type)
+
+(plan_entity
+  type: (identifier) @type
+  name: (identifier) @variable)
+
+(plan_operator
+  name: (identifier) @function)
+
+(typed_parameter
+  type: (identifier) @type
+  name: (identifier) @variable.parameter)
+
+(mission_call
+  name: (identifier) @function)
+
+(mapping
+  action: (identifier) @function)
+
+(attribute
+  name: (identifier) @variable.member)
