@@ -15,6 +15,12 @@
 //!    no supervisor can save: a [`Problem`] on the constraints whose
 //!    supervisors hold the waiting calls or lie in the siphon, with the
 //!    firing sequence that leads to it.
+//! 5. Free of deadlock: verify again, over nominal runs only
+//!    ([`verify_quiet`]: no call fails outside a condition, no alarm). A
+//!    marking they reach from which a mission can end only through a
+//!    failure or an alarm is a [`WitnessKind::Stuck`] problem (a call
+//!    waiting for a sync partner that a `parallel ... or` withdrew, say):
+//!    a dry run with the mock's default answers could stop there.
 //!
 //! The invariants and minimal siphons of the final net (steps 1, 3, 4) are
 //! reported as well ([`crate::structure::Structure`]).
@@ -30,7 +36,9 @@ use crate::structure::{
     analyze_structure, check_siphon_supervisor, minimal_siphons_within, siphon_supervisor, wrapped, Refusal, Structure,
 };
 use crate::supervisor::{apply, synthesize, Supervisor};
-use crate::verify::{empty_places, verify, Outcome, VerifyOptions, VerifyStats, Witness, WitnessKind};
+use crate::verify::{
+    empty_places, has_off_nominal, verify, verify_quiet, Outcome, VerifyOptions, VerifyStats, Witness, WitnessKind,
+};
 
 /// Options of [`analyze_with`].
 #[derive(Clone, Debug)]
@@ -155,7 +163,17 @@ pub fn analyze_with(
     let (verdict, problems, stats, net) = loop {
         let net = supervised_net(&plant, &sups)?;
         match verify(missions, &plant, &sups, &net, &opts.verify) {
-            Outcome::Verified(st) => break (Verdict::Free, Vec::new(), st, net),
+            Outcome::Verified(st) if !has_off_nominal(missions) => break (Verdict::Free, Vec::new(), st, net),
+            // Free of deadlock; and in nominal runs? (verify.rs, `verify_quiet`)
+            Outcome::Verified(st) => match verify_quiet(missions, &plant, &sups, &net, &opts.verify) {
+                Outcome::Verified(_) => break (Verdict::Free, Vec::new(), st, net),
+                Outcome::Unknown(reason, _) => break (Verdict::Unknown { reason }, Vec::new(), st, net),
+                Outcome::Problems(ws, _) => {
+                    let problems =
+                        ws.iter().map(|w| problem(&plant, &net, &sups, w, None, None, constraints)).collect();
+                    break (Verdict::Deadlock, problems, st, net);
+                }
+            },
             Outcome::Unknown(reason, st) => break (Verdict::Unknown { reason }, Vec::new(), st, net),
             Outcome::Problems(ws, st) => {
                 let wnet = wrapped(&net, &plant);
@@ -276,6 +294,7 @@ fn problem(
     let what = match w.kind {
         WitnessKind::Dead => "deadlock",
         WitnessKind::Blocked => "blocking (a mission can no longer end)",
+        WitnessKind::Stuck => "a wait for ever in a nominal run (a mission can end only through a failure or an alarm)",
     };
     let mut message = format!(
         "{what}, caused by {}",

@@ -145,6 +145,7 @@ fn deadlock(p: &Problem, missions: &[Mission], constraints: &[Constraint], block
     let what = match p.kind {
         WitnessKind::Dead => "a deadlock",
         WitnessKind::Blocked => "a state where a mission can never end",
+        WitnessKind::Stuck => "a state where, with no failure and no alarm, a mission can never end",
     };
     let message = if waiting.is_empty() {
         format!("these constraints can lead to {what}")
@@ -216,6 +217,7 @@ fn deadlock(p: &Problem, missions: &[Mission], constraints: &[Constraint], block
         match p.kind {
             WitnessKind::Dead => "then nothing can fire",
             WitnessKind::Blocked => "then some mission can never end",
+            WitnessKind::Stuck => "then, unless some call fails or an alarm fires, some mission can never end",
         },
         state.join("; ")
     ));
@@ -230,6 +232,13 @@ fn deadlock(p: &Problem, missions: &[Mission], constraints: &[Constraint], block
             )
         }
         None => {}
+    }
+    if p.kind == WitnessKind::Stuck {
+        return d.with_help(
+            "a call held by a sync or an order waits until its partner comes; a partner withdrawn by an abort \
+             (another branch of a `parallel ... or` that ends first, a failure in a `try`) never does: keep the \
+             partners out of branches that can be aborted, or drop the constraint",
+        );
     }
     d.with_help(match p.constraints.len() {
         0 => "the missions deadlock with these constraints; change the missions or the constraints".to_string(),

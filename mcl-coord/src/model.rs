@@ -120,6 +120,15 @@ pub struct Mission {
     pub controllable: Vec<bool>,
     /// The labelled activities.
     pub activities: Vec<Activity>,
+    /// Off-nominal answers: event transition `t` is one while one of the
+    /// places is marked (a call holds the task: its `run` place). A
+    /// *nominal run* is one without them: every call outside a condition
+    /// ends ok, tests (`if` and `while` conditions) answer either way, and
+    /// no monitor condition fires (no alarm), which is what a mock vehicle
+    /// does unless told otherwise. Besides the absence of deadlock, the
+    /// verification proves that in no nominal run does a mission wait for
+    /// ever ([`crate::verify::WitnessKind::Stuck`]).
+    pub off_nominal: Vec<(TransitionId, Vec<PlaceId>)>,
 }
 
 impl Mission {
@@ -127,7 +136,15 @@ impl Mission {
     /// is controllable. Add activities with [`Mission::with_activity`].
     pub fn new(name: impl Into<String>, net: Net, initial_places: Vec<PlaceId>, final_places: Vec<PlaceId>) -> Self {
         let controllable = net.transitions().iter().map(|t| t.kind.is_immediate()).collect();
-        Mission { name: name.into(), net, initial_places, final_places, controllable, activities: Vec::new() }
+        Mission {
+            name: name.into(),
+            net,
+            initial_places,
+            final_places,
+            controllable,
+            activities: Vec::new(),
+            off_nominal: Vec::new(),
+        }
     }
 
     /// Adds an activity.
@@ -171,13 +188,56 @@ impl Mission {
             .iter()
             .filter_map(|id| pid(id))
             .collect();
-        Mission { name: name.into(), net, initial_places, final_places, controllable, activities }
+        let off_nominal = off_nominal(&net, &calls);
+        Mission { name: name.into(), net, initial_places, final_places, controllable, activities, off_nominal }
     }
 
     /// The activities labelled `label`.
     pub fn activities_labelled<'a>(&'a self, label: &'a str) -> impl Iterator<Item = &'a Activity> + 'a {
         self.activities.iter().filter(move |a| a.label == label)
     }
+}
+
+/// The off-nominal answers of every call ([`Mission::off_nominal`]): all
+/// the events of a task called in a monitor condition; the fail events
+/// (net property `task_events:T`) of a task called outside any condition.
+/// A task's net is shared by its calls: its events are off-nominal only
+/// while such a call holds it (its `run` place is marked).
+fn off_nominal(net: &Net, calls: &[CallNodes]) -> Vec<(TransitionId, Vec<PlaceId>)> {
+    let fail_events = |task: &str| -> Vec<String> {
+        let key = format!("task_events:{task}");
+        net.properties()
+            .iter()
+            .find(|(k, _)| *k == key)
+            .and_then(|(_, v)| serde_json::from_str::<serde_json::Value>(v).ok())
+            .and_then(|v| {
+                v.get("fail")?.as_array().map(|a| a.iter().filter_map(|e| e.as_str().map(String::from)).collect())
+            })
+            .unwrap_or_default()
+    };
+    let mut out: Vec<(TransitionId, Vec<PlaceId>)> = Vec::new();
+    for c in calls {
+        let all = match c.role.as_deref() {
+            Some("monitor_condition") => true,
+            None => false,
+            // Tests (if and while conditions): both answers are nominal.
+            Some(_) => continue,
+        };
+        let fails = if all { Vec::new() } else { fail_events(&c.task) };
+        let prefix = format!("task.{}.", c.task);
+        for t in net.transition_ids() {
+            let Some(tr) = net.transition(t) else { continue };
+            let mcl_net::TransitionKind::Event(e) = &tr.kind else { continue };
+            if !tr.id.starts_with(&prefix) || !(all || fails.iter().any(|f| f == e)) {
+                continue;
+            }
+            match out.iter_mut().find(|(x, _)| *x == t) {
+                Some((_, ps)) => ps.push(c.run),
+                None => out.push((t, vec![c.run])),
+            }
+        }
+    }
+    out
 }
 
 /// `mission:label`.

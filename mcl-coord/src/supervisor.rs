@@ -23,11 +23,13 @@
 //!   supervisors, 6.25), `Σ v(started(j)) − Σ v(arrived(i)) ≤ μ0(waiting(i))`
 //!   (6.24): j starts only after i has arrived in its waiting place as many
 //!   times. An arrival that an abort later withdraws (the adapter's `cancel`)
-//!   still counts here: a supervisor may not hold an abort (the building
-//!   blocks rely on an abort being processed at once), so the credit cannot
-//!   be taken back in the centralized net; the per-vehicle nets take it back
-//!   when the other call has not used it yet (`crate::decentral`). On the
-//!   seed's compact nets nothing is ever withdrawn.
+//!   gives its credit back when the other call has not used it yet
+//!   ([`Supervisor::withdrawn_by`]). That is not an arc: a supervisor may not
+//!   hold an abort (the building blocks rely on an abort being processed at
+//!   once), so the centralized net keeps (6.24) as printed, and the
+//!   per-vehicle nets (`crate::decentral`) and the verification
+//!   (`crate::verify`) apply the take-back. On the seed's compact nets
+//!   nothing is ever withdrawn.
 
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId};
 use serde::Serialize;
@@ -102,6 +104,13 @@ pub struct Supervisor {
     pub consumed_by: Vec<(TransitionId, u32)>,
     /// `μ_c0 = b − L·μ0`.
     pub initial: i64,
+    /// Transitions that take one token back when there is one, and do
+    /// nothing otherwise: the withdrawals (`cancel`) of the calls whose
+    /// arrivals a sync supervisor counts. Not arcs of the net: the vehicles
+    /// apply them ([`crate::decentral`]) and so does the verification
+    /// ([`crate::verify`]); empty for every other supervisor.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub withdrawn_by: Vec<TransitionId>,
 }
 
 impl Supervisor {
@@ -154,7 +163,7 @@ impl Supervisor {
         }
         let m0 = net.initial_marking();
         let initial = b - l.iter().map(|&(p, w)| w * i64::from(m0.get(p))).sum::<i64>();
-        Supervisor { id: id.into(), origin, l, c, b, produced_by, consumed_by, initial }
+        Supervisor { id: id.into(), origin, l, c, b, produced_by, consumed_by, initial, withdrawn_by: Vec::new() }
     }
 
     /// `D_c⁺` as a dense row over `transitions` transitions.
@@ -299,14 +308,18 @@ pub fn constraint_supervisors(plant: &Plant, k: usize, c: &Constraint) -> Result
                     let mut cv = transitions_of(gj, |a| &a.started, 1);
                     cv.extend(transitions_of(gi, |a| &a.arrived, -1));
                     let b: i64 = gi.iter().flat_map(|a| a.waiting.iter()).map(|&p| i64::from(m0.get(p))).sum();
-                    v.push(Supervisor::synthesize(
+                    let mut s = Supervisor::synthesize(
                         net,
                         format!("coord.sync{}.{}-{}", k + 1, i + 1, j + 1),
                         Origin::Sync { constraint: k, first: i, second: j },
                         &[],
                         &cv,
                         b,
-                    ));
+                    );
+                    s.withdrawn_by = gi.iter().flat_map(|a| a.withdrawn.iter().copied()).collect();
+                    s.withdrawn_by.sort_unstable();
+                    s.withdrawn_by.dedup();
+                    v.push(s);
                 }
             }
             v
@@ -344,6 +357,34 @@ pub fn apply(net: &Net, supervisors: &[Supervisor]) -> Result<Net, CoordError> {
         for &(t, w) in &s.consumed_by {
             b.add_input(p, t, w);
         }
+    }
+    Ok(b.build()?)
+}
+
+/// `net` (a supervised net: the plant's nodes, then the supervisor places of
+/// `supervisors` in order, as [`apply`] builds it) with the take-back of
+/// withdrawn sync arrivals ([`Supervisor::withdrawn_by`]) written as Petri
+/// net nodes, for tools that explore nets: per supervisor `S` with
+/// withdrawals, a place `S.withdrawn` that each withdrawal marks, an
+/// immediate transition `S.withdraw` of priority 2 that takes it with one
+/// token of `S`, and `S.forget` of priority 1 that takes it alone. Under
+/// the MCL firing rule (immediate transitions first, by priority) this is
+/// exactly the take-back that the verification applies: a withdrawal takes
+/// a credit back at once when there is one.
+pub fn with_take_backs(net: &Net, supervisors: &[Supervisor]) -> Result<Net, CoordError> {
+    let mut b: NetBuilder = net.to_builder();
+    let np = net.place_count() - supervisors.len();
+    for (k, s) in supervisors.iter().enumerate().filter(|(_, s)| !s.withdrawn_by.is_empty()) {
+        let sp = PlaceId((np + k) as u32);
+        let w = b.add_place(mcl_net::Place::new(format!("{}.withdrawn", s.id)));
+        for &t in &s.withdrawn_by {
+            b.add_output(t, w, 1);
+        }
+        let tw = b.add_transition(mcl_net::Transition::new(format!("{}.withdraw", s.id)).with_priority(2));
+        b.add_input(w, tw, 1);
+        b.add_input(sp, tw, 1);
+        let tf = b.add_transition(mcl_net::Transition::new(format!("{}.forget", s.id)).with_priority(1));
+        b.add_input(w, tf, 1);
     }
     Ok(b.build()?)
 }

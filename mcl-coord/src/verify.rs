@@ -117,6 +117,10 @@ pub enum WitnessKind {
     Dead,
     /// Transitions can fire but some mission can no longer end.
     Blocked,
+    /// A nominal run ([`Mission::off_nominal`]: no call fails outside a
+    /// condition, no alarm) reaches a marking from which, in nominal runs,
+    /// some mission can never end ([`verify_quiet`]).
+    Stuck,
 }
 
 /// A firing sequence of the supervised centralized net that ends in a
@@ -203,8 +207,24 @@ enum LtsError {
     Unbounded,
 }
 
-fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: usize) -> Result<Lts, LtsError> {
+fn build_lts(
+    m: &Mission,
+    t_off: u32,
+    effect_of: &[u32],
+    gated: &[bool],
+    quiet: bool,
+    max: usize,
+) -> Result<Lts, LtsError> {
     let net = &m.net;
+    // With `quiet`, off-nominal answers never come.
+    let mut quiet_places: Vec<Option<&[PlaceId]>> = vec![None; net.transition_count()];
+    if quiet {
+        for (t, ps) in &m.off_nominal {
+            if let Some(x) = quiet_places.get_mut(t.index()) {
+                *x = Some(ps.as_slice());
+            }
+        }
+    }
     let np = net.place_count();
     let m0: Vec<u8> = net.places().iter().map(|p| u8::try_from(p.initial).unwrap_or(u8::MAX)).collect();
     if net.places().iter().any(|p| p.initial > 200) {
@@ -238,7 +258,9 @@ fn build_lts(m: &Mission, t_off: u32, effect_of: &[u32], gated: &[bool], max: us
         lts.fin.push(m.final_places.iter().any(|p| cur[p.index()] > 0));
         en.clear();
         for t in net.transition_ids() {
-            if net.pre(t).iter().all(|&(p, w)| u32::from(cur[p.index()]) >= w) {
+            if net.pre(t).iter().all(|&(p, w)| u32::from(cur[p.index()]) >= w)
+                && !quiet_places[t.index()].is_some_and(|ps| ps.iter().any(|p| cur[p.index()] > 0))
+            {
                 en.push(t.0);
             }
         }
@@ -486,11 +508,14 @@ fn reduce(lts: &Lts) -> Quotient {
     Quotient { block, n: count, off, edges: flat, gates, fin }
 }
 
-/// The supervisor arcs of one transition: (supervisor, weight) consumed and produced.
+/// The supervisor arcs of one transition: (supervisor, weight) consumed and
+/// produced, and the supervisors it takes one token back from when they
+/// have one (a withdrawn sync arrival, [`Supervisor::withdrawn_by`]).
 #[derive(Default, Clone, PartialEq, Eq, Hash)]
 struct Effect {
     consume: Vec<(usize, u32)>,
     produce: Vec<(usize, u32)>,
+    take_back: Vec<usize>,
 }
 
 struct Product<'a> {
@@ -566,7 +591,7 @@ impl Product<'_> {
                             }
                             states = nexts;
                         }
-                        for (mut x, pess) in states {
+                        for (x, _) in states.iter_mut() {
                             for &(s, w) in &e.produce {
                                 let c = &mut x[self.nv + s];
                                 *c = (*c + w).min(self.cap + 1);
@@ -574,6 +599,27 @@ impl Product<'_> {
                                     *over = true;
                                 }
                             }
+                        }
+                        // Take-backs: one token if there is one; from `>K`,
+                        // `K` (the pessimistic choice) or `>K`.
+                        for &s in &e.take_back {
+                            let mut nexts = Vec::with_capacity(states.len());
+                            for (mut x, pess) in states {
+                                let c = x[self.nv + s];
+                                if c == self.cap + 1 {
+                                    *over = true;
+                                    let mut y = x.clone();
+                                    y[self.nv + s] = self.cap;
+                                    nexts.push((y, pess));
+                                    nexts.push((x, false));
+                                } else {
+                                    x[self.nv + s] = c.saturating_sub(1);
+                                    nexts.push((x, pess));
+                                }
+                            }
+                            states = nexts;
+                        }
+                        for (x, pess) in states {
                             out.push((x, v, label, pess));
                         }
                     }
@@ -681,10 +727,58 @@ fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph 
 /// Verifies the supervised net `snet` = plant + `sups` (supervisor places
 /// appended in order).
 pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &Net, opts: &VerifyOptions) -> Outcome {
+    verify_mode(missions, plant, sups, snet, opts, false)
+}
+
+/// True when some mission has off-nominal answers ([`Mission::off_nominal`]):
+/// only then can [`verify_quiet`] find more than [`verify`].
+pub fn has_off_nominal(missions: &[Mission]) -> bool {
+    missions.iter().any(|m| !m.off_nominal.is_empty())
+}
+
+/// [`verify`] restricted to nominal runs ([`Mission::off_nominal`]: no call
+/// fails outside a condition, no monitor condition fires; what a mock
+/// vehicle does unless told otherwise, whatever the timing). Its
+/// counterexamples, of kind [`WitnessKind::Stuck`], are markings reached by
+/// a nominal run from which a mission can end only through a failure or an
+/// alarm: a call waiting for ever for a sync partner that a `parallel ...
+/// or` withdrew, say. [`verify`] does not see them, since an alarm, always
+/// possible, would let the mission end.
+pub fn verify_quiet(
+    missions: &[Mission],
+    plant: &Plant,
+    sups: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+) -> Outcome {
+    match verify_mode(missions, plant, sups, snet, opts, true) {
+        Outcome::Problems(mut ws, st) => {
+            for w in &mut ws {
+                w.kind = WitnessKind::Stuck;
+            }
+            Outcome::Problems(ws, st)
+        }
+        o => o,
+    }
+}
+
+fn verify_mode(
+    missions: &[Mission],
+    plant: &Plant,
+    sups: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+    quiet: bool,
+) -> Outcome {
     let nt = plant.net.transition_count();
     let mut gated = vec![false; nt];
     let mut per_t: Vec<Effect> = vec![Effect::default(); nt];
+    let mut take_back: Vec<Vec<usize>> = vec![Vec::new(); nt];
     for (k, s) in sups.iter().enumerate() {
+        for &t in &s.withdrawn_by {
+            per_t[t.index()].take_back.push(k);
+            take_back[t.index()].push(k);
+        }
         for &(t, w) in &s.consumed_by {
             gated[t.index()] = true;
             per_t[t.index()].consume.push((k, w));
@@ -699,7 +793,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     let effect_of: Vec<u32> = per_t
         .into_iter()
         .map(|e| {
-            if e.consume.is_empty() && e.produce.is_empty() {
+            if e.consume.is_empty() && e.produce.is_empty() && e.take_back.is_empty() {
                 return 0;
             }
             let next = effects.len() as u32;
@@ -712,7 +806,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     let mut stats = VerifyStats::default();
     let mut ltss = Vec::new();
     for (m, part) in missions.iter().zip(&plant.parts) {
-        match build_lts(m, part.transitions.start, &effect_of, &gated, opts.max_vehicle_states) {
+        match build_lts(m, part.transitions.start, &effect_of, &gated, quiet, opts.max_vehicle_states) {
             Ok(l) => {
                 stats.vehicle_states.push(l.len());
                 ltss.push(l);
@@ -735,6 +829,24 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
     stats.vehicle_classes = quots.iter().map(|q| q.n).collect();
     // Which vehicles can end when nothing holds them.
     let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
+    // The off-nominal answers, in centralized ids.
+    let quiet_ts: Vec<(TransitionId, Vec<PlaceId>)> = if quiet {
+        missions
+            .iter()
+            .zip(&plant.parts)
+            .flat_map(|(m, part)| {
+                m.off_nominal.iter().map(move |(t, ps)| {
+                    (
+                        TransitionId(t.0 + part.transitions.start),
+                        ps.iter().map(|p| PlaceId(p.0 + part.places.start)).collect(),
+                    )
+                })
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let rules = ReplayRules { take_back: &take_back, quiet: &quiet_ts };
 
     // Vehicles that no supervisor links are independent: each group of
     // linked vehicles is verified alone (docs/coordination.md).
@@ -751,7 +863,7 @@ pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &N
             can_end: vs.iter().map(|&v| can_end[v]).collect(),
             whole: groups.len() == 1,
         };
-        match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
+        match verify_group(&g, plant, &effects, sups, snet, &rules, opts, &mut stats) {
             GroupOutcome::Verified => {}
             GroupOutcome::Problems(ws) => witnesses.extend(ws),
             GroupOutcome::Unknown(r) => {
@@ -831,6 +943,7 @@ fn verify_group(
     effects_all: &[Effect],
     sups_all: &[Supervisor],
     snet: &Net,
+    rules: &ReplayRules<'_>,
     opts: &VerifyOptions,
     stats: &mut VerifyStats,
 ) -> GroupOutcome {
@@ -845,6 +958,7 @@ fn verify_group(
         .map(|e| Effect {
             consume: e.consume.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
             produce: e.produce.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
+            take_back: e.take_back.iter().filter(|&&k| local[k] != usize::MAX).map(|&k| local[k]).collect(),
         })
         .collect();
     let quots = &grp.quots;
@@ -852,7 +966,8 @@ fn verify_group(
     let can_end = &grp.can_end;
     let group_ts: Vec<TransitionId> =
         grp.vehicles.iter().flat_map(|&v| plant.parts[v].transitions.clone().map(TransitionId)).collect();
-    let replay = Replay { snet, nsups: sups_all.len(), group_ts: if grp.whole { None } else { Some(&group_ts) } };
+    let replay =
+        Replay { snet, nsups: sups_all.len(), group_ts: if grp.whole { None } else { Some(&group_ts) }, rules };
     let max_w = sups.iter().flat_map(|s| s.consumed_by.iter().map(|&(_, w)| w)).max().unwrap_or(1);
     let max_init = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).max().unwrap_or(0);
     let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
@@ -1052,6 +1167,35 @@ struct Replay<'a> {
     snet: &'a Net,
     nsups: usize,
     group_ts: Option<&'a [TransitionId]>,
+    rules: &'a ReplayRules<'a>,
+}
+
+/// What a replay applies besides the net's arcs.
+struct ReplayRules<'a> {
+    /// Per transition of the plant: the supervisors it takes a token back
+    /// from, if they have one ([`Supervisor::withdrawn_by`]).
+    take_back: &'a [Vec<usize>],
+    /// Transitions that never fire while one of the places is marked (the
+    /// off-nominal answers of [`verify_quiet`]).
+    quiet: &'a [(TransitionId, Vec<PlaceId>)],
+}
+
+impl ReplayRules<'_> {
+    fn fire(&self, snet: &Net, nsups: usize, m: &mut Marking, t: TransitionId) -> bool {
+        if mcl_net::semantics::fire(snet, m, t).is_err() {
+            return false;
+        }
+        let np = snet.place_count() - nsups;
+        for &k in self.take_back.get(t.index()).map_or(&[][..], |v| v.as_slice()) {
+            let x = &mut m.0[np + k];
+            *x = x.saturating_sub(1);
+        }
+        true
+    }
+
+    fn silent(&self, m: &Marking, t: TransitionId) -> bool {
+        self.quiet.iter().any(|(q, ps)| *q == t && ps.iter().any(|&p| m.get(p) > 0))
+    }
 }
 
 fn can_end_alone(l: &Lts) -> bool {
@@ -1176,11 +1320,12 @@ fn concretize(
     // Replay with exact counts.
     let mut m = snet.initial_marking();
     for &t in &path {
-        if mcl_net::semantics::fire(snet, &mut m, t).is_err() {
+        if !replay.rules.fire(snet, replay.nsups, &mut m, t) {
             return None;
         }
     }
-    let enabled = mcl_net::semantics::enabled(snet, &m);
+    let mut enabled = mcl_net::semantics::enabled(snet, &m);
+    enabled.retain(|&t| !replay.rules.silent(&m, t));
     let mut kind = kind;
     match replay.group_ts {
         None => {
@@ -1193,7 +1338,8 @@ fn concretize(
             // input places marked (no other vehicle touches them); the
             // whole net is dead only if the other vehicles are too.
             if kind == WitnessKind::Dead {
-                let live = ts.iter().any(|&t| snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w));
+                let live =
+                    ts.iter().any(|&t| snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w) && !replay.rules.silent(&m, t));
                 if live {
                     return None;
                 }

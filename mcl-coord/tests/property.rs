@@ -8,6 +8,14 @@
 //! #starts(j) ≤ #arrivals(i) for every pair of a sync. When it reports a
 //! deadlock, its counterexample replays to a dead marking.
 //!
+//! The net explored is the supervised net with the take-back of withdrawn
+//! sync arrivals written as nodes (`supervisor::with_take_backs`). Nominal
+//! runs (no call fails outside a condition, no monitor condition fires;
+//! `Mission::off_nominal`) are explored by a breadth-first search of this
+//! file: when the analysis says "free", the end stays reachable by nominal
+//! steps from every marking that nominal runs reach; when it reports a
+//! `Stuck` marking, no nominal run from it reaches the end.
+//!
 //! The same holds for the scaling parts of the analysis
 //! (docs/coordination.md): with a third mission that no constraint links
 //! (verified as its own group), and with the random-walk deadlock search
@@ -18,11 +26,13 @@
 
 use mcl_compiler::{Database, Db};
 use mcl_coord::source::load;
+use mcl_coord::supervisor::with_take_backs;
 use mcl_coord::verify::VerifyOptions;
 use mcl_coord::verify::WitnessKind;
 use mcl_coord::{analyze, analyze_with, Activity, AnalyzeOptions, ConstraintKind, Mission, Verdict};
-use mcl_net::{explore, NetBuilder, Options, PlaceId, TransitionId};
+use mcl_net::{explore, Marking, Net, NetBuilder, Options, PlaceId, TransitionId};
 use proptest::prelude::*;
+use std::collections::HashMap;
 
 /// A small deterministic generator (splitmix64).
 struct Rng(u64);
@@ -52,7 +62,7 @@ fn stmt(r: &mut Rng, depth: usize, labels: &mut usize) -> String {
     if depth == 0 || r.below(3) == 0 {
         return call(r, labels);
     }
-    match r.below(5) {
+    match r.below(6) {
         0 => format!("{} ; {}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
         1 => format!("parallel {{ {} }} and {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
         2 => format!("parallel {{ {} }} or {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
@@ -62,7 +72,9 @@ fn stmt(r: &mut Rng, depth: usize, labels: &mut usize) -> String {
             stmt(r, depth - 1, labels),
             stmt(r, depth - 1, labels)
         ),
-        _ => format!("try {{ {} }} catch {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+        4 => format!("try {{ {} }} catch {{ {} }}", stmt(r, depth - 1, labels), stmt(r, depth - 1, labels)),
+        // An alarm: the only way out of a wait in nominal runs, never taken there.
+        _ => format!("monitor {{ {} }} condition ( Alarm() ) do {{ Surface() }}", stmt(r, depth - 1, labels)),
     }
 }
 
@@ -142,13 +154,26 @@ fn check(seed: u64) -> Result<(), TestCaseError> {
 fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), TestCaseError> {
     let (ms, cs) = compile(&text, seed);
     let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
-    let net = &r.net;
+    let faithful = with_take_backs(&r.net, &r.supervisors).unwrap();
+    let net = &faithful;
     let gid = |m: usize, local: &str| format!("{}/{local}", ms[m].name);
     let places = |m: usize, ps: &[PlaceId]| -> Vec<PlaceId> {
         ps.iter().map(|&p| net.place_by_id(&gid(m, &ms[m].net.place(p).unwrap().id)).unwrap()).collect()
     };
     let trans = |m: usize, ts: &[TransitionId]| -> Vec<TransitionId> {
         ts.iter().map(|&t| net.transition_by_id(&gid(m, &ms[m].net.transition(t).unwrap().id)).unwrap()).collect()
+    };
+    // The off-nominal answers, in the ids of `net`.
+    let off: Vec<(TransitionId, Vec<PlaceId>)> = (0..ms.len())
+        .flat_map(|m| ms[m].off_nominal.iter().map(move |(t, ps)| (m, *t, ps)))
+        .map(|(m, t, ps)| (trans(m, &[t])[0], places(m, ps)))
+        .collect();
+    let all_ended = |m: &Marking| {
+        ms.iter().all(|x| {
+            ["mission.ok", "mission.fail"]
+                .iter()
+                .any(|p| m.get(net.place_by_id(&format!("{}/{p}", x.name)).unwrap()) == 1)
+        })
     };
     let acts = |c: &mcl_coord::CallRef| -> (usize, Vec<&Activity>) {
         let m = ms.iter().position(|x| x.name == c.mission).unwrap();
@@ -229,6 +254,13 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
             }
             let co = ss.coreachable(end);
             prop_assert!(co.iter().all(|&x| x), "some marking cannot reach the end\n{text}");
+            // Nominal runs: the end stays reachable without failures.
+            let g = nominal_graph(net, net.initial_marking(), &off);
+            let co = g.coreachable(|m| all_ended(m));
+            prop_assert!(
+                co.iter().all(|&x| x),
+                "analysis says free, but a nominal run reaches a marking where a mission can no longer end\n{text}"
+            );
             for s in ss.states() {
                 for (ps, bound) in &mutexes {
                     let n: u32 = ps.iter().map(|&p| ss.tokens(s, p)).sum();
@@ -245,12 +277,16 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
                 let mut m = net.initial_marking();
                 for id in &p.counterexample {
                     let t = net.transition_by_id(id).unwrap();
-                    prop_assert!(
-                        mcl_net::semantics::fire(net, &mut m, t).is_ok(),
-                        "counterexample does not replay\n{text}"
-                    );
+                    prop_assert!(fire_settled(net, &mut m, t), "counterexample does not replay\n{text}");
                 }
-                if p.kind == WitnessKind::Dead {
+                if p.kind == WitnessKind::Stuck {
+                    let g = nominal_graph(net, m.clone(), &off);
+                    prop_assert!(!all_ended(&m), "stuck but every mission ended\n{text}");
+                    prop_assert!(
+                        !g.coreachable(|x| all_ended(x))[0],
+                        "stuck, but a nominal run from there ends every mission\n{text}"
+                    );
+                } else if p.kind == WitnessKind::Dead {
                     prop_assert!(mcl_net::semantics::enabled(net, &m).is_empty(), "counterexample not dead\n{text}");
                 } else if !mcl_net::semantics::enabled(net, &m).is_empty() {
                     // Blocked: some mission has not ended.
@@ -267,6 +303,84 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
         Verdict::Unknown { reason } => prop_assert!(false, "unknown: {reason}\n{text}"),
     }
     Ok(())
+}
+
+/// Fires `t`, then the take-back nodes it enabled (`S.withdraw`, else
+/// `S.forget`: under the MCL rule they fire before anything else).
+fn fire_settled(net: &Net, m: &mut Marking, t: TransitionId) -> bool {
+    if mcl_net::semantics::fire(net, m, t).is_err() {
+        return false;
+    }
+    loop {
+        let en = mcl_net::semantics::enabled(net, m);
+        let id = |t: &TransitionId| net.transition(*t).unwrap().id.to_string();
+        let next =
+            en.iter().find(|t| id(t).ends_with(".withdraw")).or_else(|| en.iter().find(|t| id(t).ends_with(".forget")));
+        match next {
+            Some(&t) => {
+                mcl_net::semantics::fire(net, m, t).unwrap();
+            }
+            None => return true,
+        }
+    }
+}
+
+/// The markings that nominal runs reach from `m0` under the MCL rule, with
+/// their edges.
+struct Graph {
+    marks: Vec<Marking>,
+    succ: Vec<Vec<usize>>,
+}
+
+impl Graph {
+    /// Per marking: can a nominal run from it reach a marking where `end` holds?
+    fn coreachable(&self, end: impl Fn(&Marking) -> bool) -> Vec<bool> {
+        let n = self.marks.len();
+        let mut pred: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (s, ss) in self.succ.iter().enumerate() {
+            for &t in ss {
+                pred[t].push(s);
+            }
+        }
+        let mut co: Vec<bool> = self.marks.iter().map(&end).collect();
+        let mut stack: Vec<usize> = (0..n).filter(|&s| co[s]).collect();
+        while let Some(s) = stack.pop() {
+            for &p in &pred[s] {
+                if !co[p] {
+                    co[p] = true;
+                    stack.push(p);
+                }
+            }
+        }
+        co
+    }
+}
+
+fn nominal_graph(net: &Net, m0: Marking, off: &[(TransitionId, Vec<PlaceId>)]) -> Graph {
+    let mut index: HashMap<Vec<u32>, usize> = HashMap::new();
+    let mut g = Graph { marks: vec![m0.clone()], succ: Vec::new() };
+    index.insert(m0.0.clone(), 0);
+    let mut i = 0;
+    while i < g.marks.len() {
+        assert!(g.marks.len() < 2_000_000, "nominal graph too large");
+        let m = g.marks[i].clone();
+        let (_, mut ready) = mcl_net::semantics::ready(net, &m);
+        ready.retain(|&t| !off.iter().any(|(q, ps)| *q == t && ps.iter().any(|&p| m.get(p) > 0)));
+        let mut out = Vec::new();
+        for t in ready {
+            let mut m2 = m.clone();
+            mcl_net::semantics::fire(net, &mut m2, t).unwrap();
+            let n = g.marks.len();
+            let to = *index.entry(m2.0.clone()).or_insert_with(|| {
+                g.marks.push(m2);
+                n
+            });
+            out.push(to);
+        }
+        g.succ.push(out);
+        i += 1;
+    }
+    g
 }
 
 proptest! {
@@ -329,4 +443,18 @@ fn fixed_seeds() {
     }
     // Both verdicts occur in the batch.
     assert!(free > n / 8 && free < n, "{free} of {n} free");
+}
+
+/// The fixed batch meets every verdict of the analysis, among them
+/// problems that only nominal runs show (a mission whose only way out of a
+/// wait is an alarm).
+#[test]
+fn fixed_seeds_meet_stuck_missions() {
+    let mut stuck = 0;
+    for seed in 0..40 {
+        let (ms, cs) = compile(&case(seed), seed);
+        let r = analyze(&ms, &cs).unwrap();
+        stuck += r.problems.iter().filter(|p| p.kind == WitnessKind::Stuck).count();
+    }
+    assert!(stuck > 0, "no stuck case in the batch: the generator no longer exercises nominal runs");
 }

@@ -67,7 +67,8 @@ pub struct CallInfo {
     pub task: String,
     /// The call's label.
     pub label: Option<String>,
-    /// `monitor_condition`, `while_condition` or none.
+    /// `monitor_condition`, `while_condition`, `negated_while_condition`,
+    /// `if_condition` or none.
     pub role: Option<String>,
 }
 

@@ -15,7 +15,9 @@
 //!    ChaCha8, [`mcl_net::semantics::uniform_index`]) among the enabled ones,
 //!    until none is enabled: the marking is then *tangible*. A cascade longer
 //!    than [`PlayerOptions::step_limit`] is a livelock and ends the mission as
-//!    stuck.
+//!    stuck; so are more than `step_limit` zero-delay timers fired at one
+//!    instant without any input (`while ( True() ) { Void() }` with tasks
+//!    that end at once: each call's `release` is a zero-delay timer).
 //! 2. **Timed** transitions: a timer starts when the transition becomes
 //!    enabled in a tangible marking and is cancelled when it is disabled (it
 //!    starts from zero the next time). A transition disabled and re-enabled
@@ -84,7 +86,8 @@ pub struct PlayerOptions {
     /// Values of symbolic call arguments (`timeout`, `altitude`...): used for
     /// `Param` delays and substituted in action parameters.
     pub symbols: BTreeMap<String, Value>,
-    /// Bound on consecutive immediate firings before reporting a livelock.
+    /// Bound on consecutive immediate firings, and on zero-delay timers fired
+    /// at one instant without any input, before reporting a livelock.
     pub step_limit: usize,
     /// Delay of a timed transition whose `Param` delay has no numeric value.
     pub default_delay: f64,
@@ -645,12 +648,24 @@ impl Player {
     /// first of all) until the marking is tangible with no timer due now;
     /// then checks for the end of the mission.
     fn stabilize(&mut self, out: &mut Vec<Output>) {
+        let mut timers = 0usize;
         loop {
             if !self.settle(out) {
                 return;
             }
             match self.next_deadline() {
                 Some(d) if d <= self.now => {
+                    timers += 1;
+                    if timers > self.opts.step_limit {
+                        let reason = format!(
+                            "livelock: {} zero-delay timers fired at t={} s without time advancing (a loop whose \
+                             tasks end at once?)",
+                            timers - 1,
+                            self.now
+                        );
+                        self.end(Outcome::Stuck, Some(reason), out);
+                        return;
+                    }
                     if let Some(t) = self.pop_due_timer() {
                         self.fire(t, out);
                     }
@@ -1067,5 +1082,25 @@ mod tests {
         let out = p.start(0.0);
         assert_eq!(out.len(), 11);
         assert_eq!(p.outcome(), Some(Outcome::Stuck));
+    }
+
+    /// A loop through a zero-delay timer (each call's `release`) never
+    /// leaves the instant: it is a livelock too, not an endless run.
+    #[test]
+    fn zero_delay_loop_is_stuck() {
+        let mut b = NetBuilder::new("m");
+        let p0 = b.add_place(Place::new("p").with_tokens(1));
+        let q = b.add_place(Place::new("q"));
+        let t0 = b.add_transition(Transition::new("t0"));
+        let t1 = b.add_transition(Transition::new("t1").with_kind(TransitionKind::Timed(Delay::Fixed(0.0))));
+        b.add_input(p0, t0, 1).add_output(t0, q, 1).add_input(q, t1, 1).add_output(t1, p0, 1);
+        let mut p = Player::new(Arc::new(b.build().unwrap()), PlayerOptions { step_limit: 10, ..Default::default() });
+        let out = p.start(0.0);
+        assert_eq!(p.outcome(), Some(Outcome::Stuck));
+        let reason = out.iter().find_map(|o| match o {
+            Output::Outcome { reason, .. } => reason.clone(),
+            _ => None,
+        });
+        assert!(reason.is_some_and(|r| r.contains("zero-delay timers")), "{out:?}");
     }
 }

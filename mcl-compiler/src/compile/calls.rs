@@ -32,6 +32,10 @@ pub struct CallNodes {
     pub task: String,
     /// The call's label (`Task( ... ) : label`), if any.
     pub label: Option<String>,
+    /// Where the call sits, when that changes what a mock vehicle answers
+    /// by default (`monitor_condition`, `while_condition`,
+    /// `negated_while_condition`; [`mcl_net::CallBinding::role`]).
+    pub role: Option<String>,
     /// Where the parent puts the token that starts the call (the waiting place).
     pub begin: PlaceId,
     /// Where the parent puts the token that aborts the call.
@@ -103,6 +107,7 @@ pub fn call_nodes(net: &Net) -> Vec<CallNodes> {
             call_site: b.call_site,
             task: b.task.clone(),
             label: b.label.clone(),
+            role: b.role.clone(),
             begin,
             abort_place,
             run,

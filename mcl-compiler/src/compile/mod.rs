@@ -227,6 +227,10 @@ impl Composer<'_> {
             let saved = self.role;
             match (&s, i) {
                 (Structure::While, 0) => self.role = Some("while_condition"),
+                // A test: either answer is normal (mcl-coord's nominal runs).
+                (Structure::IfThen | Structure::IfThenElse, 0) if self.role.is_none() => {
+                    self.role = Some("if_condition")
+                }
                 (Structure::Monitor(_), i) if i % 2 == 1 => self.role = Some("monitor_condition"),
                 // Under an odd number of `not`s, a call that fails keeps the loop going.
                 (Structure::Not, _) => {
