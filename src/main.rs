@@ -86,78 +86,7 @@ enum Command {
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
     /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
     /// 3 mission stuck or time limit passed.
-    Run {
-        /// The mission: an .mcl or .pnml file.
-        file: PathBuf,
-        /// Play against the in-process mock vehicle.
-        #[arg(long)]
-        mock: bool,
-        /// Play against the AAC listening at HOST:PORT.
-        #[arg(long, value_name = "HOST:PORT")]
-        aac: Option<String>,
-        /// Shared secret for the AAC.
-        #[arg(long)]
-        token: Option<String>,
-        /// How the mock vehicle answers (TOML, see docs/scenarios.md).
-        #[arg(long, value_name = "FILE")]
-        scenario: Option<PathBuf>,
-        /// Seed of the random choices (default: the scenario's seed, else 0).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Run in virtual time: deterministic and instantaneous (needs --mock).
-        #[arg(long)]
-        virtual_time: bool,
-        /// Mission time runs FACTOR times faster than real time (with --aac, only for a mock AAC run with the same --speed).
-        #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
-        speed: f64,
-        /// Write the trace here (JSON lines).
-        #[arg(long, value_name = "FILE")]
-        trace: Option<PathBuf>,
-        /// Write an SVG chronogram of the run here.
-        #[arg(long, value_name = "FILE")]
-        chronogram: Option<PathBuf>,
-        /// Journal every firing and received event here, to --resume after a crash.
-        #[arg(long, value_name = "FILE")]
-        journal: Option<PathBuf>,
-        /// Resume the run journaled in FILE (and keep journaling there).
-        #[arg(long, value_name = "FILE")]
-        resume: Option<PathBuf>,
-        /// Give a symbolic argument a value, e.g. --set timeout=60 (repeatable).
-        #[arg(long, value_name = "NAME=VALUE")]
-        set: Vec<String>,
-        /// Stop (exit status 3) when mission time passes SECONDS (virtual time: 86400 unless given; `inf`: no limit).
-        #[arg(long, value_name = "SECONDS")]
-        time_limit: Option<f64>,
-        /// Run only this mission of a file that defines several (default: all of them
-        /// coordinated with --mock, the first with --aac).
-        #[arg(long, value_name = "NAME")]
-        mission: Option<String>,
-        /// How coordinated vehicles exchange messages (several missions with --mock).
-        #[arg(long, value_enum, default_value = "in-process")]
-        transport: cmd::run::Transport,
-        /// Host the TCP transport's listeners bind to (one free port per vehicle).
-        #[arg(long, value_name = "HOST", default_value = "127.0.0.1")]
-        coord_host: String,
-        /// Run only this vehicle (mission) of a coordinated file, in this process, over TCP with
-        /// the others (--coord-listen, --coord-peer; real time).
-        #[arg(long, value_name = "NAME")]
-        vehicle: Option<String>,
-        /// With --vehicle: the address this vehicle listens on for coordination messages.
-        #[arg(long, value_name = "HOST:PORT")]
-        coord_listen: Option<String>,
-        /// With --vehicle: where another vehicle of the file listens (repeatable).
-        #[arg(long, value_name = "NAME=HOST:PORT")]
-        coord_peer: Vec<String>,
-        /// No live log.
-        #[arg(short, long)]
-        quiet: bool,
-        /// Also log every firing and timer.
-        #[arg(short, long)]
-        verbose: bool,
-        /// Test hook: abort after N journal syncs, as a crash would.
-        #[arg(long, hide = true)]
-        crash_after: Option<u64>,
-    },
+    Run(cmd::run::Options),
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
         /// A JSONL trace.
@@ -388,55 +317,7 @@ fn main() -> ExitCode {
                 quiet,
             }),
         }),
-        Command::Run {
-            file,
-            mock,
-            aac,
-            token,
-            scenario,
-            seed,
-            virtual_time,
-            speed,
-            trace,
-            chronogram,
-            journal,
-            resume,
-            set,
-            time_limit,
-            mission,
-            quiet,
-            verbose,
-            crash_after,
-            transport,
-            coord_host,
-            vehicle,
-            coord_listen,
-            coord_peer,
-        } => cmd::run::run(cmd::run::Options {
-            file,
-            mock,
-            aac,
-            token,
-            scenario,
-            seed,
-            virtual_time,
-            speed,
-            trace,
-            chronogram,
-            journal,
-            resume,
-            set,
-            time_limit,
-            mission,
-            quiet,
-            verbose,
-            crash_after,
-            transport,
-            coord_host,
-            vehicle,
-            coord_listen,
-            coord_peer,
-        }),
+        Command::Run(o) => cmd::run::run(o),
         Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {
                 net,

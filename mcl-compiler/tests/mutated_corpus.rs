@@ -12,6 +12,7 @@
 //! stays within a couple of seconds.
 
 use mcl_compiler::{check_file, Database};
+use mcl_syntax::gen::MUTATION_PIECES as PIECES;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use std::path::{Path, PathBuf};
@@ -38,62 +39,6 @@ fn corpus() -> Vec<(String, String)> {
     assert!(out.len() > 20, "the corpus is there: {}", out.len());
     out
 }
-
-/// Pieces inserted by mutations: keywords, delimiters, separators, a BOM.
-const PIECES: &[&str] = &[
-    "{",
-    "}",
-    "(",
-    ")",
-    "[",
-    "]",
-    ";",
-    ":",
-    ",",
-    ".",
-    "=",
-    "->",
-    "\"",
-    "/*",
-    "*/",
-    "//",
-    "mission",
-    "mission :",
-    "mcl_plan_op",
-    "import",
-    "tasks",
-    "pattern",
-    "actions",
-    "events",
-    "constraints",
-    "places",
-    "transitions",
-    "arcs",
-    "if",
-    "then",
-    "else",
-    "while",
-    "do",
-    "parallel",
-    "and",
-    "or",
-    "try",
-    "catch",
-    "not",
-    "monitor",
-    "condition",
-    "while_condition",
-    "mutex",
-    "order",
-    "sync",
-    "Void()",
-    "x",
-    "0",
-    "-1.5",
-    "é",
-    "\u{feff}",
-    "\n",
-];
 
 #[derive(Clone, Debug)]
 enum Mutation {

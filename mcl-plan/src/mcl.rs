@@ -3,11 +3,11 @@
 //! everything it imports), and the check that every `:mcl` call of a domain
 //! names one of them with the right number of arguments.
 
+use crate::model::McProgram;
 use crate::pddl::Domain;
 use crate::sexpr::Error;
 use mcl_syntax::ast::{Item, MissionKind};
 use mcl_syntax::span::LineIndex;
-use mcl_syntax::Severity;
 use std::path::{Path, PathBuf};
 
 /// A parametrised mission or mission operator of an .mcl program.
@@ -22,60 +22,29 @@ pub struct MclOperator {
 }
 
 /// Reads the mission operators of `path` and of the files it imports
-/// (transitively, each once). Syntax errors and unreadable files are errors.
+/// (transitively, each once: [`McProgram::load`]). Syntax errors and
+/// unreadable files are errors (`file:line:column: message`).
 pub fn load_operators(path: &Path) -> Result<Vec<MclOperator>, Vec<String>> {
+    let program = McProgram::load(path).map_err(|es| es.iter().map(ToString::to_string).collect::<Vec<_>>())?;
     let mut out = Vec::new();
-    let mut errors = Vec::new();
-    let mut seen: Vec<PathBuf> = Vec::new();
-    let mut todo = vec![path.to_path_buf()];
-    while let Some(p) = todo.pop() {
-        let key = p.canonicalize().unwrap_or_else(|_| p.clone());
-        if seen.contains(&key) {
-            continue;
-        }
-        seen.push(key);
-        let text = match std::fs::read_to_string(&p) {
-            Ok(t) => t,
-            Err(e) => {
-                errors.push(format!("{}: cannot read: {e}", p.display()));
-                continue;
-            }
-        };
-        let parsed = mcl_syntax::parse(&text);
-        let index = LineIndex::new(&text);
-        for d in parsed.errors.iter().filter(|d| d.severity == Severity::Error) {
-            let lc = index.line_col(&text, d.span.start as usize);
-            errors.push(format!("{}:{}:{}: {}", p.display(), lc.line, lc.column, d.message));
-        }
-        for item in &parsed.file.items {
-            match item {
-                Item::Import(i) => {
-                    let dir = p.parent().unwrap_or(Path::new("."));
-                    todo.push(dir.join(&i.path));
-                }
-                Item::Mission(m) => {
-                    if let Some(name) = &m.name {
-                        // A named mission with no parameter list (`mission : auv`) is not an operator.
-                        if m.kind == MissionKind::PlanOp || !m.params.is_empty() || is_parametrised(&text, m) {
-                            out.push(MclOperator {
-                                name: name.text.clone(),
-                                params: m.params.iter().map(|n| n.text.clone()).collect(),
-                                plan_op: m.kind == MissionKind::PlanOp,
-                                file: p.clone(),
-                                line: index.line_col(&text, name.span.start as usize).line as usize,
-                            });
-                        }
-                    }
-                }
-                _ => {}
+    for f in &program.files {
+        let index = LineIndex::new(&f.text);
+        for item in &f.items {
+            let Item::Mission(m) = item else { continue };
+            let Some(name) = &m.name else { continue };
+            // A named mission with no parameter list (`mission : auv`) is not an operator.
+            if m.kind == MissionKind::PlanOp || !m.params.is_empty() || is_parametrised(&f.text, m) {
+                out.push(MclOperator {
+                    name: name.text.clone(),
+                    params: m.params.iter().map(|n| n.text.clone()).collect(),
+                    plan_op: m.kind == MissionKind::PlanOp,
+                    file: f.path.clone(),
+                    line: index.line_col(&f.text, name.span.start as usize).line as usize,
+                });
             }
         }
     }
-    if errors.is_empty() {
-        Ok(out)
-    } else {
-        Err(errors)
-    }
+    Ok(out)
 }
 
 /// `mission Name()` (empty parameter list) versus `mission : name`.

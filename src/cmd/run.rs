@@ -24,37 +24,79 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Options of `mcl run`.
-#[derive(Debug, Default)]
+/// Options of `mcl run` (its command-line arguments).
+#[derive(Debug, Default, clap::Args)]
 pub struct Options {
+    /// The mission: an .mcl or .pnml file.
     pub file: PathBuf,
+    /// Play against the in-process mock vehicle.
+    #[arg(long)]
     pub mock: bool,
+    /// Play against the AAC listening at HOST:PORT.
+    #[arg(long, value_name = "HOST:PORT")]
     pub aac: Option<String>,
+    /// Shared secret for the AAC.
+    #[arg(long)]
     pub token: Option<String>,
+    /// How the mock vehicle answers (TOML, see docs/scenarios.md).
+    #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
+    /// Seed of the random choices (default: the scenario's seed, else 0).
+    #[arg(long)]
     pub seed: Option<u64>,
+    /// Run in virtual time: deterministic and instantaneous (needs --mock).
+    #[arg(long)]
     pub virtual_time: bool,
+    /// Mission time runs FACTOR times faster than real time (with --aac, only for a mock AAC run with the same --speed).
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
     pub speed: f64,
+    /// Write the trace here (JSON lines).
+    #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
+    /// Write an SVG chronogram of the run here.
+    #[arg(long, value_name = "FILE")]
     pub chronogram: Option<PathBuf>,
+    /// Journal every firing and received event here, to --resume after a crash.
+    #[arg(long, value_name = "FILE")]
     pub journal: Option<PathBuf>,
+    /// Resume the run journaled in FILE (and keep journaling there).
+    #[arg(long, value_name = "FILE")]
     pub resume: Option<PathBuf>,
+    /// Give a symbolic argument a value, e.g. --set timeout=60 (repeatable).
+    #[arg(long, value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// Stop (exit status 3) when mission time passes SECONDS (virtual time: 86400 unless given; `inf`: no limit).
+    #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+    /// Run only this mission of a file that defines several (default: all of them
+    /// coordinated with --mock, the first with --aac).
+    #[arg(long, value_name = "NAME")]
     pub mission: Option<String>,
-    pub quiet: bool,
-    pub verbose: bool,
-    pub crash_after: Option<u64>,
-    /// Coordination transport of a multi-vehicle run.
+    /// How coordinated vehicles exchange messages (several missions with --mock).
+    #[arg(long, value_enum, default_value = "in-process")]
     pub transport: Transport,
-    /// Host the TCP transport listens on.
+    /// Host the TCP transport's listeners bind to (one free port per vehicle).
+    #[arg(long, value_name = "HOST", default_value = "127.0.0.1")]
     pub coord_host: String,
-    /// Run only this vehicle of a coordinated file (others in other processes).
+    /// Run only this vehicle (mission) of a coordinated file, in this process, over TCP with
+    /// the others (--coord-listen, --coord-peer; real time).
+    #[arg(long, value_name = "NAME")]
     pub vehicle: Option<String>,
-    /// With `vehicle`: the address it listens on.
+    /// With --vehicle: the address this vehicle listens on for coordination messages.
+    #[arg(long, value_name = "HOST:PORT")]
     pub coord_listen: Option<String>,
-    /// With `vehicle`: `NAME=HOST:PORT` of the other vehicles.
+    /// With --vehicle: where another vehicle of the file listens (repeatable).
+    #[arg(long, value_name = "NAME=HOST:PORT")]
     pub coord_peer: Vec<String>,
+    /// No live log.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Also log every firing and timer.
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// Test hook: abort after N journal syncs, as a crash would.
+    #[arg(long, hide = true)]
+    pub crash_after: Option<u64>,
 }
 
 /// How the vehicles of a coordinated run exchange messages.
