@@ -862,8 +862,9 @@ fn verify_mode(
             quots: vs.iter().map(|&v| &quots[v]).collect(),
             can_end: vs.iter().map(|&v| can_end[v]).collect(),
             whole: groups.len() == 1,
+            rules: &rules,
         };
-        match verify_group(&g, plant, &effects, sups, snet, &rules, opts, &mut stats) {
+        match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
             GroupOutcome::Verified => {}
             GroupOutcome::Problems(ws) => witnesses.extend(ws),
             GroupOutcome::Unknown(r) => {
@@ -929,6 +930,8 @@ struct Group<'a> {
     can_end: Vec<bool>,
     /// The group holds every vehicle.
     whole: bool,
+    /// What a replay of its counterexamples applies.
+    rules: &'a ReplayRules<'a>,
 }
 
 enum GroupOutcome {
@@ -943,10 +946,10 @@ fn verify_group(
     effects_all: &[Effect],
     sups_all: &[Supervisor],
     snet: &Net,
-    rules: &ReplayRules<'_>,
     opts: &VerifyOptions,
     stats: &mut VerifyStats,
 ) -> GroupOutcome {
+    let rules = grp.rules;
     let sups: Vec<&Supervisor> = grp.sups.iter().map(|&k| &sups_all[k]).collect();
     // Supervisor indices local to the group.
     let mut local = vec![usize::MAX; sups_all.len()];
