@@ -13,8 +13,10 @@ use crate::ast::*;
 use crate::diag::{codes, Diagnostic};
 use crate::lexer::{lex, unescape, Comment, Kw, Token};
 use crate::span::Span;
+use chumsky::cache::{Cache, Cached};
 use chumsky::error::{RichPattern, RichReason};
 use chumsky::input::{Input as _, MappedInput, ValueInput};
+use chumsky::inspector::SimpleState;
 use chumsky::prelude::*;
 
 /// The result of parsing one file: always a tree, plus comments and errors.
@@ -214,9 +216,19 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
         input.push((Token::Kw(k), SimpleSpan::from(len..end)));
     }
     let eoi = SimpleSpan::from(end..end);
-    let limit = next.map(|_| len);
-    let (file, parse_errors) =
-        item_parser(limit).parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
+    // The parser reads the limit from its state: one grammar, built once per
+    // thread, serves every item and file.
+    let mut limit = SimpleState(if next.is_some() { len } else { usize::MAX });
+    let tokens: &[(Token<'_>, SimpleSpan)] = &input;
+    let (file, parse_errors) = GRAMMAR
+        .with(|g| {
+            let stream = token_stream(tokens, eoi);
+            match next {
+                Some(_) => g.1.get().parse_with_state(stream, &mut limit),
+                None => g.0.get().parse_with_state(stream, &mut limit),
+            }
+        })
+        .into_output_errors();
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
     // What a too-deep construct left (an opener and its closer, a keyword)
     // does not parse: those errors are follow-ups of the nesting error.
@@ -563,7 +575,34 @@ type In<'t, 's> = MappedInput<
     &'t [(Token<'s>, SimpleSpan)],
     fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan),
 >;
-type Extra<'t, 's> = extra::Err<Rich<'t, Token<'s>, SimpleSpan>>;
+/// The parser's state is where the current item ends (`usize::MAX` for a
+/// whole file): the keyword of the next item that follows is not parsed.
+type Extra<'t, 's> = extra::Full<Rich<'t, Token<'s>, SimpleSpan>, SimpleState<usize>, ()>;
+
+/// The parser's input. One lifetime: [`In`] is invariant in the tokens'
+/// lifetime, and the cached grammar is used with `In<'t, 't>`.
+fn token_stream<'t>(tokens: &'t [(Token<'t>, SimpleSpan)], eoi: SimpleSpan) -> In<'t, 't> {
+    tokens.map(eoi, |(t, s)| (t, s))
+}
+
+/// The grammar of a whole file (`ITEM = false`) or of one item followed by
+/// the next one's keyword (`ITEM = true`), for any input lifetime: building
+/// it allocates hundreds of boxed combinators, so each thread builds it once
+/// ([`GRAMMAR`]) instead of once per item.
+#[derive(Default)]
+struct Grammar<const ITEM: bool>;
+
+impl<const ITEM: bool> Cached for Grammar<ITEM> {
+    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Extra<'t, 't>>;
+
+    fn make_parser<'t>(self) -> Self::Parser<'t> {
+        item_parser(ITEM)
+    }
+}
+
+thread_local! {
+    static GRAMMAR: (Cache<Grammar<false>>, Cache<Grammar<true>>) = (Cache::default(), Cache::default());
+}
 
 /// Custom errors carry their code and help in the message, separated by `\u{1}`.
 fn custom(code: &str, msg: impl std::fmt::Display, help: &str) -> String {
@@ -892,7 +931,7 @@ where
 
 /// The grammar of a file; with `Some(limit)`, of one item followed by the
 /// keyword of the next one (at `limit`), which is not parsed.
-fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
+fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFile, Extra<'t, 's>> {
     // import "path";
     let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
     // A missing `;` is one error after the path, and the import is kept (so
@@ -1296,9 +1335,14 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         })
         .to(None);
     let before_limit = any()
-        .try_map(move |_, span: SimpleSpan| match limit {
-            Some(l) if span.start >= l => Err(Rich::custom(span, "")),
-            _ => Ok(()),
+        .try_map_with(|_, e| {
+            let span: SimpleSpan = e.span();
+            let limit: &mut SimpleState<usize> = e.state();
+            if span.start >= **limit {
+                Err(Rich::custom(span, ""))
+            } else {
+                Ok(())
+            }
         })
         .rewind();
     let items = before_limit
@@ -1306,9 +1350,10 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .repeated()
         .collect::<Vec<Option<Item>>>()
         .map(|v| SourceFile { items: v.into_iter().flatten().collect() });
-    match limit {
-        None => items.then_ignore(end()).boxed(),
-        Some(_) => items.then_ignore(any()).then_ignore(end()).boxed(),
+    if one_item {
+        items.then_ignore(any()).then_ignore(end()).boxed()
+    } else {
+        items.then_ignore(end()).boxed()
     }
 }
 
