@@ -14,9 +14,10 @@ use crate::diag::{codes, Diagnostic};
 use crate::lexer::{lex, unescape, Comment, Kw, Token};
 use crate::span::Span;
 use chumsky::cache::{Cache, Cached};
-use chumsky::error::{RichPattern, RichReason};
-use chumsky::input::{Input as _, MappedInput, ValueInput};
+use chumsky::error::{EmptyErr, RichPattern, RichReason};
+use chumsky::input::{Input, MappedInput, ValueInput};
 use chumsky::inspector::SimpleState;
+use chumsky::label::LabelError;
 use chumsky::prelude::*;
 
 /// The result of parsing one file: always a tree, plus comments and errors.
@@ -220,15 +221,21 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
     // thread, serves every item and file.
     let mut limit = SimpleState(if next.is_some() { len } else { usize::MAX });
     let tokens: &[(Token<'_>, SimpleSpan)] = &input;
-    let (file, parse_errors) = GRAMMAR
-        .with(|g| {
-            let stream = token_stream(tokens, eoi);
-            match next {
-                Some(_) => g.1.get().parse_with_state(stream, &mut limit),
-                None => g.0.get().parse_with_state(stream, &mut limit),
-            }
-        })
-        .into_output_errors();
+    let (file, parse_errors) = GRAMMAR.with(|g| {
+        let quick = match next {
+            Some(_) => g.quick_item.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+            None => g.quick_file.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+        };
+        if !quick.has_errors() {
+            return (quick.into_output(), Vec::new());
+        }
+        let stream = token_stream(tokens, eoi);
+        match next {
+            Some(_) => g.item.get().parse_with_state(stream, &mut limit),
+            None => g.file.get().parse_with_state(stream, &mut limit),
+        }
+        .into_output_errors()
+    });
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
     // What a too-deep construct left (an opener and its closer, a keyword)
     // does not parse: those errors are follow-ups of the nesting error.
@@ -575,9 +582,29 @@ type In<'t, 's> = MappedInput<
     &'t [(Token<'s>, SimpleSpan)],
     fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan),
 >;
-/// The parser's state is where the current item ends (`usize::MAX` for a
-/// whole file): the keyword of the next item that follows is not parsed.
-type Extra<'t, 's> = extra::Full<Rich<'t, Token<'s>, SimpleSpan>, SimpleState<usize>, ()>;
+/// The parser's extra types: its errors `R` (rich, or [`EmptyErr`] for the
+/// quick pass), and its state, where the current item ends (`usize::MAX` for
+/// a whole file): the keyword of the next item that follows is not parsed.
+type Ex<R> = extra::Full<R, SimpleState<usize>, ()>;
+
+/// The errors the grammar can produce: [`Rich`] ones, or none at all
+/// ([`EmptyErr`]: only whether an error happened).
+trait Fail<'t, I: Input<'t>>: chumsky::error::Error<'t, I> + LabelError<'t, I, &'static str> + 't {
+    /// An error with a message (see [`custom`]).
+    fn custom(span: SimpleSpan, msg: String) -> Self;
+}
+
+impl<'t, 's: 't, I: Input<'t, Token = Token<'s>, Span = SimpleSpan>> Fail<'t, I> for Rich<'t, Token<'s>, SimpleSpan> {
+    fn custom(span: SimpleSpan, msg: String) -> Self {
+        Rich::custom(span, msg)
+    }
+}
+
+impl<'t, I: Input<'t>> Fail<'t, I> for EmptyErr {
+    fn custom(_: SimpleSpan, _: String) -> Self {
+        EmptyErr::default()
+    }
+}
 
 /// The parser's input. One lifetime: [`In`] is invariant in the tokens'
 /// lifetime, and the cached grammar is used with `In<'t, 't>`.
@@ -593,15 +620,43 @@ fn token_stream<'t>(tokens: &'t [(Token<'t>, SimpleSpan)], eoi: SimpleSpan) -> I
 struct Grammar<const ITEM: bool>;
 
 impl<const ITEM: bool> Cached for Grammar<ITEM> {
-    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Extra<'t, 't>>;
+    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Ex<Rich<'t, Token<'t>, SimpleSpan>>>;
 
     fn make_parser<'t>(self) -> Self::Parser<'t> {
         item_parser(ITEM)
     }
 }
 
+/// The same grammar without error reporting. Most texts have no syntax
+/// error: the quick pass gives their tree without building an error for
+/// every alternative tried; a text with an error is parsed again with
+/// [`Grammar`] (the tree is the same whenever no error was emitted: error
+/// recovery only runs after an error).
+#[derive(Default)]
+struct QuickGrammar<const ITEM: bool>;
+
+impl<const ITEM: bool> Cached for QuickGrammar<ITEM> {
+    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Ex<EmptyErr>>;
+
+    fn make_parser<'t>(self) -> Self::Parser<'t> {
+        item_parser(ITEM)
+    }
+}
+
+struct Grammars {
+    file: Cache<Grammar<false>>,
+    item: Cache<Grammar<true>>,
+    quick_file: Cache<QuickGrammar<false>>,
+    quick_item: Cache<QuickGrammar<true>>,
+}
+
 thread_local! {
-    static GRAMMAR: (Cache<Grammar<false>>, Cache<Grammar<true>>) = (Cache::default(), Cache::default());
+    static GRAMMAR: Grammars = Grammars {
+        file: Cache::default(),
+        item: Cache::default(),
+        quick_file: Cache::default(),
+        quick_item: Cache::default(),
+    };
 }
 
 /// Custom errors carry their code and help in the message, separated by `\u{1}`.
@@ -609,39 +664,47 @@ fn custom(code: &str, msg: impl std::fmt::Display, help: &str) -> String {
     format!("{code}\u{1}{msg}\u{1}{help}")
 }
 
-fn name<'t, 's: 't, I>() -> impl Parser<'t, I, Name, Extra<'t, 's>> + Clone
+fn name<'t, 's: 't, I, R>() -> impl Parser<'t, I, Name, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Ident(s) = e => Name { text: s.to_string(), span: Span::from(e.span()) } }.labelled("identifier")
 }
 
-fn number<'t, 's: 't, I>() -> impl Parser<'t, I, Number, Extra<'t, 's>> + Clone
+fn number<'t, 's: 't, I, R>() -> impl Parser<'t, I, Number, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Num(s) = e => Number { text: s.to_string(), span: Span::from(e.span()) } }.labelled("number")
 }
 
 /// A contextual word lexed as an identifier, e.g. `c`, `v`, `a`, `e`, `mutex`.
-fn word<'t, 's: 't, I>(w: &'static str, label: &'static str) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+fn word<'t, 's: 't, I, R>(
+    w: &'static str,
+    label: &'static str,
+) -> impl Parser<'t, I, Span, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Ident(s) = e if s == w => Span::from(e.span()) }.labelled(label)
 }
 
-fn kw<'t, 's: 't, I>(k: Kw) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+fn kw<'t, 's: 't, I, R>(k: Kw) -> impl Parser<'t, I, Span, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     just(Token::Kw(k)).map_with(|_, e| Span::from(e.span()))
 }
 
 /// Any balanced token tree: a delimited group or a single non-delimiter token.
-fn token_tree<'t, 's: 't, I>() -> impl Parser<'t, I, (), Extra<'t, 's>> + Clone
+fn token_tree<'t, 's: 't, I, R>() -> impl Parser<'t, I, (), Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|tt| {
         let group = |o: Token<'static>, c: Token<'static>| tt.clone().repeated().delimited_by(just(o), just(c));
@@ -659,11 +722,10 @@ where
 
 /// `p` repeated inside a braced list of `;`-terminated definitions. A broken
 /// definition is skipped up to and including its `;` (or up to the `}`).
-fn semi_list<'t, 's: 't, I, T>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
-) -> impl Parser<'t, I, Vec<T>, Extra<'t, 's>> + Clone
+fn semi_list<'t, 's: 't, I, R, T>(p: impl Parser<'t, I, T, Ex<R>> + Clone + 't) -> Boxed<'t, 't, I, Vec<T>, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
     T: 't,
 {
     let skip = token_tree()
@@ -685,12 +747,13 @@ where
 }
 
 /// `{ ... }` whose contents, if they fail to parse, become `fallback`.
-fn braced<'t, 's: 't, I, T: 't>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
+fn braced<'t, 's: 't, I, R, T: 't>(
+    p: impl Parser<'t, I, T, Ex<R>> + Clone + 't,
     fallback: impl Fn() -> T + Clone + 't,
-) -> impl Parser<'t, I, T, Extra<'t, 's>> + Clone
+) -> Boxed<'t, 't, I, T, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     p.delimited_by(just(Token::LBrace), just(Token::RBrace))
         .recover_with(via_parser(
@@ -702,9 +765,10 @@ where
         .boxed()
 }
 
-fn value<'t, 's: 't, I>() -> impl Parser<'t, I, Value, Extra<'t, 's>> + Clone
+fn value<'t, 's: 't, I, R>() -> impl Parser<'t, I, Value, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|value| {
         let list = value
@@ -761,12 +825,13 @@ const STMT_STOP: [Token<'static>; 7] = [
 /// `{ ... }` groups), never further and never less.
 const CLOSERS: [Token<'static>; 3] = [Token::RBrace, Token::RParen, Token::RBracket];
 
-fn block<'t, 's: 't, I>(
-    stmt: impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone + 't,
+fn block<'t, 's: 't, I, R>(
+    stmt: impl Parser<'t, I, Stmt, Ex<R>> + Clone + 't,
     stops: &'static [Token<'static>],
-) -> impl Parser<'t, I, Block, Extra<'t, 's>> + Clone
+) -> Boxed<'t, 't, I, Block, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     // A statement that fails is skipped up to the next `;` or stop token.
     let skip = token_tree().and_is(none_of([Token::Semi]).ignored()).and_is(none_of(stops).ignored()).repeated();
@@ -780,7 +845,7 @@ where
     item.repeated().collect::<Vec<(Stmt, Option<Span>)>>().validate(|items, e, emitter| {
         let span = Span::from(e.span());
         if items.is_empty() {
-            emitter.emit(Rich::custom(
+            emitter.emit(R::custom(
                 e.span(),
                 custom(codes::EMPTY_BLOCK, "expected a statement", "a block holds at least one task call or control structure; use `Void()` for a task that does nothing"),
             ));
@@ -793,7 +858,7 @@ where
             // Only between two statements that parsed: after or before a
             // broken one, the error already reported is enough.
             if i + 1 < n && semi.is_none() && s.kind != StmtKind::Error && next_ok[i] {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     SimpleSpan::from(s.span.end as usize..s.span.end as usize),
                     custom(codes::UNEXPECTED_TOKEN, "expected `;` between two statements", "`;` runs the statement before it, then the statement after it"),
                 ));
@@ -805,9 +870,10 @@ where
     .boxed()
 }
 
-fn stmt<'t, 's: 't, I>() -> impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone
+fn stmt<'t, 's: 't, I, R>() -> impl Parser<'t, I, Stmt, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|stmt| {
         let bare_block = block(stmt.clone().boxed(), &STMT_STOP).boxed();
@@ -931,7 +997,7 @@ where
 
 /// The grammar of a file; with `Some(limit)`, of one item followed by the
 /// keyword of the next one (at `limit`), which is not parsed.
-fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFile, Extra<'t, 's>> {
+fn item_parser<'t, 's: 't, R: Fail<'t, In<'t, 's>>>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFile, Ex<R>> {
     // import "path";
     let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
     // A missing `;` is one error after the path, and the import is kept (so
@@ -939,7 +1005,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
     let import = kw(Kw::Import).then(string).then(just(Token::Semi).or_not()).validate(
         |((_, (path, path_span)), semi), e, emitter| {
             if semi.is_none() {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     SimpleSpan::from(path_span.end as usize..path_span.end as usize),
                     custom(
                         codes::UNEXPECTED_TOKEN,
@@ -971,7 +1037,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
             for a in args {
                 match a {
                     ActionArg::Command(c) if command.is_none() => command = Some(c),
-                    ActionArg::Command(c) => emitter.emit(Rich::custom(
+                    ActionArg::Command(c) => emitter.emit(R::custom(
                         SimpleSpan::from(c.span.range()),
                         custom(
                             codes::MISSING_COMMAND,
@@ -983,7 +1049,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
                 }
             }
             if command.is_none() {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     e.span(),
                     custom(
                         codes::MISSING_COMMAND,
@@ -1185,7 +1251,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
             token_tree().and_is(none_of([Token::LBrace]).ignored()).and_is(starts_item.not()).repeated().at_least(1),
         )
         .validate(|(t, span), _, emitter| {
-            emitter.emit(Rich::custom(span, custom(codes::UNEXPECTED_TOKEN, format!("expected `{{`, found {t}"), "")));
+            emitter.emit(R::custom(span, custom(codes::UNEXPECTED_TOKEN, format!("expected `{{`, found {t}"), "")));
         });
     // Every part of the header is parsed as optional, and the combination
     // is checked afterwards: a malformed header is one error, and the
@@ -1198,7 +1264,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
                 Token::Kw(k) => k.as_str(),
                 _ => "",
             };
-            emitter.emit(Rich::custom(
+            emitter.emit(R::custom(
                 e.span(),
                 custom(
                     codes::UNEXPECTED_TOKEN,
@@ -1224,7 +1290,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
         .then(body.clone())
         .validate(|(((kind, keyword_span), (((colon, name), params), placement)), body), e, emitter| {
             let mut error = |span: Span, msg: &str, help: &str| {
-                emitter.emit(Rich::custom(SimpleSpan::from(span.range()), custom(codes::UNEXPECTED_TOKEN, msg, help)));
+                emitter.emit(R::custom(SimpleSpan::from(span.range()), custom(codes::UNEXPECTED_TOKEN, msg, help)));
             };
             let name_span = name.as_ref().map(|n: &Name| n.span);
             match kind {
@@ -1339,7 +1405,7 @@ fn item_parser<'t, 's: 't>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFi
             let span: SimpleSpan = e.span();
             let limit: &mut SimpleState<usize> = e.state();
             if span.start >= **limit {
-                Err(Rich::custom(span, ""))
+                Err(R::custom(span, String::new()))
             } else {
                 Ok(())
             }
@@ -1485,9 +1551,10 @@ fn lint_spellings(file: &SourceFile, out: &mut Vec<Diagnostic>) {
 
 /// Skips a broken definition of a planning block: up to and including its
 /// `;`, or its `{ ... }` group, never past the block's `}`.
-fn plan_skip<'t, 's: 't, I>() -> impl Parser<'t, I, (), Extra<'t, 's>> + Clone
+fn plan_skip<'t, 's: 't, I, R>() -> impl Parser<'t, I, (), Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     token_tree()
         .and_is(none_of([Token::RBrace]).ignored())
@@ -1498,11 +1565,10 @@ where
 }
 
 /// `p` repeated until the enclosing `}`, each failure skipped with [`plan_skip`].
-fn plan_list<'t, 's: 't, I, T: 't>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
-) -> impl Parser<'t, I, Vec<T>, Extra<'t, 's>> + Clone
+fn plan_list<'t, 's: 't, I, R, T: 't>(p: impl Parser<'t, I, T, Ex<R>> + Clone + 't) -> Boxed<'t, 't, I, Vec<T>, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     none_of([Token::RBrace])
         .rewind()
@@ -1514,9 +1580,10 @@ where
 }
 
 /// `( a, b, ... )`, possibly empty.
-fn plan_names<'t, 's: 't, I>() -> impl Parser<'t, I, Vec<Name>, Extra<'t, 's>> + Clone
+fn plan_names<'t, 's: 't, I, R>() -> impl Parser<'t, I, Vec<Name>, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     name()
         .separated_by(just(Token::Comma))
@@ -1527,9 +1594,10 @@ where
 }
 
 /// An operand: `l2.x`, `distance( a, b )`, `l1`, a number or a string.
-fn plan_operand<'t, 's: 't, I>() -> impl Parser<'t, I, PlanOperand, Extra<'t, 's>> + Clone
+fn plan_operand<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanOperand, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let string = select! { Token::Str(s) => ValueKind::Str(unescape(s)) }.labelled("string");
     let literal =
@@ -1546,9 +1614,10 @@ where
 }
 
 /// `Mission( arg, ... )`.
-fn plan_call<'t, 's: 't, I>() -> impl Parser<'t, I, PlanCall, Extra<'t, 's>> + Clone
+fn plan_call<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanCall, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     name()
         .then(
@@ -1564,9 +1633,10 @@ where
 }
 
 /// A fact `[not] subject relation [object]`.
-fn plan_fact<'t, 's: 't, I>() -> impl Parser<'t, I, PlanFact, Extra<'t, 's>> + Clone
+fn plan_fact<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanFact, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     kw(Kw::Not)
         .or_not()
@@ -1585,17 +1655,19 @@ where
 }
 
 /// `{ fact; ... }`
-fn plan_facts<'t, 's: 't, I>() -> impl Parser<'t, I, Vec<PlanFact>, Extra<'t, 's>> + Clone
+fn plan_facts<'t, 's: 't, I, R>() -> impl Parser<'t, I, Vec<PlanFact>, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     braced(semi_list(plan_fact()), Vec::new).boxed()
 }
 
 /// `planning { ... }`
-fn planning_item<'t, 's: 't, I>() -> impl Parser<'t, I, Item, Extra<'t, 's>> + Clone
+fn planning_item<'t, 's: 't, I, R>() -> impl Parser<'t, I, Item, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let end = just(Token::Semi).or_not().ignored();
     // type location { x; y; z; }  |  type robot;  |  type auv : robot;
@@ -1701,9 +1773,10 @@ where
 }
 
 /// `pddl_map { action( a, b ) -> Mission( b.x, 3 ); }`
-fn pddl_map_item<'t, 's: 't, I>() -> impl Parser<'t, I, Item, Extra<'t, 's>> + Clone
+fn pddl_map_item<'t, 's: 't, I, R>() -> impl Parser<'t, I, Item, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let mapping = name()
         .then(plan_names())
