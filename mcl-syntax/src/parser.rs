@@ -31,7 +31,7 @@ pub struct Parse {
 
 /// Parses a whole file. Never panics and never gives up.
 pub fn parse(src: &str) -> Parse {
-    parse_with(src, None)
+    parse_with(src, None, true)
 }
 
 /// The bounds of one top-level item of a file, as found by [`split_items`].
@@ -197,10 +197,12 @@ fn split_from(
 /// Parses one part of a file as cut by [`split_items`] (`src` is the part's
 /// text, `next` its `next`), with spans relative to the part's start.
 pub fn parse_item(src: &str, next: Option<(Kw, u32)>) -> Parse {
-    parse_with(src, next)
+    parse_with(src, next, true)
 }
 
-fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
+/// `quick`: try the quick pass first (always, but in a test that compares
+/// it with the rich pass alone).
+fn parse_with(src: &str, next: Option<(Kw, u32)>, quick: bool) -> Parse {
     let lexed = lex(src);
     let mut errors = lexed.errors;
     let why = if next.is_some() { "before the next item" } else { "at the end of the file" };
@@ -222,12 +224,14 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
     let mut limit = SimpleState(if next.is_some() { len } else { usize::MAX });
     let tokens: &[(Token<'_>, SimpleSpan)] = &input;
     let (file, parse_errors) = GRAMMAR.with(|g| {
-        let quick = match next {
-            Some(_) => g.quick_item.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
-            None => g.quick_file.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
-        };
-        if !quick.has_errors() {
-            return (quick.into_output(), Vec::new());
+        if quick {
+            let quick = match next {
+                Some(_) => g.quick_item.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+                None => g.quick_file.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+            };
+            if !quick.has_errors() {
+                return (quick.into_output(), Vec::new());
+            }
         }
         let stream = token_stream(tokens, eoi);
         match next {
@@ -1791,4 +1795,37 @@ where
             Item::PddlMap(PddlMapBlock { keyword_span, maps, span: Span::from(e.span()) })
         })
         .boxed()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quick pass gives the tree of the rich pass (and no error where
+    /// the rich pass finds none): on the examples, the malformed corpus and
+    /// generated programs, whole files and item by item.
+    #[test]
+    fn the_quick_pass_gives_the_rich_pass_tree() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut texts: Vec<String> = (0..4).map(|seed| crate::gen::program(400, seed)).collect();
+        for dir in [root.join("../examples"), root.join("../examples/planning"), root.join("tests/bad")] {
+            let mut paths: Vec<_> = std::fs::read_dir(&dir).expect("corpus").flatten().map(|e| e.path()).collect();
+            paths.sort();
+            for p in paths.iter().filter(|p| p.extension().is_some_and(|e| e == "mcl")) {
+                texts.push(std::fs::read_to_string(p).expect("readable"));
+            }
+        }
+        assert!(texts.len() > 20);
+        let mut without_errors = 0;
+        for text in &texts {
+            let rich = parse_with(text, None, false);
+            assert_eq!(parse_with(text, None, true), rich);
+            without_errors += usize::from(rich.errors.is_empty());
+            for b in split_items(text) {
+                let part = &text[b.start..b.end];
+                assert_eq!(parse_with(part, b.next, true), parse_with(part, b.next, false));
+            }
+        }
+        assert!(without_errors >= 8, "{without_errors} texts without errors");
+    }
 }
