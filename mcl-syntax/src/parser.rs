@@ -13,8 +13,11 @@ use crate::ast::*;
 use crate::diag::{codes, Diagnostic};
 use crate::lexer::{lex, unescape, Comment, Kw, Token};
 use crate::span::Span;
-use chumsky::error::{RichPattern, RichReason};
-use chumsky::input::{Input as _, MappedInput, ValueInput};
+use chumsky::cache::{Cache, Cached};
+use chumsky::error::{EmptyErr, RichPattern, RichReason};
+use chumsky::input::{Input, MappedInput, ValueInput};
+use chumsky::inspector::SimpleState;
+use chumsky::label::LabelError;
 use chumsky::prelude::*;
 
 /// The result of parsing one file: always a tree, plus comments and errors.
@@ -28,7 +31,7 @@ pub struct Parse {
 
 /// Parses a whole file. Never panics and never gives up.
 pub fn parse(src: &str) -> Parse {
-    parse_with(src, None)
+    parse_with(src, None, true)
 }
 
 /// The bounds of one top-level item of a file, as found by [`split_items`].
@@ -194,10 +197,12 @@ fn split_from(
 /// Parses one part of a file as cut by [`split_items`] (`src` is the part's
 /// text, `next` its `next`), with spans relative to the part's start.
 pub fn parse_item(src: &str, next: Option<(Kw, u32)>) -> Parse {
-    parse_with(src, next)
+    parse_with(src, next, true)
 }
 
-fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
+/// `quick`: try the quick pass first (always, but in a test that compares
+/// it with the rich pass alone).
+fn parse_with(src: &str, next: Option<(Kw, u32)>, quick: bool) -> Parse {
     let lexed = lex(src);
     let mut errors = lexed.errors;
     let why = if next.is_some() { "before the next item" } else { "at the end of the file" };
@@ -214,9 +219,27 @@ fn parse_with(src: &str, next: Option<(Kw, u32)>) -> Parse {
         input.push((Token::Kw(k), SimpleSpan::from(len..end)));
     }
     let eoi = SimpleSpan::from(end..end);
-    let limit = next.map(|_| len);
-    let (file, parse_errors) =
-        item_parser(limit).parse(input.as_slice().map(eoi, |(t, s)| (t, s))).into_output_errors();
+    // The parser reads the limit from its state: one grammar, built once per
+    // thread, serves every item and file.
+    let mut limit = SimpleState(if next.is_some() { len } else { usize::MAX });
+    let tokens: &[(Token<'_>, SimpleSpan)] = &input;
+    let (file, parse_errors) = GRAMMAR.with(|g| {
+        if quick {
+            let quick = match next {
+                Some(_) => g.quick_item.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+                None => g.quick_file.get().parse_with_state(token_stream(tokens, eoi), &mut limit),
+            };
+            if !quick.has_errors() {
+                return (quick.into_output(), Vec::new());
+            }
+        }
+        let stream = token_stream(tokens, eoi);
+        match next {
+            Some(_) => g.item.get().parse_with_state(stream, &mut limit),
+            None => g.file.get().parse_with_state(stream, &mut limit),
+        }
+        .into_output_errors()
+    });
     errors.extend(parse_errors.into_iter().map(rich_to_diagnostic));
     // What a too-deep construct left (an opener and its closer, a keyword)
     // does not parse: those errors are follow-ups of the nesting error.
@@ -563,46 +586,129 @@ type In<'t, 's> = MappedInput<
     &'t [(Token<'s>, SimpleSpan)],
     fn(&'t (Token<'s>, SimpleSpan)) -> (&'t Token<'s>, &'t SimpleSpan),
 >;
-type Extra<'t, 's> = extra::Err<Rich<'t, Token<'s>, SimpleSpan>>;
+/// The parser's extra types: its errors `R` (rich, or [`EmptyErr`] for the
+/// quick pass), and its state, where the current item ends (`usize::MAX` for
+/// a whole file): the keyword of the next item that follows is not parsed.
+type Ex<R> = extra::Full<R, SimpleState<usize>, ()>;
+
+/// The errors the grammar can produce: [`Rich`] ones, or none at all
+/// ([`EmptyErr`]: only whether an error happened).
+trait Fail<'t, I: Input<'t>>: chumsky::error::Error<'t, I> + LabelError<'t, I, &'static str> + 't {
+    /// An error with a message (see [`custom`]).
+    fn custom(span: SimpleSpan, msg: String) -> Self;
+}
+
+impl<'t, 's: 't, I: Input<'t, Token = Token<'s>, Span = SimpleSpan>> Fail<'t, I> for Rich<'t, Token<'s>, SimpleSpan> {
+    fn custom(span: SimpleSpan, msg: String) -> Self {
+        Rich::custom(span, msg)
+    }
+}
+
+impl<'t, I: Input<'t>> Fail<'t, I> for EmptyErr {
+    fn custom(_: SimpleSpan, _: String) -> Self {
+        EmptyErr::default()
+    }
+}
+
+/// The parser's input. One lifetime: [`In`] is invariant in the tokens'
+/// lifetime, and the cached grammar is used with `In<'t, 't>`.
+fn token_stream<'t>(tokens: &'t [(Token<'t>, SimpleSpan)], eoi: SimpleSpan) -> In<'t, 't> {
+    tokens.map(eoi, |(t, s)| (t, s))
+}
+
+/// The grammar of a whole file (`ITEM = false`) or of one item followed by
+/// the next one's keyword (`ITEM = true`), for any input lifetime: building
+/// it allocates hundreds of boxed combinators, so each thread builds it once
+/// ([`GRAMMAR`]) instead of once per item.
+#[derive(Default)]
+struct Grammar<const ITEM: bool>;
+
+impl<const ITEM: bool> Cached for Grammar<ITEM> {
+    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Ex<Rich<'t, Token<'t>, SimpleSpan>>>;
+
+    fn make_parser<'t>(self) -> Self::Parser<'t> {
+        item_parser(ITEM)
+    }
+}
+
+/// The same grammar without error reporting. Most texts have no syntax
+/// error: the quick pass gives their tree without building an error for
+/// every alternative tried; a text with an error is parsed again with
+/// [`Grammar`] (the tree is the same whenever no error was emitted: error
+/// recovery only runs after an error).
+#[derive(Default)]
+struct QuickGrammar<const ITEM: bool>;
+
+impl<const ITEM: bool> Cached for QuickGrammar<ITEM> {
+    type Parser<'t> = Boxed<'t, 't, In<'t, 't>, SourceFile, Ex<EmptyErr>>;
+
+    fn make_parser<'t>(self) -> Self::Parser<'t> {
+        item_parser(ITEM)
+    }
+}
+
+struct Grammars {
+    file: Cache<Grammar<false>>,
+    item: Cache<Grammar<true>>,
+    quick_file: Cache<QuickGrammar<false>>,
+    quick_item: Cache<QuickGrammar<true>>,
+}
+
+thread_local! {
+    static GRAMMAR: Grammars = Grammars {
+        file: Cache::default(),
+        item: Cache::default(),
+        quick_file: Cache::default(),
+        quick_item: Cache::default(),
+    };
+}
 
 /// Custom errors carry their code and help in the message, separated by `\u{1}`.
 fn custom(code: &str, msg: impl std::fmt::Display, help: &str) -> String {
     format!("{code}\u{1}{msg}\u{1}{help}")
 }
 
-fn name<'t, 's: 't, I>() -> impl Parser<'t, I, Name, Extra<'t, 's>> + Clone
+fn name<'t, 's: 't, I, R>() -> impl Parser<'t, I, Name, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Ident(s) = e => Name { text: s.to_string(), span: Span::from(e.span()) } }.labelled("identifier")
 }
 
-fn number<'t, 's: 't, I>() -> impl Parser<'t, I, Number, Extra<'t, 's>> + Clone
+fn number<'t, 's: 't, I, R>() -> impl Parser<'t, I, Number, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Num(s) = e => Number { text: s.to_string(), span: Span::from(e.span()) } }.labelled("number")
 }
 
 /// A contextual word lexed as an identifier, e.g. `c`, `v`, `a`, `e`, `mutex`.
-fn word<'t, 's: 't, I>(w: &'static str, label: &'static str) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+fn word<'t, 's: 't, I, R>(
+    w: &'static str,
+    label: &'static str,
+) -> impl Parser<'t, I, Span, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     select! { Token::Ident(s) = e if s == w => Span::from(e.span()) }.labelled(label)
 }
 
-fn kw<'t, 's: 't, I>(k: Kw) -> impl Parser<'t, I, Span, Extra<'t, 's>> + Clone
+fn kw<'t, 's: 't, I, R>(k: Kw) -> impl Parser<'t, I, Span, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     just(Token::Kw(k)).map_with(|_, e| Span::from(e.span()))
 }
 
 /// Any balanced token tree: a delimited group or a single non-delimiter token.
-fn token_tree<'t, 's: 't, I>() -> impl Parser<'t, I, (), Extra<'t, 's>> + Clone
+fn token_tree<'t, 's: 't, I, R>() -> impl Parser<'t, I, (), Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|tt| {
         let group = |o: Token<'static>, c: Token<'static>| tt.clone().repeated().delimited_by(just(o), just(c));
@@ -620,11 +726,10 @@ where
 
 /// `p` repeated inside a braced list of `;`-terminated definitions. A broken
 /// definition is skipped up to and including its `;` (or up to the `}`).
-fn semi_list<'t, 's: 't, I, T>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
-) -> impl Parser<'t, I, Vec<T>, Extra<'t, 's>> + Clone
+fn semi_list<'t, 's: 't, I, R, T>(p: impl Parser<'t, I, T, Ex<R>> + Clone + 't) -> Boxed<'t, 't, I, Vec<T>, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
     T: 't,
 {
     let skip = token_tree()
@@ -646,12 +751,13 @@ where
 }
 
 /// `{ ... }` whose contents, if they fail to parse, become `fallback`.
-fn braced<'t, 's: 't, I, T: 't>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
+fn braced<'t, 's: 't, I, R, T: 't>(
+    p: impl Parser<'t, I, T, Ex<R>> + Clone + 't,
     fallback: impl Fn() -> T + Clone + 't,
-) -> impl Parser<'t, I, T, Extra<'t, 's>> + Clone
+) -> Boxed<'t, 't, I, T, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     p.delimited_by(just(Token::LBrace), just(Token::RBrace))
         .recover_with(via_parser(
@@ -663,9 +769,10 @@ where
         .boxed()
 }
 
-fn value<'t, 's: 't, I>() -> impl Parser<'t, I, Value, Extra<'t, 's>> + Clone
+fn value<'t, 's: 't, I, R>() -> impl Parser<'t, I, Value, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|value| {
         let list = value
@@ -722,12 +829,13 @@ const STMT_STOP: [Token<'static>; 7] = [
 /// `{ ... }` groups), never further and never less.
 const CLOSERS: [Token<'static>; 3] = [Token::RBrace, Token::RParen, Token::RBracket];
 
-fn block<'t, 's: 't, I>(
-    stmt: impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone + 't,
+fn block<'t, 's: 't, I, R>(
+    stmt: impl Parser<'t, I, Stmt, Ex<R>> + Clone + 't,
     stops: &'static [Token<'static>],
-) -> impl Parser<'t, I, Block, Extra<'t, 's>> + Clone
+) -> Boxed<'t, 't, I, Block, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     // A statement that fails is skipped up to the next `;` or stop token.
     let skip = token_tree().and_is(none_of([Token::Semi]).ignored()).and_is(none_of(stops).ignored()).repeated();
@@ -741,7 +849,7 @@ where
     item.repeated().collect::<Vec<(Stmt, Option<Span>)>>().validate(|items, e, emitter| {
         let span = Span::from(e.span());
         if items.is_empty() {
-            emitter.emit(Rich::custom(
+            emitter.emit(R::custom(
                 e.span(),
                 custom(codes::EMPTY_BLOCK, "expected a statement", "a block holds at least one task call or control structure; use `Void()` for a task that does nothing"),
             ));
@@ -754,7 +862,7 @@ where
             // Only between two statements that parsed: after or before a
             // broken one, the error already reported is enough.
             if i + 1 < n && semi.is_none() && s.kind != StmtKind::Error && next_ok[i] {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     SimpleSpan::from(s.span.end as usize..s.span.end as usize),
                     custom(codes::UNEXPECTED_TOKEN, "expected `;` between two statements", "`;` runs the statement before it, then the statement after it"),
                 ));
@@ -766,9 +874,10 @@ where
     .boxed()
 }
 
-fn stmt<'t, 's: 't, I>() -> impl Parser<'t, I, Stmt, Extra<'t, 's>> + Clone
+fn stmt<'t, 's: 't, I, R>() -> impl Parser<'t, I, Stmt, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     recursive(|stmt| {
         let bare_block = block(stmt.clone().boxed(), &STMT_STOP).boxed();
@@ -892,7 +1001,7 @@ where
 
 /// The grammar of a file; with `Some(limit)`, of one item followed by the
 /// keyword of the next one (at `limit`), which is not parsed.
-fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, SourceFile, Extra<'t, 's>> {
+fn item_parser<'t, 's: 't, R: Fail<'t, In<'t, 's>>>(one_item: bool) -> Boxed<'t, 't, In<'t, 's>, SourceFile, Ex<R>> {
     // import "path";
     let string = select! { Token::Str(s) = e => (unescape(s), Span::from(e.span())) }.labelled("string");
     // A missing `;` is one error after the path, and the import is kept (so
@@ -900,7 +1009,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
     let import = kw(Kw::Import).then(string).then(just(Token::Semi).or_not()).validate(
         |((_, (path, path_span)), semi), e, emitter| {
             if semi.is_none() {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     SimpleSpan::from(path_span.end as usize..path_span.end as usize),
                     custom(
                         codes::UNEXPECTED_TOKEN,
@@ -932,7 +1041,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
             for a in args {
                 match a {
                     ActionArg::Command(c) if command.is_none() => command = Some(c),
-                    ActionArg::Command(c) => emitter.emit(Rich::custom(
+                    ActionArg::Command(c) => emitter.emit(R::custom(
                         SimpleSpan::from(c.span.range()),
                         custom(
                             codes::MISSING_COMMAND,
@@ -944,7 +1053,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
                 }
             }
             if command.is_none() {
-                emitter.emit(Rich::custom(
+                emitter.emit(R::custom(
                     e.span(),
                     custom(
                         codes::MISSING_COMMAND,
@@ -1146,7 +1255,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
             token_tree().and_is(none_of([Token::LBrace]).ignored()).and_is(starts_item.not()).repeated().at_least(1),
         )
         .validate(|(t, span), _, emitter| {
-            emitter.emit(Rich::custom(span, custom(codes::UNEXPECTED_TOKEN, format!("expected `{{`, found {t}"), "")));
+            emitter.emit(R::custom(span, custom(codes::UNEXPECTED_TOKEN, format!("expected `{{`, found {t}"), "")));
         });
     // Every part of the header is parsed as optional, and the combination
     // is checked afterwards: a malformed header is one error, and the
@@ -1159,7 +1268,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
                 Token::Kw(k) => k.as_str(),
                 _ => "",
             };
-            emitter.emit(Rich::custom(
+            emitter.emit(R::custom(
                 e.span(),
                 custom(
                     codes::UNEXPECTED_TOKEN,
@@ -1185,7 +1294,7 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .then(body.clone())
         .validate(|(((kind, keyword_span), (((colon, name), params), placement)), body), e, emitter| {
             let mut error = |span: Span, msg: &str, help: &str| {
-                emitter.emit(Rich::custom(SimpleSpan::from(span.range()), custom(codes::UNEXPECTED_TOKEN, msg, help)));
+                emitter.emit(R::custom(SimpleSpan::from(span.range()), custom(codes::UNEXPECTED_TOKEN, msg, help)));
             };
             let name_span = name.as_ref().map(|n: &Name| n.span);
             match kind {
@@ -1296,9 +1405,14 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         })
         .to(None);
     let before_limit = any()
-        .try_map(move |_, span: SimpleSpan| match limit {
-            Some(l) if span.start >= l => Err(Rich::custom(span, "")),
-            _ => Ok(()),
+        .try_map_with(|_, e| {
+            let span: SimpleSpan = e.span();
+            let limit: &mut SimpleState<usize> = e.state();
+            if span.start >= **limit {
+                Err(R::custom(span, String::new()))
+            } else {
+                Ok(())
+            }
         })
         .rewind();
     let items = before_limit
@@ -1306,9 +1420,10 @@ fn item_parser<'t, 's: 't>(limit: Option<usize>) -> impl Parser<'t, In<'t, 's>, 
         .repeated()
         .collect::<Vec<Option<Item>>>()
         .map(|v| SourceFile { items: v.into_iter().flatten().collect() });
-    match limit {
-        None => items.then_ignore(end()).boxed(),
-        Some(_) => items.then_ignore(any()).then_ignore(end()).boxed(),
+    if one_item {
+        items.then_ignore(any()).then_ignore(end()).boxed()
+    } else {
+        items.then_ignore(end()).boxed()
     }
 }
 
@@ -1440,9 +1555,10 @@ fn lint_spellings(file: &SourceFile, out: &mut Vec<Diagnostic>) {
 
 /// Skips a broken definition of a planning block: up to and including its
 /// `;`, or its `{ ... }` group, never past the block's `}`.
-fn plan_skip<'t, 's: 't, I>() -> impl Parser<'t, I, (), Extra<'t, 's>> + Clone
+fn plan_skip<'t, 's: 't, I, R>() -> impl Parser<'t, I, (), Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     token_tree()
         .and_is(none_of([Token::RBrace]).ignored())
@@ -1453,11 +1569,10 @@ where
 }
 
 /// `p` repeated until the enclosing `}`, each failure skipped with [`plan_skip`].
-fn plan_list<'t, 's: 't, I, T: 't>(
-    p: impl Parser<'t, I, T, Extra<'t, 's>> + Clone + 't,
-) -> impl Parser<'t, I, Vec<T>, Extra<'t, 's>> + Clone
+fn plan_list<'t, 's: 't, I, R, T: 't>(p: impl Parser<'t, I, T, Ex<R>> + Clone + 't) -> Boxed<'t, 't, I, Vec<T>, Ex<R>>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     none_of([Token::RBrace])
         .rewind()
@@ -1469,9 +1584,10 @@ where
 }
 
 /// `( a, b, ... )`, possibly empty.
-fn plan_names<'t, 's: 't, I>() -> impl Parser<'t, I, Vec<Name>, Extra<'t, 's>> + Clone
+fn plan_names<'t, 's: 't, I, R>() -> impl Parser<'t, I, Vec<Name>, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     name()
         .separated_by(just(Token::Comma))
@@ -1482,9 +1598,10 @@ where
 }
 
 /// An operand: `l2.x`, `distance( a, b )`, `l1`, a number or a string.
-fn plan_operand<'t, 's: 't, I>() -> impl Parser<'t, I, PlanOperand, Extra<'t, 's>> + Clone
+fn plan_operand<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanOperand, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let string = select! { Token::Str(s) => ValueKind::Str(unescape(s)) }.labelled("string");
     let literal =
@@ -1501,9 +1618,10 @@ where
 }
 
 /// `Mission( arg, ... )`.
-fn plan_call<'t, 's: 't, I>() -> impl Parser<'t, I, PlanCall, Extra<'t, 's>> + Clone
+fn plan_call<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanCall, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     name()
         .then(
@@ -1519,9 +1637,10 @@ where
 }
 
 /// A fact `[not] subject relation [object]`.
-fn plan_fact<'t, 's: 't, I>() -> impl Parser<'t, I, PlanFact, Extra<'t, 's>> + Clone
+fn plan_fact<'t, 's: 't, I, R>() -> impl Parser<'t, I, PlanFact, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     kw(Kw::Not)
         .or_not()
@@ -1540,17 +1659,19 @@ where
 }
 
 /// `{ fact; ... }`
-fn plan_facts<'t, 's: 't, I>() -> impl Parser<'t, I, Vec<PlanFact>, Extra<'t, 's>> + Clone
+fn plan_facts<'t, 's: 't, I, R>() -> impl Parser<'t, I, Vec<PlanFact>, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     braced(semi_list(plan_fact()), Vec::new).boxed()
 }
 
 /// `planning { ... }`
-fn planning_item<'t, 's: 't, I>() -> impl Parser<'t, I, Item, Extra<'t, 's>> + Clone
+fn planning_item<'t, 's: 't, I, R>() -> impl Parser<'t, I, Item, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let end = just(Token::Semi).or_not().ignored();
     // type location { x; y; z; }  |  type robot;  |  type auv : robot;
@@ -1656,9 +1777,10 @@ where
 }
 
 /// `pddl_map { action( a, b ) -> Mission( b.x, 3 ); }`
-fn pddl_map_item<'t, 's: 't, I>() -> impl Parser<'t, I, Item, Extra<'t, 's>> + Clone
+fn pddl_map_item<'t, 's: 't, I, R>() -> impl Parser<'t, I, Item, Ex<R>> + Clone + use<'t, 's, I, R>
 where
     I: ValueInput<'t, Token = Token<'s>, Span = SimpleSpan>,
+    R: Fail<'t, I>,
 {
     let mapping = name()
         .then(plan_names())
@@ -1673,4 +1795,37 @@ where
             Item::PddlMap(PddlMapBlock { keyword_span, maps, span: Span::from(e.span()) })
         })
         .boxed()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quick pass gives the tree of the rich pass (and no error where
+    /// the rich pass finds none): on the examples, the malformed corpus and
+    /// generated programs, whole files and item by item.
+    #[test]
+    fn the_quick_pass_gives_the_rich_pass_tree() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut texts: Vec<String> = (0..4).map(|seed| crate::gen::program(400, seed)).collect();
+        for dir in [root.join("../examples"), root.join("../examples/planning"), root.join("tests/bad")] {
+            let mut paths: Vec<_> = std::fs::read_dir(&dir).expect("corpus").flatten().map(|e| e.path()).collect();
+            paths.sort();
+            for p in paths.iter().filter(|p| p.extension().is_some_and(|e| e == "mcl")) {
+                texts.push(std::fs::read_to_string(p).expect("readable"));
+            }
+        }
+        assert!(texts.len() > 20);
+        let mut without_errors = 0;
+        for text in &texts {
+            let rich = parse_with(text, None, false);
+            assert_eq!(parse_with(text, None, true), rich);
+            without_errors += usize::from(rich.errors.is_empty());
+            for b in split_items(text) {
+                let part = &text[b.start..b.end];
+                assert_eq!(parse_with(part, b.next, true), parse_with(part, b.next, false));
+            }
+        }
+        assert!(without_errors >= 8, "{without_errors} texts without errors");
+    }
 }

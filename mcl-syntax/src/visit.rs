@@ -12,8 +12,33 @@ pub fn walk_block<'a>(block: &'a Block, f: &mut impl FnMut(&'a Stmt)) {
 /// Calls `f` on `stmt` and then on every statement nested in it.
 pub fn walk_stmt<'a>(stmt: &'a Stmt, f: &mut impl FnMut(&'a Stmt)) {
     f(stmt);
-    for b in child_blocks(stmt) {
-        walk_block(b, f);
+    // The blocks of `child_blocks`, without collecting them.
+    match &stmt.kind {
+        StmtKind::Call(_) | StmtKind::Error => {}
+        StmtKind::While { cond, body, .. } => {
+            walk_block(cond, f);
+            walk_block(body, f);
+        }
+        StmtKind::If { cond, then, otherwise, .. } => {
+            walk_block(cond, f);
+            walk_block(then, f);
+            if let Some(o) = otherwise {
+                walk_block(o, f);
+            }
+        }
+        StmtKind::Parallel { branches, .. } => branches.iter().for_each(|b| walk_block(b, f)),
+        StmtKind::Try { body, catch, .. } => {
+            walk_block(body, f);
+            walk_block(catch, f);
+        }
+        StmtKind::Not { body, .. } => walk_block(body, f),
+        StmtKind::Monitor { body, handlers, .. } => {
+            walk_block(body, f);
+            for h in handlers {
+                walk_block(&h.condition, f);
+                walk_block(&h.action, f);
+            }
+        }
     }
 }
 

@@ -9,7 +9,41 @@ use mcl_syntax::visit::walk_block;
 use mcl_syntax::{Diagnostic, Span};
 use rustc_hash::FxHashMap;
 
+/// What the checks of a call need to know about the task it names, looked
+/// up once per task name of the item (a mission calls the same tasks many
+/// times, and each lookup goes through the database).
+#[derive(Clone, Copy)]
+enum Callee<'a> {
+    /// No such task: every call is reported.
+    Undefined,
+    /// Nothing to check (no node for it, or a task with a syntax error).
+    Skip,
+    Task {
+        id: scope::DefId,
+        task: &'a TaskDef,
+        /// The pattern's net, when the task names a pattern that has one.
+        net: Option<&'a PatternNet>,
+    },
+}
+
+fn callee<'a>(cx: &Cx<'a>, name: &str) -> Callee<'a> {
+    let Some(id) = cx.scope.first(DefKind::Task, name) else { return Callee::Undefined };
+    let Some(task) = scope::task(cx.db, id) else { return Callee::Skip };
+    // A task with a syntax error: its header may be incomplete.
+    if scope::is_broken(cx.db, id, task.span) {
+        return Callee::Skip;
+    }
+    let net = task
+        .pattern
+        .as_ref()
+        .and_then(|p| cx.scope.first(DefKind::Pattern, &p.text))
+        .and_then(|pid| scope::pattern_net(cx.db, pid))
+        .and_then(Result::ok);
+    Callee::Task { id, task, net }
+}
+
 pub(crate) fn check(cx: &mut Cx<'_>) {
+    let mut callees: FxHashMap<&str, Callee<'_>> = FxHashMap::default();
     for item in &cx.ast().items {
         let Item::Mission(m) = item else { continue };
         let mut params: FxHashMap<&str, Span> = FxHashMap::default();
@@ -41,7 +75,11 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                         );
                     }
                 }
-                check_call(cx, c);
+                let callee = match callees.get(c.name.text.as_str()) {
+                    Some(x) => *x,
+                    None => *callees.entry(&c.name.text).or_insert(callee(cx, &c.name.text)),
+                };
+                check_call(cx, c, callee);
             }
             StmtKind::Parallel { ops, .. } => {
                 if let (Some(&(first, fs)), Some(&(_, other))) = (ops.first(), ops.iter().find(|(o, _)| *o != ops[0].0))
@@ -60,29 +98,29 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
     }
 }
 
-fn check_call(cx: &mut Cx<'_>, c: &Call) {
-    let Some(id) = cx.scope.first(DefKind::Task, &c.name.text) else {
-        let mut d =
-            Diagnostic::error(codes::UNDEFINED_TASK, format!("cannot find task `{}`", c.name.text), c.name.span)
-                .with_label(c.name.span, "not defined in this file or its imports");
-        if cx.scope.first(DefKind::Mission, &c.name.text).is_some() {
-            d = d.with_help(format!("`{}` is a mission; missions cannot be called from other missions", c.name.text));
-        } else {
-            d = cx.suggest(d, &c.name.text, cx.scope.names(DefKind::Task));
-            if d.help.is_none() {
-                d = d.with_help("declare it in a `tasks { ... }` block, or import the file that declares it");
+fn check_call(cx: &mut Cx<'_>, c: &Call, callee: Callee<'_>) {
+    let (id, task, net) = match callee {
+        Callee::Task { id, task, net } => (id, task, net),
+        Callee::Skip => return,
+        Callee::Undefined => {
+            let mut d =
+                Diagnostic::error(codes::UNDEFINED_TASK, format!("cannot find task `{}`", c.name.text), c.name.span)
+                    .with_label(c.name.span, "not defined in this file or its imports");
+            if cx.scope.first(DefKind::Mission, &c.name.text).is_some() {
+                d = d.with_help(format!(
+                    "`{}` is a mission; missions cannot be called from other missions",
+                    c.name.text
+                ));
+            } else {
+                d = cx.suggest(d, &c.name.text, cx.scope.names(DefKind::Task));
+                if d.help.is_none() {
+                    d = d.with_help("declare it in a `tasks { ... }` block, or import the file that declares it");
+                }
             }
+            cx.out.push(d);
+            return;
         }
-        cx.out.push(d);
-        return;
     };
-    let Some(task) = scope::task(cx.db, id) else {
-        return;
-    };
-    // A task with a syntax error: its header may be incomplete.
-    if scope::is_broken(cx.db, id, task.span) {
-        return;
-    }
     // A syntax error inside the parentheses already explains what is wrong.
     let broken_args = cx
         .syntax_errors
@@ -113,20 +151,16 @@ fn check_call(cx: &mut Cx<'_>, c: &Call) {
         cx.out.push(d);
         return;
     }
-    check_delay_arguments(cx, c, id, task);
+    if let Some(net) = net {
+        check_delay_arguments(cx, c, id, task, net);
+    }
 }
 
 /// The arguments that give the delay of a timed transition of the task's
 /// pattern (`TO(timeout)`) must be positive numbers of seconds, or symbols
 /// (identifiers) whose value is given at run time (`--set timeout=60`, a
 /// scenario's `[symbols]`).
-fn check_delay_arguments(cx: &mut Cx<'_>, c: &Call, id: scope::DefId, task: &TaskDef) {
-    let Some(pid) = task.pattern.as_ref().and_then(|p| cx.scope.first(DefKind::Pattern, &p.text)) else {
-        return;
-    };
-    let Some(Ok(net)) = scope::pattern_net(cx.db, pid) else {
-        return;
-    };
+fn check_delay_arguments(cx: &mut Cx<'_>, c: &Call, id: scope::DefId, task: &TaskDef, net: &PatternNet) {
     // Most patterns have no parameter delay: no allocation for them.
     fn delay_param(t: &TransitionDef) -> Option<&str> {
         match &t.delay {

@@ -30,7 +30,9 @@ pub fn item_uses<'db>(db: &'db dyn Db, item: ItemText<'db>) -> (bool, Vec<(DefKi
         }
         Some(Item::Mission(m)) => {
             is_mission = true;
-            used.extend(calls(&m.body).into_iter().map(|c| (DefKind::Task, c.name.text.clone())));
+            // A mission calls the same tasks many times: one copy per name.
+            let names: FxHashSet<&str> = calls(&m.body).into_iter().map(|c| c.name.text.as_str()).collect();
+            used.extend(names.into_iter().map(|n| (DefKind::Task, n.to_string())));
         }
         _ => {}
     }
