@@ -469,14 +469,7 @@ pub fn vehicle_nets_with_tokens(
             }
             let Some(&c) = copies.get(&k) else { continue };
             let id = &sups[k].id;
-            let p = *pending.entry(k).or_insert_with(|| {
-                let p = b.add_place(mcl_net::Place::new(format!("{id}.withdrawn")));
-                let tw = b.add_transition(mcl_net::Transition::new(format!("{id}.withdraw")).with_priority(2));
-                b.add_input(p, tw, 1).add_input(c, tw, 1);
-                let tf = b.add_transition(mcl_net::Transition::new(format!("{id}.forget")).with_priority(1));
-                b.add_input(p, tf, 1);
-                p
-            });
+            let p = *pending.entry(k).or_insert_with(|| crate::supervisor::add_take_back(&mut b, id, c));
             let from = plant.parts[o].name.clone();
             let tt = *recv.entry(w.0).or_insert_with(|| {
                 let rid = format!("coord.recv.{from}.{wid}");

@@ -204,37 +204,32 @@ impl Mission {
 /// A task's net is shared by its calls: its events are off-nominal only
 /// while such a call holds it (its `run` place is marked).
 fn off_nominal(net: &Net, calls: &[CallNodes]) -> Vec<(TransitionId, Vec<PlaceId>)> {
-    let fail_events = |task: &str| -> Vec<String> {
-        let key = format!("task_events:{task}");
-        net.properties()
-            .iter()
-            .find(|(k, _)| *k == key)
-            .and_then(|(_, v)| serde_json::from_str::<serde_json::Value>(v).ok())
-            .and_then(|v| {
-                v.get("fail")?.as_array().map(|a| a.iter().filter_map(|e| e.as_str().map(String::from)).collect())
-            })
-            .unwrap_or_default()
-    };
-    let mut out: Vec<(TransitionId, Vec<PlaceId>)> = Vec::new();
+    let fail_events: std::collections::HashMap<&str, Vec<String>> =
+        net.task_events().map(|(task, e)| (task, e.fail)).collect();
+    // Per task: the `run` places of its calls for which all its events are
+    // off-nominal (monitor conditions), and of those for which its fail
+    // events are (calls outside any condition; tests answer either way).
+    let mut by_task: std::collections::BTreeMap<&str, (Vec<PlaceId>, Vec<PlaceId>)> = Default::default();
     for c in calls {
-        let all = match c.role.as_deref() {
-            Some("monitor_condition") => true,
-            None => false,
-            // Tests (if and while conditions): both answers are nominal.
-            Some(_) => continue,
-        };
-        let fails = if all { Vec::new() } else { fail_events(&c.task) };
-        let prefix = format!("task.{}.", c.task);
-        for t in net.transition_ids() {
-            let Some(tr) = net.transition(t) else { continue };
-            let mcl_net::TransitionKind::Event(e) = &tr.kind else { continue };
-            if !tr.id.starts_with(&prefix) || !(all || fails.iter().any(|f| f == e)) {
-                continue;
-            }
-            match out.iter_mut().find(|(x, _)| *x == t) {
-                Some((_, ps)) => ps.push(c.run),
-                None => out.push((t, vec![c.run])),
-            }
+        let entry = by_task.entry(c.task.as_str()).or_default();
+        match c.role.as_deref() {
+            Some("monitor_condition") => entry.0.push(c.run),
+            None => entry.1.push(c.run),
+            Some(_) => {}
+        }
+    }
+    let mut out = Vec::new();
+    for t in net.transition_ids() {
+        let Some(tr) = net.transition(t) else { continue };
+        let mcl_net::TransitionKind::Event(e) = &tr.kind else { continue };
+        let Some((task, _)) = tr.id.strip_prefix("task.").and_then(|r| r.split_once('.')) else { continue };
+        let Some((monitor, plain)) = by_task.get(task) else { continue };
+        let mut places = monitor.clone();
+        if fail_events.get(task).is_some_and(|f| f.iter().any(|x| x == e)) {
+            places.extend(plain);
+        }
+        if !places.is_empty() {
+            out.push((t, places));
         }
     }
     out

@@ -375,16 +375,23 @@ pub fn with_take_backs(net: &Net, supervisors: &[Supervisor]) -> Result<Net, Coo
     let mut b: NetBuilder = net.to_builder();
     let np = net.place_count() - supervisors.len();
     for (k, s) in supervisors.iter().enumerate().filter(|(_, s)| !s.withdrawn_by.is_empty()) {
-        let sp = PlaceId((np + k) as u32);
-        let w = b.add_place(mcl_net::Place::new(format!("{}.withdrawn", s.id)));
+        let w = add_take_back(&mut b, &s.id, PlaceId((np + k) as u32));
         for &t in &s.withdrawn_by {
             b.add_output(t, w, 1);
         }
-        let tw = b.add_transition(mcl_net::Transition::new(format!("{}.withdraw", s.id)).with_priority(2));
-        b.add_input(w, tw, 1);
-        b.add_input(sp, tw, 1);
-        let tf = b.add_transition(mcl_net::Transition::new(format!("{}.forget", s.id)).with_priority(1));
-        b.add_input(w, tf, 1);
     }
     Ok(b.build()?)
+}
+
+/// The take-back nodes of the supervisor place `sp` whose id is `id`: the
+/// place `id.withdrawn` (returned; a withdrawal marks it), the immediate
+/// transition `id.withdraw` of priority 2 that takes it with one token of
+/// `sp`, and `id.forget` of priority 1 that takes it alone.
+pub(crate) fn add_take_back(b: &mut NetBuilder, id: &str, sp: PlaceId) -> PlaceId {
+    let w = b.add_place(mcl_net::Place::new(format!("{id}.withdrawn")));
+    let tw = b.add_transition(mcl_net::Transition::new(format!("{id}.withdraw")).with_priority(2));
+    b.add_input(w, tw, 1).add_input(sp, tw, 1);
+    let tf = b.add_transition(mcl_net::Transition::new(format!("{id}.forget")).with_priority(1));
+    b.add_input(w, tf, 1);
+    w
 }

@@ -41,7 +41,7 @@ mod xml;
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{
     ActionRef, Arc, CallBinding, Delay, Marking, Name, Net, NetBuilder, NetError, NodeId, Place, PlaceId, Provenance,
-    SharedText, SourceSpan, Transition, TransitionId, TransitionKind,
+    SharedText, SourceSpan, TaskEvents, Transition, TransitionId, TransitionKind,
 };
 pub use pnml::{read_pnml, read_pnml_nets, write_pnml, PnmlError};
 pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};

@@ -11,6 +11,18 @@ use std::sync::OnceLock;
 
 pub use crate::name::{Name, SharedText};
 
+/// The events that end a task in ok and in fail (net property
+/// `task_events:T`, [`Net::task_events`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+pub struct TaskEvents {
+    /// Events that end the task in ok.
+    #[serde(default)]
+    pub ok: Vec<String>,
+    /// Events that end the task in fail.
+    #[serde(default)]
+    pub fail: Vec<String>,
+}
+
 use serde::Serialize;
 
 /// Index of a place in a [`Net`] (its position in [`Net::places`]).
@@ -417,6 +429,16 @@ impl Net {
     /// Free key/value annotations of the net (kept in order).
     pub fn properties(&self) -> &[(String, String)] {
         &self.properties
+    }
+
+    /// The events that end each task in ok and in fail: the properties
+    /// `task_events:T` that the compiler writes for every task it
+    /// instantiates, by task name (malformed ones are skipped).
+    pub fn task_events(&self) -> impl Iterator<Item = (&str, TaskEvents)> + '_ {
+        self.properties.iter().filter_map(|(k, v)| {
+            let task = k.strip_prefix("task_events:")?;
+            serde_json::from_str::<TaskEvents>(v).ok().map(|e| (task, e))
+        })
     }
 
     /// All places; [`PlaceId`] `i` is `places()[i]`.

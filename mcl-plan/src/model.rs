@@ -140,26 +140,8 @@ pub fn to_model(prog: &McProgram) -> Result<(Domain, Problem), Vec<Error>> {
     let root = prog.files.first().map(|f| f.path.clone()).unwrap_or_default();
     let name = root.file_stem().map(|s| s.to_string_lossy().to_ascii_lowercase()).unwrap_or_else(|| "mcl".into());
     let file_name = root.display().to_string();
-    let mut d = Domain {
-        file: file_name.clone(),
-        name: name.clone(),
-        requirements: Vec::new(),
-        types: Vec::new(),
-        constants: Vec::new(),
-        predicates: Vec::new(),
-        functions: Vec::new(),
-        actions: Vec::new(),
-    };
-    let mut p = Problem {
-        file: file_name,
-        name: name.clone(),
-        domain: name,
-        objects: Vec::new(),
-        init: Vec::new(),
-        values: Vec::new(),
-        goal: Vec::new(),
-        metric: false,
-    };
+    let mut d = Domain { file: file_name.clone(), name: name.clone(), ..Domain::default() };
+    let mut p = Problem { file: file_name, name: name.clone(), domain: name, ..Problem::default() };
     // Relations and their arity (the first use decides).
     let mut relations: BTreeMap<String, usize> = BTreeMap::new();
     let mut attrs: BTreeMap<String, ()> = BTreeMap::new();

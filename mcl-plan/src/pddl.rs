@@ -147,7 +147,7 @@ pub struct Action {
     pub line: usize,
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Domain {
     pub file: String,
     pub name: String,
@@ -209,7 +209,7 @@ impl fmt::Display for Fact {
     }
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Problem {
     pub file: String,
     pub name: String,
@@ -696,16 +696,7 @@ pub fn parse_domain(file: &str, text: &str) -> Result<Domain, Vec<Error>> {
     let mut p = P { src: Source::new(file, text), errors: Vec::new() };
     let top = sexpr::read(&p.src).map_err(|e| vec![e])?;
     let (name, sections) = p.define(&top, "domain", Span::default()).map_err(|e| vec![e])?;
-    let mut d = Domain {
-        file: file.to_string(),
-        name,
-        requirements: Vec::new(),
-        types: Vec::new(),
-        constants: Vec::new(),
-        predicates: Vec::new(),
-        functions: Vec::new(),
-        actions: Vec::new(),
-    };
+    let mut d = Domain { file: file.to_string(), name, ..Domain::default() };
     for s in sections {
         let r: R<()> = (|| {
             let l = p.expect_list(s, "a section `(:keyword ...)`")?;
@@ -837,16 +828,7 @@ pub fn parse_problem(file: &str, text: &str) -> Result<Problem, Vec<Error>> {
     let mut p = P { src: Source::new(file, text), errors: Vec::new() };
     let top = sexpr::read(&p.src).map_err(|e| vec![e])?;
     let (name, sections) = p.define(&top, "problem", Span::default()).map_err(|e| vec![e])?;
-    let mut pr = Problem {
-        file: file.to_string(),
-        name,
-        domain: String::new(),
-        objects: Vec::new(),
-        init: Vec::new(),
-        values: Vec::new(),
-        goal: Vec::new(),
-        metric: false,
-    };
+    let mut pr = Problem { file: file.to_string(), name, ..Problem::default() };
     let mut has_goal = false;
     for s in sections {
         let r: R<()> = (|| {

@@ -49,16 +49,7 @@ use crate::scenario::{DelaySpec, OutcomeRule, Rule, Scenario};
 /// Seconds a primitive takes to answer when nothing else is said.
 pub const DEFAULT_DURATION: f64 = 5.0;
 
-/// The events that end a task in ok and in fail (net property `task_events:T`).
-#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Deserialize)]
-pub struct TaskEvents {
-    /// Events that end the task in ok.
-    #[serde(default)]
-    pub ok: Vec<String>,
-    /// Events that end the task in fail.
-    #[serde(default)]
-    pub fail: Vec<String>,
-}
+pub use mcl_net::TaskEvents;
 
 /// What the mock needs to know about a call site.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -74,14 +65,7 @@ pub struct CallInfo {
 
 /// The task and call tables of a compiled net.
 pub fn tables_of(net: &Net) -> (HashMap<String, TaskEvents>, HashMap<u32, CallInfo>) {
-    let mut tasks = HashMap::new();
-    for (k, v) in net.properties() {
-        if let Some(task) = k.strip_prefix("task_events:") {
-            if let Ok(ev) = serde_json::from_str::<TaskEvents>(v) {
-                tasks.insert(task.to_string(), ev);
-            }
-        }
-    }
+    let tasks = net.task_events().map(|(t, e)| (t.to_string(), e)).collect();
     let mut calls = HashMap::new();
     for t in net.transitions() {
         if let Some(b) = &t.binding {
