@@ -37,6 +37,7 @@ pub mod pnml;
 pub mod semantics;
 pub mod structural;
 mod xml;
+pub mod xml_id;
 
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{

@@ -41,6 +41,10 @@
 //! makes names optional; a node without one is named by its id). A net
 //! without MCL data has only immediate transitions. [`write_pnml`] followed
 //! by [`read_pnml`] gives back an equal [`Net`].
+//!
+//! Node and net ids are written as valid XML ids (`xsd:ID`): a character an
+//! NCName cannot hold (`$`, `/` of MCL names, ...) is written `_xHHHH_` and
+//! read back as itself ([`crate::xml_id`]).
 
 use std::borrow::Cow;
 use std::collections::HashSet;
@@ -56,6 +60,7 @@ use crate::model::{
     TransitionKind,
 };
 use crate::xml::{self, Element};
+use crate::xml_id;
 
 /// The provenance records of a net, by key.
 type ProvenanceTable<'a> = std::collections::HashMap<&'a str, std::sync::Arc<Provenance>>;
@@ -217,7 +222,7 @@ impl<'a> Ctx<'a> {
                 self.err(el, format!("unsupported net type `{ty}`: only P/T nets ({PTNET_TYPE}) are supported"))
             );
         }
-        let mut b = NetBuilder::new(id);
+        let mut b = NetBuilder::new(&*xml_id::decode(id));
         if let Some(name) = self.label_text(el, "name")? {
             b.name(name);
         }
@@ -353,7 +358,7 @@ impl<'a> Ctx<'a> {
 
     fn place(&self, el: &Element, table: &ProvenanceTable<'_>) -> Result<Place, PnmlError> {
         let id = self.required(el, "id")?;
-        let mut p = Place::new(id);
+        let mut p = Place::new(&*xml_id::decode(id));
         if let Some(name) = self.label_text(el, "name")? {
             p.name = name.into();
         }
@@ -375,7 +380,7 @@ impl<'a> Ctx<'a> {
 
     fn transition(&self, el: &Element, table: &ProvenanceTable<'_>) -> Result<Transition, PnmlError> {
         let id = self.required(el, "id")?;
-        let mut t = Transition::new(id);
+        let mut t = Transition::new(&*xml_id::decode(id));
         if let Some(name) = self.label_text(el, "name")? {
             t.name = name.into();
         }
@@ -635,7 +640,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     let mut out = Out { w: Writer::new_with_indent(Vec::new(), b' ', 2) };
     out.w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).map_err(io_err)?;
     out.start("pnml", &[("xmlns", PNML_NAMESPACE)])?;
-    out.start("net", &[("id", net.id()), ("type", PTNET_TYPE)])?;
+    out.start("net", &[("id", &xml_id::encode(net.id())), ("type", PTNET_TYPE)])?;
     out.label("name", net.name())?;
     // Each provenance record once, with the nodes it belongs to as ranges of
     // node indices (places and transitions in document order). Records are
@@ -702,7 +707,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     out.start("page", &[("id", &page_id)])?;
 
     for p in net.places() {
-        out.start("place", &[("id", &p.id)])?;
+        out.start("place", &[("id", &xml_id::encode(&p.id))])?;
         if p.name != p.id {
             out.label("name", &p.name)?;
         }
@@ -718,7 +723,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     }
 
     for t in net.transitions() {
-        out.start("transition", &[("id", &t.id)])?;
+        out.start("transition", &[("id", &xml_id::encode(&t.id))])?;
         if t.name != t.id {
             out.label("name", &t.name)?;
         }
@@ -792,7 +797,8 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
             return Err(PnmlError::nowhere("arc refers to a missing node"));
         };
         let id = fresh_id(&used, "a", i);
-        let attrs = [("id", id.as_str()), ("source", src), ("target", dst)];
+        let (src, dst) = (xml_id::encode(src), xml_id::encode(dst));
+        let attrs = [("id", id.as_str()), ("source", &*src), ("target", &*dst)];
         if w == 1 {
             out.empty("arc", &attrs)?;
         } else {
