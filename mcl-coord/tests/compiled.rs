@@ -69,7 +69,7 @@ fn labelled_calls_map_to_their_adapter_nodes() {
     let ss = explore(&asc.net, &Options::default());
     assert!(ss.complete());
     for c in call_nodes(&asc.net) {
-        let lock = asc.net.place_by_id(&format!("task.{}.idle", c.task)).unwrap();
+        let lock = asc.net.place_by_id(&format!("lock.{}", c.task)).unwrap();
         let others: Vec<_> =
             call_nodes(&asc.net).into_iter().filter(|o| o.task == c.task && o.call_site != c.call_site).collect();
         for s in ss.states() {

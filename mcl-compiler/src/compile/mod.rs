@@ -336,7 +336,7 @@ impl Composer<'_> {
         let (ok, fail) = task_outcome_events(self.db, self.scope, name);
         self.b.net.property(format!("task_events:{name}"), serde_json::json!({ "ok": ok, "fail": fail }).to_string());
         self.b.provenance = Arc::new(Provenance { task: Some(name.to_string()), ..Default::default() });
-        let lock = self.b.place(format!("task.{name}.idle"), 1);
+        let lock = self.b.place(format!("lock.{name}"), 1);
         Some(TaskNet { iface, lock, params: params.into() })
     }
 }
