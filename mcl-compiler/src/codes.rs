@@ -31,9 +31,11 @@ pub const INTERFACE_MISMATCH: &str = "E0212";
 // Missions.
 pub const MIXED_PARALLEL: &str = "E0301";
 pub const BAD_DELAY_ARGUMENT: &str = "E0302";
+pub const MONITOR_SHARES_TASK: &str = "W0303";
 
 // Building blocks.
 pub const BLOCK_PROPERTY: &str = "E0601";
+pub const PREMATURE_TRANSITION: &str = "W0602";
 
 // Constraints.
 pub const UNKNOWN_MISSION: &str = "E0401";
@@ -121,6 +123,7 @@ registry! {
     "E0212" => "interface id of an arc end does not match its declaration",
     "E0301" => "`and` and `or` mixed in one parallel",
     "E0302" => "a delay argument that is not a positive number of seconds",
+    "W0303" => "a task called both in a monitor's watched block and in its condition",
     "E0401" => "constraint names an unknown mission",
     "E0402" => "constraint names an unknown label",
     "E0403" => "ambiguous label in a constraint",
@@ -133,6 +136,7 @@ registry! {
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
     "E0601" => "building block that breaks the block properties",
+    "W0602" => "a transition left without an event fires before the event it competes with",
     "E0701" => "unknown planning type",
     "E0702" => "unknown entity or unbound variable in planning",
     "E0703" => "unknown attribute or function in planning",

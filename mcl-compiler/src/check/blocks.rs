@@ -74,7 +74,7 @@ fn what(property: &str) -> &'static str {
 
 fn help(property: &str) -> &'static str {
     match property {
-        "abort" => "an abort must take a running task back to rest at once, through immediate transitions, and do nothing at rest",
+        "abort" => "an abort must take a running task back to rest at once, through immediate transitions",
         "rest" => "when ok or fail is marked, the remaining transitions (e.g. the primitive's disable) must be immediate, so that the task is at rest before its next call starts",
         "reusability" => "every place outside begin/abort/ok/fail must be back to its initial marking when the task ends",
         "1-safe" => "a place of a building block holds at most one token",
@@ -154,6 +154,32 @@ fn check_tasks(cx: &mut Cx<'_>, block: &TasksBlock) {
                 }
             };
             cx.out.push(with_details(d, v));
+        }
+        // A task that breaks a property is reported once, by E0601.
+        let premature = if verdict.ok() { verdict.premature.as_slice() } else { &[] };
+        for f in premature.iter().filter(|f| !f.transition.starts_with('_')) {
+            let d = Diagnostic::warning(
+                codes::PREMATURE_TRANSITION,
+                format!(
+                    "transition `{}` of task `{}` fires at once: it has no event and no delay, and it takes `{}` before `{}` can wait for `{}`",
+                    f.transition, t.name.text, f.place, f.waiting, f.event
+                ),
+                t.name.span,
+            )
+            .with_label(
+                t.name.span,
+                format!("`{}` is immediate here, so `{}` never waits for `{}`", f.transition, f.waiting, f.event),
+            )
+            .with_note(format!(
+                "counterexample: {}, then `{}` fires before any event",
+                if f.trace.is_empty() { "(start)".to_string() } else { f.trace.join(" -> ") },
+                f.transition
+            ))
+            .with_help(format!(
+                "bind an event to it (`e: someEvent -> {0};`) or give it a delay (`{0}(30)` in the pattern) to make it a time-out; if it must fire at once, name it `_{0}`",
+                f.transition
+            ));
+            cx.out.push(d);
         }
     }
 }

@@ -20,8 +20,15 @@
 //! * **reusability** — in every final marking, every place of the block
 //!   (and of its children) is back to its initial marking;
 //! * for task patterns: an abort, and the end of the task, take the task
-//!   back to rest at once (through immediate transitions), and an abort at
-//!   rest enables nothing.
+//!   back to rest at once (through immediate transitions).
+//!
+//! The harness delivers to a block exactly what a composed mission can
+//! deliver to it (docs/blocks.md, "the protocol between a block and its
+//! children"): `begin` once, at rest; `abort` at most once, only while the
+//! block runs and has not produced its result, and only in a tangible
+//! marking (the environment's abort is an event). An abort at rest never
+//! happens inside a mission, so what a pattern would do with one (the seed's
+//! figure 4.3(c) consumes it, `abort.1 -> T1`) is not judged.
 //!
 //! A violation comes with the shortest run that shows it, in the block's own
 //! transition names (`begin` and `abort` are the environment's steps), and,
@@ -78,12 +85,33 @@ impl Violation {
     }
 }
 
+/// An immediate transition of a task that takes a token from a transition
+/// waiting for an event in a marking where both are enabled: it always wins
+/// (immediate transitions fire first), so the event is never waited for.
+/// Typically a transition the task meant to bind to an event but left
+/// unbound.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Premature {
+    /// The immediate transition (the pattern's name for it).
+    pub transition: String,
+    /// The transition waiting for an event that it pre-empts.
+    pub waiting: String,
+    /// That transition's event.
+    pub event: String,
+    /// The place both take a token from.
+    pub place: String,
+    /// The shortest run to a marking where it happens.
+    pub trace: Vec<String>,
+}
+
 /// The outcome of a verification.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Verdict {
     pub states: usize,
     pub tangible: usize,
     pub violations: Vec<Violation>,
+    /// For tasks: immediate transitions that pre-empt event transitions.
+    pub premature: Vec<Premature>,
 }
 
 impl Verdict {
@@ -109,7 +137,6 @@ pub struct Harness {
     env_transitions: Vec<TransitionId>,
     /// The environment's abort.
     env_abort: Option<TransitionId>,
-    abort_place: Option<PlaceId>,
     is_task: bool,
 }
 
@@ -130,7 +157,6 @@ pub fn mission_harness(net: Net) -> Option<Harness> {
         interface: vec![begin, ok, fail, abort],
         env_transitions: vec![],
         env_abort: None,
-        abort_place: None,
         is_task: false,
     })
 }
@@ -170,7 +196,6 @@ fn harness(net: Net, ext: Iface, env: Env, is_task: bool) -> Harness {
         interface: vec![ext.begin, ext.abort, ext.ok, ext.fail],
         env_transitions: env.transitions,
         env_abort: Some(env.abort),
-        abort_place: Some(ext.abort),
         is_task,
     }
 }
@@ -488,29 +513,6 @@ impl Harness {
                 self.task_checks(&ss, &dead, &mut violations);
             }
         }
-        if let (true, Some(abort_place)) = (self.is_task, self.abort_place) {
-            // An abort at rest must be inert.
-            let mut m = self.net.initial_marking();
-            m.0[abort_place.index()] += 1;
-            let env_ts = &self.env_transitions;
-            if let Some(t) = self
-                .net
-                .transition_ids()
-                .find(|&t| !env_ts.contains(&t) && mcl_net::semantics::is_enabled(&self.net, &m, t))
-            {
-                push(
-                    Violation::new(
-                        "abort",
-                        format!(
-                            "an abort at rest fires `{}`: abort must only act on a running task",
-                            self.net.transition(t).map(|x| x.id.as_str()).unwrap_or("?")
-                        ),
-                        vec!["abort".into()],
-                    ),
-                    &mut violations,
-                );
-            }
-        }
         if !complete {
             violations.push(Violation::new(
                 "size",
@@ -519,7 +521,91 @@ impl Harness {
             ));
         }
         let tangible = ss.states().filter(|&s| !ss.is_vanishing(s)).count();
-        Verdict { states: n, tangible, violations }
+        let premature = if self.is_task && complete { self.premature(&ss) } else { Vec::new() };
+        Verdict { states: n, tangible, violations, premature }
+    }
+
+    /// Immediate transitions of the block that, in some marking reached
+    /// without an abort, are enabled together with a transition waiting for
+    /// an event and share an input place with it, when that event was not
+    /// being waited for before: the immediate cascade that leads there
+    /// started in a tangible marking (or at the start) where the event's
+    /// transition was not enabled, so the event is never waited for. (A
+    /// cascade that starts while the event is awaited, such as a time-out
+    /// that disables the primitive, is the pattern's design.) One finding
+    /// per immediate transition, with the shortest run (states are in BFS
+    /// order).
+    fn premature(&self, ss: &StateSpace) -> Vec<Premature> {
+        let net = &self.net;
+        let own = |t: &TransitionId| !self.env_transitions.contains(t);
+        let immediate: Vec<TransitionId> = net
+            .transition_ids()
+            .filter(own)
+            .filter(|&t| net.transition(t).is_some_and(|x| x.kind.is_immediate()))
+            .collect();
+        let waiting: Vec<(TransitionId, String)> = net
+            .transition_ids()
+            .filter(own)
+            .filter_map(|t| match &net.transition(t)?.kind {
+                TransitionKind::Event(e) => Some((t, e.clone())),
+                _ => None,
+            })
+            .collect();
+        if immediate.is_empty() || waiting.is_empty() {
+            return Vec::new();
+        }
+        let mut preds: Vec<Vec<StateId>> = vec![Vec::new(); ss.len()];
+        for s in ss.states() {
+            for &(_, d) in ss.successors(s) {
+                preds[d.0 as usize].push(s);
+            }
+        }
+        let enabled = |s: StateId, t: TransitionId| net.pre(t).iter().all(|&(p, w)| ss.tokens(s, p) >= w);
+        // Whether some cascade into `s` started where `e` was not enabled.
+        let fresh = |s: StateId, e: TransitionId| {
+            let mut seen = vec![false; ss.len()];
+            let mut stack = vec![s];
+            while let Some(x) = stack.pop() {
+                if std::mem::replace(&mut seen[x.0 as usize], true) {
+                    continue;
+                }
+                let ps = &preds[x.0 as usize];
+                if x != s && (!ss.is_vanishing(x) || ps.is_empty()) || x == s && ps.is_empty() {
+                    if !enabled(x, e) {
+                        return true;
+                    }
+                    continue;
+                }
+                stack.extend(ps.iter().copied());
+            }
+            false
+        };
+        let mut found: Vec<Premature> = Vec::new();
+        for s in ss.states() {
+            if self.was_aborted(ss, s) {
+                continue;
+            }
+            for &t in &immediate {
+                let tname = self.step(t);
+                if found.iter().any(|f| f.transition == tname) || !enabled(s, t) {
+                    continue;
+                }
+                let hit = waiting.iter().find_map(|(e, event)| {
+                    let shared = net.pre(t).iter().find(|(p, _)| net.pre(*e).iter().any(|(q, _)| q == p))?.0;
+                    (enabled(s, *e) && fresh(s, *e)).then(|| (*e, event.clone(), shared))
+                });
+                if let Some((e, event, place)) = hit {
+                    found.push(Premature {
+                        transition: tname,
+                        waiting: self.step(e),
+                        event,
+                        place: self.place_name(place),
+                        trace: self.trace(ss, s),
+                    });
+                }
+            }
+        }
+        found
     }
 
     /// Tasks are shared by call sites through a lock that the call gives
