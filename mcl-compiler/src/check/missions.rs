@@ -93,8 +93,71 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                     );
                 }
             }
+            StmtKind::Monitor { body, handlers, .. } => check_monitor_sharing(cx, body, handlers),
             _ => {}
         });
+    }
+}
+
+/// Whether a call of task `name` can last: the task binds an event or its
+/// pattern has a timed transition (an instantaneous task, such as the seed's
+/// `Void`, holds its net for no time at all).
+fn can_wait(cx: &Cx<'_>, name: &str) -> bool {
+    let Some(task) = cx.scope.first(DefKind::Task, name).and_then(|id| scope::task(cx.db, id)) else { return false };
+    if task.bindings.iter().any(|b| b.kind == BindingKind::Event) {
+        return true;
+    }
+    task.pattern
+        .as_ref()
+        .and_then(|p| cx.scope.first(DefKind::Pattern, &p.text))
+        .and_then(|pid| scope::pattern_net(cx.db, pid))
+        .and_then(Result::ok)
+        .is_some_and(|net| net.transitions.iter().any(|t| t.delay.is_some()))
+}
+
+/// A task is one net shared by its calls (seed 5.7): two calls that are
+/// active at once run one after the other. A monitor's condition runs
+/// beside its watched block and normally ends only when what it watches
+/// happens, so a task called both in the watched block and in a condition
+/// (or in two conditions) makes one wait for the other: the block cannot
+/// run while the condition holds the task, or the condition does not watch
+/// while the block holds it. Reported once per task and monitor (W0303).
+fn check_monitor_sharing(cx: &mut Cx<'_>, body: &Block, handlers: &[MonitorHandler]) {
+    fn calls(b: &Block) -> Vec<&Call> {
+        let mut out = Vec::new();
+        walk_block(b, &mut |s| {
+            if let StmtKind::Call(c) = &s.kind {
+                out.push(c);
+            }
+        });
+        out
+    }
+    // (task, where it is first called, in what) for the watched block and each condition seen so far.
+    let mut seen: Vec<(&str, Span, &'static str)> =
+        calls(body).into_iter().map(|c| (c.name.text.as_str(), c.name.span, "the watched block")).collect();
+    let mut reported: Vec<&str> = Vec::new();
+    for h in handlers {
+        let here = calls(&h.condition);
+        for c in &here {
+            let name = c.name.text.as_str();
+            if reported.contains(&name) || !can_wait(cx, name) {
+                continue;
+            }
+            let Some(&(_, first, place)) = seen.iter().find(|(n, ..)| *n == name) else { continue };
+            reported.push(name);
+            cx.out.push(
+                Diagnostic::warning(
+                    codes::MONITOR_SHARES_TASK,
+                    format!("task `{name}` is called both in {place} of this monitor and in its condition: the two calls cannot run at once"),
+                    c.name.span,
+                )
+                .with_label(c.name.span, "this call waits while the other holds the task, or holds it while the other waits")
+                .with_label(first, format!("`{name}` is also called here, in {place}"))
+                .with_note("a task is one net shared by all its calls (seed 5.7): a second call waits until the first has ended; a condition normally ends only when what it watches happens")
+                .with_help("use a task of its own for the condition (another task on the same primitive), or call this task outside the monitor"),
+            );
+        }
+        seen.extend(here.into_iter().map(|c| (c.name.text.as_str(), c.name.span, "another condition")));
     }
 }
 
