@@ -27,6 +27,7 @@ pub const BAD_NUMBER_IN_PATTERN: &str = "E0209";
 pub const PNML_NOT_FOUND: &str = "E0210";
 pub const TIMED_AND_EVENT: &str = "E0211";
 pub const INTERFACE_MISMATCH: &str = "E0212";
+pub const EVENTS_WITHOUT_ACTION: &str = "W0213";
 
 // Missions.
 pub const MIXED_PARALLEL: &str = "E0301";
@@ -121,6 +122,7 @@ registry! {
     "E0210" => "PNML pattern file not found",
     "E0211" => "transition both timed and bound to an event",
     "E0212" => "interface id of an arc end does not match its declaration",
+    "W0213" => "a task that waits for events but sends no action",
     "E0301" => "`and` and `or` mixed in one parallel",
     "E0302" => "a delay argument that is not a positive number of seconds",
     "W0303" => "a task called both in a monitor's watched block and in its condition",

@@ -224,6 +224,32 @@ fn check_task(cx: &mut Cx<'_>, t: &TaskDef) {
             }
         }
     }
+    check_events_without_action(cx, t);
+}
+
+/// A task that waits for events but sends no action never tells the
+/// vehicle to start anything: its events come only if the vehicle sends them
+/// on its own, and the mock vehicle (which answers the primitives it is
+/// asked to enable) never does, so a dry run waits for ever (W0213).
+fn check_events_without_action(cx: &mut Cx<'_>, t: &TaskDef) {
+    let event = t.bindings.iter().find(|b| b.kind == BindingKind::Event);
+    if t.bindings.iter().any(|b| b.kind == BindingKind::Action) {
+        return;
+    }
+    let Some(event) = event else { return };
+    cx.out.push(
+        Diagnostic::warning(
+            codes::EVENTS_WITHOUT_ACTION,
+            format!("task `{}` waits for events but sends no action", t.name.text),
+            t.name.span,
+        )
+        .with_label(event.target.span, format!("`{}` only comes if the vehicle sends it unasked", event.target.text))
+        .with_note("the mock vehicle answers the primitives it is asked to enable: in a dry run this task waits for ever unless a scenario scripts its events")
+        .with_help(format!(
+            "bind the action that enables the primitive to the transition that starts the task (`a: enableX -> T0;`), or script the event in a scenario (`[[events]]` with `at = 10.0` and `event = \"{}\"`, docs/scenarios.md)",
+            event.target.text
+        )),
+    );
 }
 
 fn header_with(t: &TaskDef, extra: &str) -> String {
