@@ -238,6 +238,15 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Start a new project in a new folder NAME: a vehicle, a mission, a mock scenario and a README.
+    ///
+    /// NAME may be a path; its last part is the project's name (a letter, then letters, digits,
+    /// `-` and `_`). Exit status: 0 when the project is written, 2 when NAME is not valid, the
+    /// folder exists and is not empty, or a file cannot be written.
+    New {
+        /// The folder to create (it may exist if it is empty).
+        name: PathBuf,
+    },
     /// Explain a diagnostic code, with an example of the error and its fix.
     Explain {
         /// A code such as E0101; without one, lists every code.
@@ -264,6 +273,7 @@ fn main() -> ExitCode {
         Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
+        Command::New { name } => cmd::new::run(&name),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),
         Command::Plan {
             file,

@@ -14,6 +14,7 @@ pub const DUPLICATE_DEFINITION: &str = "E0110";
 pub const DUPLICATE_NODE: &str = "E0111";
 pub const DUPLICATE_LABEL: &str = "E0112";
 pub const DUPLICATE_PARAMETER: &str = "E0113";
+pub const UNNAMED_MISSIONS: &str = "E0114";
 
 // Tasks and patterns.
 pub const ARITY: &str = "E0201";
@@ -111,6 +112,7 @@ registry! {
     "E0111" => "duplicate place or transition",
     "E0112" => "duplicate label",
     "E0113" => "duplicate parameter",
+    "E0114" => "a mission without a name in a file with several missions",
     "E0201" => "wrong number of arguments",
     "E0202" => "action parameter missing from the task header",
     "E0204" => "event bound to two transitions",

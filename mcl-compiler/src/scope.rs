@@ -154,7 +154,8 @@ fn item_of(db: &dyn Db, id: DefId) -> Option<&Item> {
 /// `Item::Mission`): a named mission's (or operator's) name; an anonymous
 /// mission is `mission` when it is the file's only one, otherwise
 /// `mission1`, `mission2`, ... by its rank among the anonymous missions
-/// (skipping a number that a named mission already uses). Every tool that
+/// (skipping a number that a named mission already uses; only a file with
+/// E0114, which the editor still names, has several). Every tool that
 /// names a mission uses this one function: the checker's messages, the
 /// compiled nets and their PNML file names, `mcl run --mission` and traces.
 pub fn mission_names(file: &SourceFileAst) -> Vec<String> {
@@ -251,6 +252,31 @@ pub fn mission_parts(db: &dyn Db, file: SourceFile) -> Vec<u32> {
         .filter(|(_, c)| matches!(parse_item(db, c.text).file.items.first(), Some(Item::Mission(_))))
         .map(|(i, _)| i as u32)
         .collect()
+}
+
+/// The missions without a name of a file that has several missions (E0114):
+/// each one's part and the span of its keyword, relative to the part. Empty
+/// when the file has at most one mission. A mission whose header has a
+/// syntax error is left out: its name may be what the error is about.
+/// Equal across edits inside mission bodies.
+#[salsa::tracked(returns(ref))]
+pub fn unnamed_missions(db: &dyn Db, file: SourceFile) -> Vec<(u32, Span)> {
+    let parts = mission_parts(db, file);
+    if parts.len() < 2 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for &part in parts {
+        let Some(text) = *chunk_text(db, ChunkKey::new(db, file, part)) else { continue };
+        let parsed = parse_item(db, text);
+        let Some(Item::Mission(m)) = parsed.file.items.first() else { continue };
+        let (start, end) = (m.keyword_span.start, m.body.span.start);
+        let broken = parsed.errors.iter().any(|e| e.is_error() && e.span.start >= start && e.span.start <= end);
+        if m.name.is_none() && !broken {
+            out.push((part, m.keyword_span));
+        }
+    }
+    out
 }
 
 /// The net of a pattern: written in MCL, or read from its PNML file. `Err`

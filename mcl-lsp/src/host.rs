@@ -271,7 +271,7 @@ mod tests {
         let file = mcl_compiler::Db::file(&snap.db, &snap.world.path_of(&uri()));
         let writer = {
             let host = host.clone();
-            let text = format!("{text}\nmission {{ Nope() }}\n");
+            let text = format!("{text}\nmission : nope {{ Nope() }}\n");
             std::thread::spawn(move || {
                 host.apply(vec![Edit::Change {
                     uri: uri(),

@@ -8,6 +8,7 @@ pub mod explain;
 pub mod fmt;
 pub mod lsp;
 pub mod mock_aac;
+pub mod new;
 pub mod plan;
 pub mod run;
 

@@ -1,5 +1,6 @@
-//! Mission checks: calls against task headers, labels, parameters, and
-//! `parallel` blocks that mix `and` and `or`.
+//! Mission checks: calls against task headers, labels, parameters,
+//! `parallel` blocks that mix `and` and `or`, and missions without a name in
+//! a file that has several.
 
 use super::Cx;
 use crate::codes;
@@ -159,6 +160,23 @@ fn check_monitor_sharing(cx: &mut Cx<'_>, body: &Block, handlers: &[MonitorHandl
         }
         seen.extend(here.into_iter().map(|c| (c.name.text.as_str(), c.name.span, "another condition")));
     }
+}
+
+/// E0114: a file with several missions names each of them. Anonymous ones
+/// would be run as `mission1`, `mission2`, ... vehicles at once, a name
+/// that changes when a mission is added above them.
+pub(crate) fn check_unnamed(cx: &mut Cx<'_>) {
+    let unnamed = scope::unnamed_missions(cx.db, cx.file);
+    let Some(&(first, span)) = unnamed.first() else { return };
+    let mut d = Diagnostic::error(codes::UNNAMED_MISSIONS, "a file with several missions must name each of them", span);
+    cx.at_item(cx.file, first);
+    for &(part, span) in unnamed {
+        d = cx.item_label(d, cx.file, part, span, "this mission has no name");
+    }
+    cx.out.push(d.with_help(
+        "name each mission (`mission : auv { ... }`): the named missions of one file run together, one per vehicle, \
+         coordinated by the file's constraints (docs/coordination.md)",
+    ));
 }
 
 fn check_call(cx: &mut Cx<'_>, c: &Call, callee: Callee<'_>) {

@@ -79,6 +79,7 @@ pub fn check_definitions(db: &dyn Db, root: SourceFile) -> LocalDiagnostics {
     let mut cx = Cx::new(db, root, &EMPTY, &[]);
     definitions::check(&mut cx);
     definitions::check_imported_clashes(&mut cx);
+    missions::check_unnamed(&mut cx);
     unused::check_definitions(&mut cx);
     cx.finish()
 }
@@ -173,8 +174,21 @@ impl<'a> Cx<'a> {
     /// Adds a label at `span` inside definition `id`'s item (a span of a
     /// node read through `id`). The diagnostic must be the next one pushed.
     pub fn def_label(&mut self, d: Diagnostic, id: DefId, span: Span, message: impl Into<String>) -> Diagnostic {
+        self.item_label(d, id.file, id.item, span, message)
+    }
+
+    /// Adds a label at `span`, relative to the start of part `item` of
+    /// `file`. The diagnostic must be the next one pushed.
+    pub fn item_label(
+        &mut self,
+        d: Diagnostic,
+        file: SourceFile,
+        item: u32,
+        span: Span,
+        message: impl Into<String>,
+    ) -> Diagnostic {
         let label = d.labels.len() as u32;
-        self.anchors.push(Anchor { diag: self.out.len() as u32, label: Some(label), file: id.file, item: id.item });
+        self.anchors.push(Anchor { diag: self.out.len() as u32, label: Some(label), file, item });
         d.with_label(span, message)
     }
 
@@ -197,7 +211,13 @@ impl<'a> Cx<'a> {
     /// Puts the main span (and the labels without an anchor) of the next
     /// diagnostic pushed inside definition `id`'s item.
     pub fn at_def(&mut self, id: DefId) {
-        self.anchors.push(Anchor { diag: self.out.len() as u32, label: None, file: id.file, item: id.item });
+        self.at_item(id.file, id.item);
+    }
+
+    /// Puts the main span (and the labels without an anchor) of the next
+    /// diagnostic pushed inside part `item` of `file`.
+    pub fn at_item(&mut self, file: SourceFile, item: u32) {
+        self.anchors.push(Anchor { diag: self.out.len() as u32, label: None, file, item });
     }
 
     /// Adds "did you mean" help for `name` among `candidates`.
