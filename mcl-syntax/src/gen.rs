@@ -312,6 +312,19 @@ impl Writer {
         self.call_text(p)
     }
 
+    /// A monitor's condition: a check that the watched block, written from
+    /// `self.out[body..]`, does not call (a task shared by the two makes
+    /// them wait for each other, W0303), or the instantaneous `Void()`.
+    fn watch(&mut self, body: usize) -> String {
+        let text = &self.out[body..];
+        let free: Vec<&Prim> = PRIMS.iter().filter(|p| p.check && !text.contains(&format!("{}(", p.name))).collect();
+        if free.is_empty() {
+            return "Void()".to_string();
+        }
+        let p = *self.rng.pick(&free);
+        self.call_text(p)
+    }
+
     /// A condition: a check, sometimes negated.
     fn cond(&mut self) -> String {
         let c = self.check();
@@ -384,8 +397,9 @@ impl Writer {
             11 | 12 => {
                 let kw = if kind == 11 { "condition" } else { "while_condition" };
                 self.line(ind, "monitor {");
+                let body = self.out.len();
                 self.seq(ind + 1, depth - 1, 3);
-                let c = self.check();
+                let c = self.watch(body);
                 self.line(ind, &format!("}} {kw} ( {c} ) do {{"));
                 self.seq(ind + 1, depth - 1, 2);
                 self.line(ind, &format!("}}{end}"));

@@ -243,6 +243,7 @@ fn check_events_without_action(cx: &mut Cx<'_>, t: &TaskDef) {
             format!("task `{}` waits for events but sends no action", t.name.text),
             t.name.span,
         )
+        .with_label(t.name.span, "no `a:` binding: this task never enables a primitive")
         .with_label(event.target.span, format!("`{}` only comes if the vehicle sends it unasked", event.target.text))
         .with_note("the mock vehicle answers the primitives it is asked to enable: in a dry run this task waits for ever unless a scenario scripts its events")
         .with_help(format!(
