@@ -83,10 +83,7 @@ fn print_errors(errors: &[mcl_plan::Error]) {
 /// Type-checks the .mcl program (the file and its imports) with the compiler.
 fn check_mcl(path: &Path) -> Result<(), String> {
     let db = Database::new();
-    let root = db.file(path);
-    if root.text(&db).is_none() {
-        return Err(format!("cannot read `{}`", path.display()));
-    }
+    let root = super::source_file(&db, path)?;
     let std = db.stdlib();
     let mut diags: Vec<FileDiagnostic> = Vec::new();
     for &f in program(&db, root).files.iter() {
@@ -220,10 +217,10 @@ pub fn run(o: Options) -> u8 {
         return execute(domain, problem, &ops, &run_ops, algorithm(o.search, o.heuristic), o.max_states, x);
     }
     if let Some(plan_path) = &o.validate {
-        let text = match std::fs::read_to_string(plan_path) {
+        let text = match mcl_net::input::read_source(plan_path) {
             Ok(t) => t,
             Err(e) => {
-                eprintln!("error: cannot read `{}`: {e}", plan_path.display());
+                eprintln!("error: {e}");
                 return 2;
             }
         };
@@ -469,13 +466,10 @@ fn execute(
         return 2;
     }
     let world_path = x.world.clone().unwrap_or_else(|| file.parent().unwrap_or(Path::new(".")).join("world.xml"));
-    let xml = match std::fs::read_to_string(&world_path) {
+    let xml = match mcl_net::input::read_source(&world_path) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!(
-                "error: cannot read the fact-provider scripts `{}`: {e} (give --world W.xml)",
-                world_path.display()
-            );
+            eprintln!("error: the fact-provider scripts: {e} (give --world W.xml)");
             return 2;
         }
     };
