@@ -71,7 +71,10 @@ impl Excerpt {
     fn new(file: &str, ranges: &[std::ops::Range<usize>]) -> Excerpt {
         let lo = ranges.iter().map(|r| r.start).min().unwrap_or(0);
         let hi = ranges.iter().map(|r| r.end).max().unwrap_or(0).max(lo);
-        let start = file[..lo].rfind('\n').map_or(0, |i| i + 1);
+        // A label at the end of a file that ends with a newline is shown on
+        // the last line.
+        let line_of = if lo == file.len() && file.ends_with('\n') { lo - 1 } else { lo };
+        let start = file[..line_of].rfind('\n').map_or(0, |i| i + 1);
         let end = file[hi..].find('\n').map_or(file.len(), |i| hi + i + 1);
         let first_line = file.as_bytes()[..start].iter().filter(|b| **b == b'\n').count();
         let mut ex = Excerpt { text: "\n".repeat(first_line), pieces: Vec::new(), cut: Vec::new() };
@@ -85,7 +88,7 @@ impl Excerpt {
             if n <= MAX_LINE_CHARS {
                 ex.pieces.push((line_start, line_end, chars));
                 ex.text.push_str(line);
-                chars += n;
+                chars += line.chars().count();
             } else {
                 // A window that starts a little before the first label on the line.
                 let anchor = ranges
