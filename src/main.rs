@@ -146,7 +146,8 @@ enum Command {
     /// invalid), 2 on bad input, 3 when --max-states is reached. With --run --mock, executes the
     /// plan as a dry run against the mock vehicle, with --run --aac HOST:PORT against a vehicle's
     /// AAC in real time, and re-plans when the world differs (exit status 0 goal reached, 1 no
-    /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit).
+    /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit, 130/143 after
+    /// SIGINT/SIGTERM with the trace flushed).
     Plan {
         /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
         file: Option<PathBuf>,

@@ -444,11 +444,20 @@ impl TraceWriter {
 
     /// Appends one record (a whole line).
     pub fn write(&mut self, r: &Record) -> std::io::Result<()> {
+        self.write_line(&r.kind, r)
+    }
+
+    /// Appends one record given as JSON (`mcl plan --run`'s records).
+    pub fn write_json(&mut self, r: &Value) -> std::io::Result<()> {
+        self.write_line(r["kind"].as_str().unwrap_or(""), r)
+    }
+
+    fn write_line(&mut self, kind: &str, r: &impl Serialize) -> std::io::Result<()> {
         let mut line = serde_json::to_vec(r)?;
         line.push(b'\n');
         let mut p = self.pending();
         p.buf.extend_from_slice(&line);
-        if p.buf.len() >= FLUSH_BYTES || matches!(r.kind.as_str(), "outcome" | "coord_summary") {
+        if p.buf.len() >= FLUSH_BYTES || matches!(kind, "outcome" | "coord_summary") {
             p.flush();
         }
         p.take_error()

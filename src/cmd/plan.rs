@@ -310,7 +310,7 @@ fn algorithm(search: SearchChoice, heuristic: HeuristicChoice) -> Algorithm {
 
 /// Trace file and live log of `--run`.
 struct RunSink {
-    trace: Option<std::io::BufWriter<std::fs::File>>,
+    trace: Option<mcl_runtime::trace::TraceWriter>,
     live: bool,
     error: Option<String>,
 }
@@ -318,10 +318,7 @@ struct RunSink {
 impl mcl_plan::run::RecordSink for RunSink {
     fn record(&mut self, record: serde_json::Value, live: Option<String>) {
         if let Some(w) = &mut self.trace {
-            let r = serde_json::to_writer(&mut *w, &record)
-                .map_err(|e| e.to_string())
-                .and_then(|()| w.write_all(b"\n").map_err(|e| e.to_string()));
-            if let Err(e) = r {
+            if let Err(e) = w.write_json(&record) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
             }
         }
@@ -445,6 +442,7 @@ fn execute(
 ) -> u8 {
     use mcl_plan::executor::Executor;
     use mcl_runtime::scenario::Scenario;
+    crate::interrupt::install();
     if x.mock == x.aac.is_some() {
         eprintln!("error: --run needs --mock (the in-process mock vehicle) or --aac HOST:PORT (a vehicle's AAC)");
         return 2;
@@ -506,20 +504,10 @@ fn execute(
         }
     };
     ex.max_states = max_states;
-    let trace = match &x.trace {
-        Some(p) => {
-            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-                let _ = std::fs::create_dir_all(dir);
-            }
-            match std::fs::File::create(p) {
-                Ok(f) => Some(std::io::BufWriter::new(f)),
-                Err(e) => {
-                    eprintln!("error: cannot write trace `{}`: {e}", p.display());
-                    return 2;
-                }
-            }
-        }
-        None => None,
+    // The same traces as `mcl run`: whole lines, flushed on SIGINT/SIGTERM.
+    let trace = match super::run::open_trace(&x.trace) {
+        Ok(t) => t,
+        Err(code) => return code,
     };
     let mut sink = RunSink { trace, live: !x.quiet, error: None };
     let opts = mcl_plan::run::RunOptions {

@@ -220,7 +220,7 @@ impl Sink for RunSink {
 }
 
 /// The trace writer of `--trace FILE`, flushed on SIGINT and SIGTERM too.
-fn open_trace(path: &Option<PathBuf>) -> Result<Option<TraceWriter>, u8> {
+pub(crate) fn open_trace(path: &Option<PathBuf>) -> Result<Option<TraceWriter>, u8> {
     let Some(p) = path else { return Ok(None) };
     match TraceWriter::create(p) {
         Ok(w) => {
