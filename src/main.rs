@@ -2,6 +2,7 @@
 //! together; every capability lives in a library crate.
 
 mod cmd;
+mod interrupt;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -33,10 +34,11 @@ pub enum ColorChoice {
 enum Command {
     /// Check MCL files for errors (files, or folders searched for *.mcl).
     ///
-    /// Exit status: 0 without errors (warnings allowed), 1 with errors, 2 on a usage or I/O error.
+    /// Exit status: 0 without errors (warnings allowed), 1 with errors, 2 on a usage or I/O error
+    /// (a file that cannot be read is reported and the others are still checked).
     Check {
-        /// Files or folders to check.
-        #[arg(required = true)]
+        /// Files or folders to check (default: the current folder).
+        #[arg(default_value = ".")]
         paths: Vec<PathBuf>,
         /// Output format: human-readable reports or one JSON array.
         #[arg(long, value_enum, default_value = "human")]
@@ -85,7 +87,8 @@ enum Command {
     /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
     /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
-    /// 3 mission stuck or time limit passed.
+    /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
+    /// flushed first).
     Run(cmd::run::Options),
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
@@ -143,7 +146,8 @@ enum Command {
     /// invalid), 2 on bad input, 3 when --max-states is reached. With --run --mock, executes the
     /// plan as a dry run against the mock vehicle, with --run --aac HOST:PORT against a vehicle's
     /// AAC in real time, and re-plans when the world differs (exit status 0 goal reached, 1 no
-    /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit).
+    /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit, 130/143 after
+    /// SIGINT/SIGTERM with the trace flushed).
     Plan {
         /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
         file: Option<PathBuf>,

@@ -596,6 +596,34 @@ fn a_vehicle_changed_on_disk_is_reloaded() {
     assert_eq!(lsp.shutdown(), 0);
 }
 
+/// A FIFO and a device imported by an open document: errors at the imports,
+/// and the server never blocks on them (the other document still gets its
+/// diagnostics).
+#[cfg(unix)]
+#[test]
+fn imports_of_fifos_and_devices_are_errors_and_never_block() {
+    let mission = "import \"pipe.mcl\";\nimport \"/dev/zero\";\nmission { Void() }\n";
+    let root = workspace("special", &[("vehicle.mcl", VEHICLE), ("m.mcl", mission), ("mission.mcl", MISSION)]);
+    let made = std::process::Command::new("mkfifo").arg(root.join("pipe.mcl")).status().unwrap();
+    assert!(made.success());
+    let mut lsp = Lsp::start(&root);
+    lsp.initialize(client_caps());
+    lsp.open("m.mcl", mission);
+    let d = lsp.diagnostics("m.mcl", Some(1));
+    let messages: Vec<&str> = d["diagnostics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|x| x["code"] == "E0501")
+        .map(|x| x["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(messages.len(), 2, "{d}");
+    assert!(messages[0].contains("FIFO") && messages[1].contains("character device"), "{messages:?}");
+    lsp.open("mission.mcl", MISSION);
+    assert_eq!(lsp.diagnostics("mission.mcl", Some(1))["diagnostics"], json!([]));
+    assert_eq!(lsp.shutdown(), 0);
+}
+
 #[test]
 fn exit_without_shutdown_is_status_1() {
     let root = workspace("exit", &[]);

@@ -1,19 +1,24 @@
 //! The salsa database: source files are inputs, everything else is a query.
 
 use dashmap::DashMap;
+use mcl_net::input::Reason;
 use salsa::Setter;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 
 /// One source file. `text` is `None` when the file does not exist or cannot
-/// be read; it is still an input so that creating the file later invalidates
-/// every query that looked for it.
+/// be read (`unreadable` says why); it is still an input so that creating the
+/// file later invalidates every query that looked for it. Files are read by
+/// `mcl_net::input` (regular files only, at most 16 MiB).
 #[salsa::input(debug)]
 pub struct SourceFile {
     #[returns(ref)]
     pub path: PathBuf,
     #[returns(ref)]
     pub text: Option<Arc<str>>,
+    /// Why `text` is `None`.
+    #[returns(ref)]
+    pub unreadable: Option<Reason>,
 }
 
 /// The database interface the queries need.
@@ -49,8 +54,8 @@ impl Db for Database {
         if let Some(f) = self.files.get(&path) {
             return *f;
         }
-        let text = read(&path);
-        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text))
+        let (text, unreadable) = read(&path);
+        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, text, unreadable))
     }
 
     fn stdlib(&self) -> SourceFile {
@@ -58,7 +63,10 @@ impl Db for Database {
         if let Some(f) = self.files.get(&path) {
             return *f;
         }
-        *self.files.entry(path.clone()).or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT))))
+        *self
+            .files
+            .entry(path.clone())
+            .or_insert_with(|| SourceFile::new(self, path, Some(Arc::from(STDLIB_TEXT)), None))
     }
 }
 
@@ -84,10 +92,13 @@ impl Database {
                 if f.text(self) != &text {
                     f.set_text(self).to(text);
                 }
+                if f.unreadable(self).is_some() {
+                    f.set_unreadable(self).to(None);
+                }
                 f
             }
             None => {
-                let f = SourceFile::new(self, path.clone(), text);
+                let f = SourceFile::new(self, path.clone(), text, None);
                 self.files.insert(path, f);
                 f
             }
@@ -100,9 +111,12 @@ impl Database {
         let path = normalize(path);
         let existing = self.files.get(&path).map(|f| *f);
         if let Some(f) = existing {
-            let text = read(&path);
+            let (text, unreadable) = read(&path);
             if f.text(self) != &text {
                 f.set_text(self).to(text);
+            }
+            if f.unreadable(self) != &unreadable {
+                f.set_unreadable(self).to(unreadable);
             }
         }
     }
@@ -113,13 +127,16 @@ impl Database {
     }
 }
 
-fn read(path: &Path) -> Option<Arc<str>> {
+/// The text of a file, or why it cannot be read. Never blocks (a FIFO is
+/// refused before it is opened) and never reads more than
+/// `mcl_net::input::MAX_SOURCE_BYTES`.
+fn read(path: &Path) -> (Option<Arc<str>>, Option<Reason>) {
     // A byte order mark is no part of the text: without it, byte offsets,
     // columns and the rendered source lines agree.
-    std::fs::read_to_string(path).ok().map(|t| match t.strip_prefix('\u{feff}') {
-        Some(rest) => Arc::from(rest),
-        None => Arc::from(t),
-    })
+    match mcl_net::input::read_source(path) {
+        Ok(t) => (Some(t.strip_prefix('\u{feff}').map_or_else(|| Arc::from(t.as_str()), Arc::from)), None),
+        Err(e) => (None, Some(e.reason)),
+    }
 }
 
 /// Makes a path absolute and removes `.` and `..` components lexically (and

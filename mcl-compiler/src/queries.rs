@@ -225,24 +225,7 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
     let mut diagnostics = Vec::new();
     for imp in imports(db, root) {
         if imp.target.text(db).is_none() {
-            let shown = imp.written.clone();
-            let d = if imp.path.is_dir() {
-                Diagnostic::error(
-                    codes::IMPORT_NOT_FOUND,
-                    format!("cannot import `{shown}`: it is a folder"),
-                    imp.path_span,
-                )
-                .with_help("import one `.mcl` file")
-            } else {
-                Diagnostic::error(
-                    codes::IMPORT_NOT_FOUND,
-                    format!("cannot find the imported file `{shown}`"),
-                    imp.path_span,
-                )
-                .with_label(imp.path_span, "no readable file at this path")
-                .with_help("import paths are relative to the folder of the importing file")
-            };
-            diagnostics.push(FileDiagnostic { file: root, diag: d });
+            diagnostics.push(FileDiagnostic { file: root, diag: unreadable_import(db, imp) });
             continue;
         }
         if imp.target == root {
@@ -265,6 +248,28 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
         }
     }
     Program { root, files, diagnostics }
+}
+
+/// E0501 for an import whose file cannot be read, saying why.
+fn unreadable_import(db: &dyn Db, imp: &ResolvedImport) -> Diagnostic {
+    use mcl_net::input::Reason;
+    let shown = &imp.written;
+    let error = |message: String| Diagnostic::error(codes::IMPORT_NOT_FOUND, message, imp.path_span);
+    match imp.target.unreadable(db) {
+        None | Some(Reason::NotFound) => error(format!("cannot find the imported file `{shown}`"))
+            .with_label(imp.path_span, "no readable file at this path")
+            .with_help("import paths are relative to the folder of the importing file"),
+        Some(Reason::Folder) => {
+            error(format!("cannot import `{shown}`: it is a folder")).with_help("import one `.mcl` file")
+        }
+        Some(r @ Reason::NotRegular(_)) => {
+            error(format!("cannot import `{shown}`: {r}")).with_help("import a regular `.mcl` file")
+        }
+        Some(r @ Reason::TooLarge { .. }) => error(format!("cannot import `{shown}`: {r}"))
+            .with_help("split the file: a source file holds at most 16 MiB"),
+        Some(r @ Reason::NotUtf8) => error(format!("cannot import `{shown}`: {r}")).with_help("save the file as UTF-8"),
+        Some(r @ Reason::Io(_)) => error(format!("cannot import `{shown}`: {r}")),
+    }
 }
 
 fn file_name(db: &dyn Db, f: SourceFile) -> String {
@@ -317,7 +322,10 @@ fn path_to(db: &dyn Db, from: SourceFile, to: SourceFile) -> Option<Vec<SourceFi
 pub fn pnml_pattern(db: &dyn Db, file: SourceFile) -> Result<mcl_syntax::ast::PatternNet, String> {
     use mcl_syntax::ast::{ArcDef, Delay as AstDelay, Name, NodeRef, Number, PatternNet, PlaceDef, TransitionDef};
     let Some(text) = file.text(db) else {
-        return Err(format!("cannot read `{}`", file.path(db).display()));
+        return Err(match file.unreadable(db) {
+            Some(r) => format!("cannot read `{}`: {r}", file.path(db).display()),
+            None => format!("cannot read `{}`", file.path(db).display()),
+        });
     };
     let net = mcl_net::read_pnml(text).map_err(|e| format!("{}: {e}", file.path(db).display()))?;
     let is_ident = |s: &str| {

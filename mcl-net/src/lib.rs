@@ -7,7 +7,8 @@
 //! * [`semantics`]: the one firing rule (immediate first, random choice) and an
 //!   incremental enabled-set tracker;
 //! * [`mod@explore`]: explicit-state reachability analysis;
-//! * [`structural`]: incidence matrix, invariants, siphons and traps.
+//! * [`structural`]: incidence matrix, invariants, siphons and traps;
+//! * [`input`]: the bounded reader of every input file (regular files only).
 //!
 //! ```
 //! use mcl_net::{analyze, NetBuilder, Options, Place, Transition};
@@ -31,6 +32,7 @@
 #![warn(missing_docs)]
 
 pub mod explore;
+pub mod input;
 pub mod model;
 mod name;
 pub mod pnml;

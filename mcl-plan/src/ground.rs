@@ -191,6 +191,8 @@ struct Ctx<'a> {
     errors: Vec<Error>,
     /// Join steps left before grounding gives up.
     budget: std::cell::Cell<u64>,
+    /// The action being grounded when a limit was reached.
+    blown: std::cell::Cell<Option<usize>>,
 }
 
 fn err(file: &str, line: usize, msg: String) -> Error {
@@ -206,8 +208,15 @@ pub fn ground(d: &Domain, p: &Problem) -> Result<Task, Vec<Error>> {
 
 /// Join steps [`ground`] takes before giving up on a problem too large to ground.
 pub const DEFAULT_BUDGET: u64 = 200_000_000;
+/// The most ground actions grounding makes before giving up (an action with
+/// 8 parameters over 60 objects would have 1.7e14 of them).
+pub const MAX_GROUND_ACTIONS: usize = 1_000_000;
+/// The most reachable facts grounding indexes before giving up.
+pub const MAX_FACTS: usize = 1_000_000;
 
-/// [`ground`], giving up after `budget` join steps.
+/// [`ground`], giving up after `budget` join steps, [`MAX_GROUND_ACTIONS`]
+/// ground actions or [`MAX_FACTS`] facts, with an error at the action being
+/// grounded then.
 pub fn ground_with_budget(d: &Domain, p: &Problem, budget: u64) -> Result<Task, Vec<Error>> {
     let pf = p.file.as_str();
     let types = Types::new(d).map_err(|m| vec![err(&d.file, 1, m)])?;
@@ -324,6 +333,7 @@ pub fn ground_with_budget(d: &Domain, p: &Problem, budget: u64) -> Result<Task, 
         domains: Vec::new(),
         errors: Vec::new(),
         budget: std::cell::Cell::new(budget),
+        blown: std::cell::Cell::new(None),
     };
     let mut init = Vec::new();
     let mut static_facts = Vec::new();
@@ -415,9 +425,17 @@ pub fn ground_with_budget(d: &Domain, p: &Problem, budget: u64) -> Result<Task, 
                     bindings.push((ai as u32, b));
                 }
             }
+            if bindings.len() > MAX_GROUND_ACTIONS || cx.facts.len() > MAX_FACTS {
+                cx.blow(ai);
+            }
+            if cx.budget.get() == 0 {
+                cx.blown.set(cx.blown.get().or(Some(ai)));
+                break;
+            }
         }
         if cx.budget.get() == 0 {
-            return Err(vec![err(pf, 1, format!("grounding gave up after {budget} steps: the problem is too large to ground (an action with many parameters over many objects?)"))]);
+            let ai = cx.blown.get().unwrap_or_default();
+            return Err(vec![too_large(d, &cx.domains[ai], ai, budget)]);
         }
         if cx.facts.len() == before && bindings.len() == nb {
             break;
@@ -533,6 +551,26 @@ pub fn ground_with_budget(d: &Domain, p: &Problem, budget: u64) -> Result<Task, 
         pred_index,
         obj_index,
     })
+}
+
+/// The error of a grounding that gave up while grounding action `ai`: at the
+/// action, with its parameters and the objects they range over.
+fn too_large(d: &Domain, domains: &[Vec<u32>], ai: usize, budget: u64) -> Error {
+    let a = &d.actions[ai];
+    let sizes: Vec<String> = domains.iter().map(|v| v.len().to_string()).collect();
+    let instances: f64 = domains.iter().map(|v| v.len() as f64).product();
+    err(
+        &d.file,
+        a.line,
+        format!(
+            "grounding gave up on action `{}`: {} parameters over {} objects (up to {instances:.3e} instances) \
+             exceed the limits of {MAX_GROUND_ACTIONS} ground actions, {MAX_FACTS} facts and {budget} join steps; \
+             the problem is too large to ground (give the parameters preconditions on static facts, or fewer objects)",
+            a.name,
+            a.params.len(),
+            if sizes.is_empty() { "no".to_string() } else { sizes.join(" × ") }
+        ),
+    )
 }
 
 /// Order in which the positive preconditions are joined: greedily the one
@@ -652,6 +690,12 @@ impl Ctx<'_> {
             .all(|l| !self.static_set.contains(&self.inst(&l.atom, b)))
     }
 
+    /// Spends the whole budget: action `ai` makes too many ground actions or facts.
+    fn blow(&self, ai: usize) {
+        self.budget.set(0);
+        self.blown.set(self.blown.get().or(Some(ai)));
+    }
+
     /// Takes one step of the budget; false when it is spent.
     #[inline]
     fn tick(&self) -> bool {
@@ -727,6 +771,9 @@ impl Ctx<'_> {
         }
         if k == bind.len() {
             if self.conds_hold(a, bind) && self.static_negs_hold(a, bind) {
+                if out.len() >= MAX_GROUND_ACTIONS {
+                    return self.blow(ai);
+                }
                 out.push(bind.clone().into_boxed_slice());
             }
             return;

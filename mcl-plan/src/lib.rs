@@ -65,8 +65,9 @@ pub struct Solution {
 /// Reads and parses a domain and a problem file.
 pub fn load(domain: &Path, problem: &Path) -> Result<(Domain, Problem), Vec<Error>> {
     let read = |p: &Path| {
-        std::fs::read_to_string(p).map_err(|e| {
-            vec![Error { file: p.display().to_string(), line: 1, column: 1, message: format!("cannot read: {e}") }]
+        mcl_net::input::read_source(p).map_err(|e| {
+            let message = format!("cannot read: {}", e.reason);
+            vec![Error { file: p.display().to_string(), line: 1, column: 1, message }]
         })
     };
     let dt = read(domain)?;

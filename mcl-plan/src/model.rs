@@ -69,14 +69,14 @@ impl McProgram {
                 continue;
             }
             seen.push(key);
-            let text = match std::fs::read_to_string(&p) {
+            let text = match mcl_net::input::read_source(&p) {
                 Ok(t) => t,
                 Err(e) => {
                     errors.push(Error {
                         file: p.display().to_string(),
                         line: 1,
                         column: 1,
-                        message: format!("cannot read: {e}"),
+                        message: format!("cannot read: {}", e.reason),
                     });
                     continue;
                 }

@@ -198,8 +198,7 @@ fn with_abort_hook(net: &Net, remap: Option<&dyn Fn(&mut SourceSpan)>) -> Result
 impl Missions {
     /// Compiles the operators file (it must have no errors).
     pub fn load(ops_path: &Path) -> Result<Missions, String> {
-        let ops_text =
-            std::fs::read_to_string(ops_path).map_err(|e| format!("cannot read `{}`: {e}", ops_path.display()))?;
+        let ops_text = mcl_net::input::read_source(ops_path).map_err(|e| e.to_string())?;
         let db = Database::new();
         let f = db.file(ops_path);
         let nets = match compile_file(&db, f) {

@@ -206,7 +206,8 @@ impl JournalWriter {
 
     /// Opens a journal to continue it, cutting an incomplete last line.
     pub fn append_to(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read(path).map_err(|e| format!("cannot read journal `{}`: {e}", path.display()))?;
+        let text =
+            mcl_net::input::read_bytes(path, mcl_net::input::MAX_RECORDS_BYTES).map_err(|e| format!("journal: {e}"))?;
         let keep = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
         let file = OpenOptions::new()
             .write(true)
@@ -242,7 +243,8 @@ impl JournalWriter {
 
 /// Reads a journal. A last line cut by a crash is ignored.
 pub fn read_journal(path: &Path) -> Result<Vec<Entry>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read journal `{}`: {e}", path.display()))?;
+    let text =
+        mcl_net::input::read_text(path, mcl_net::input::MAX_RECORDS_BYTES).map_err(|e| format!("journal: {e}"))?;
     let complete = text.rfind('\n').map_or("", |i| &text[..=i]);
     let mut out = Vec::new();
     for (i, line) in complete.lines().enumerate() {

@@ -325,8 +325,7 @@ impl Scenario {
 
     /// Reads and parses a scenario file.
     pub fn load(path: &Path) -> Result<Scenario, String> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| format!("cannot read scenario `{}`: {e}", path.display()))?;
+        let text = mcl_net::input::read_source(path).map_err(|e| format!("scenario: {e}"))?;
         Scenario::from_toml(&text, &path.display().to_string())
     }
 

@@ -1304,12 +1304,13 @@ pub struct StateFile {
 impl StateFile {
     /// Reads a state file; a missing file is an empty state.
     pub fn load(path: &std::path::Path) -> io::Result<StateFile> {
-        match std::fs::read_to_string(path) {
+        use mcl_net::input::{read_source, Reason};
+        match read_source(path) {
             Ok(text) => serde_json::from_str(&text).map_err(|e| {
                 io::Error::new(io::ErrorKind::InvalidData, format!("{}: not a state file: {e}", path.display()))
             }),
-            Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(StateFile { version: 1, sessions: Vec::new() }),
-            Err(e) => Err(e),
+            Err(e) if e.reason == Reason::NotFound => Ok(StateFile { version: 1, sessions: Vec::new() }),
+            Err(e) => Err(io::Error::other(e.to_string())),
         }
     }
 

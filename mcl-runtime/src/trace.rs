@@ -28,6 +28,7 @@
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, Weak};
 
 use mcl_net::{Net, SourceSpan};
 use serde::{Deserialize, Serialize};
@@ -150,7 +151,7 @@ impl SourceMap {
             None => span.file.clone(),
         };
         let starts = self.files.entry(span.file.clone()).or_insert_with(|| {
-            std::fs::read(&span.file).ok().map(|bytes| {
+            mcl_net::input::read_bytes(Path::new(&span.file), mcl_net::input::MAX_SOURCE_BYTES).ok().map(|bytes| {
                 std::iter::once(0u32)
                     .chain(bytes.iter().enumerate().filter(|(_, &b)| b == b'\n').map(|(i, _)| i as u32 + 1))
                     .collect()
@@ -362,46 +363,184 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
     Some(line)
 }
 
-/// Writes records as JSON lines.
+/// Writes records as JSON lines that survive the end of the process.
+///
+/// Each record is serialized whole and appended to a buffer of complete
+/// lines; the buffer goes to the file in one write, so the file only ever
+/// grows by whole lines. Flush policy (documented in docs/running.md):
+/// at every `outcome` and `coord_summary` record, whenever 64 KiB are
+/// buffered, at least every second (a background thread flushes what is
+/// buffered), on [`TraceWriter::flush`] and on drop, and through a
+/// [`TraceFlusher`] (which `mcl run` calls on SIGINT and SIGTERM).
 pub struct TraceWriter {
-    out: std::io::BufWriter<std::fs::File>,
+    shared: Arc<Mutex<Pending>>,
+}
+
+/// Lines not yet in the file.
+struct Pending {
+    file: std::fs::File,
+    buf: Vec<u8>,
+    /// The first write error, reported by the next `write` or `flush`.
+    error: Option<std::io::Error>,
+}
+
+impl Pending {
+    fn flush(&mut self) {
+        if self.buf.is_empty() {
+            return;
+        }
+        if let Err(e) = self.file.write_all(&self.buf) {
+            self.error.get_or_insert(e);
+        }
+        self.buf.clear();
+    }
+
+    fn take_error(&mut self) -> std::io::Result<()> {
+        self.error.take().map_or(Ok(()), Err)
+    }
+}
+
+/// Buffered lines beyond this many bytes are written at once.
+const FLUSH_BYTES: usize = 64 << 10;
+/// Buffered lines are written at least this often.
+const FLUSH_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Flushes a [`TraceWriter`] from elsewhere (a signal handler's thread);
+/// does nothing once the writer is gone.
+#[derive(Clone)]
+pub struct TraceFlusher(Weak<Mutex<Pending>>);
+
+impl TraceFlusher {
+    /// Writes the buffered lines to the file.
+    pub fn flush(&self) {
+        if let Some(p) = self.0.upgrade() {
+            p.lock().unwrap_or_else(|e| e.into_inner()).flush();
+        }
+    }
 }
 
 impl TraceWriter {
-    /// Creates (truncates) the file.
+    /// Creates (truncates) the file, and starts the thread that flushes it
+    /// every second.
     pub fn create(path: &Path) -> std::io::Result<Self> {
         if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)?;
         }
-        Ok(TraceWriter { out: std::io::BufWriter::new(std::fs::File::create(path)?) })
+        let file = std::fs::File::create(path)?;
+        let shared = Arc::new(Mutex::new(Pending { file, buf: Vec::new(), error: None }));
+        let flusher = TraceFlusher(Arc::downgrade(&shared));
+        std::thread::Builder::new().name("trace-flush".into()).spawn(move || {
+            while flusher.0.strong_count() > 0 {
+                std::thread::sleep(FLUSH_EVERY);
+                flusher.flush();
+            }
+        })?;
+        Ok(TraceWriter { shared })
     }
 
-    /// Appends one record.
+    fn pending(&self) -> std::sync::MutexGuard<'_, Pending> {
+        self.shared.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Appends one record (a whole line).
     pub fn write(&mut self, r: &Record) -> std::io::Result<()> {
-        serde_json::to_writer(&mut self.out, r)?;
-        self.out.write_all(b"\n")
+        self.write_line(&r.kind, r)
     }
 
-    /// Flushes to the file.
+    /// Appends one record given as JSON (`mcl plan --run`'s records).
+    pub fn write_json(&mut self, r: &Value) -> std::io::Result<()> {
+        self.write_line(r["kind"].as_str().unwrap_or(""), r)
+    }
+
+    fn write_line(&mut self, kind: &str, r: &impl Serialize) -> std::io::Result<()> {
+        let mut line = serde_json::to_vec(r)?;
+        line.push(b'\n');
+        let mut p = self.pending();
+        p.buf.extend_from_slice(&line);
+        if p.buf.len() >= FLUSH_BYTES || matches!(kind, "outcome" | "coord_summary") {
+            p.flush();
+        }
+        p.take_error()
+    }
+
+    /// Writes the buffered lines to the file.
     pub fn flush(&mut self) -> std::io::Result<()> {
-        self.out.flush()
+        let mut p = self.pending();
+        p.flush();
+        p.take_error()
+    }
+
+    /// A handle that flushes this writer from another thread.
+    pub fn flusher(&self) -> TraceFlusher {
+        TraceFlusher(Arc::downgrade(&self.shared))
+    }
+}
+
+impl Drop for TraceWriter {
+    fn drop(&mut self) {
+        self.pending().flush();
     }
 }
 
 /// Reads a JSONL trace. Errors name the line.
 pub fn read_trace(path: &Path) -> Result<Vec<Record>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let text = mcl_net::input::read_text(path, mcl_net::input::MAX_RECORDS_BYTES).map_err(|e| e.to_string())?;
     parse_trace(&text).map_err(|e| format!("{}:{e}", path.display()))
 }
 
-/// Parses JSONL trace text. Errors are `line: message`.
+/// Parses JSONL trace text. Errors are `line: message`. A last line without
+/// its newline that does not parse (a run killed while writing it) is
+/// ignored.
 pub fn parse_trace(text: &str) -> Result<Vec<Record>, String> {
     let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
+    let complete = text.ends_with('\n');
+    let mut lines = text.lines().enumerate().peekable();
+    while let Some((i, line)) = lines.next() {
         if line.trim().is_empty() {
             continue;
         }
-        out.push(serde_json::from_str(line).map_err(|e| format!("{}: {e}", i + 1))?);
+        match serde_json::from_str(line) {
+            Ok(r) => out.push(r),
+            Err(_) if !complete && lines.peek().is_none() => {}
+            Err(e) => return Err(format!("{}: {e}", i + 1)),
+        }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cut_last_line_is_ignored_and_others_are_errors() {
+        let r = Record::new(1.0, "fire");
+        let line = serde_json::to_string(&r).unwrap();
+        let whole = format!("{line}\n{line}\n");
+        assert_eq!(parse_trace(&whole).unwrap().len(), 2);
+        let cut = format!("{whole}{}", &line[..10]);
+        assert_eq!(parse_trace(&cut).unwrap().len(), 2);
+        let bad = format!("{}\n{whole}", &line[..10]);
+        assert!(parse_trace(&bad).unwrap_err().starts_with("1: "));
+    }
+
+    #[test]
+    fn records_reach_the_file_at_outcomes_and_every_second() {
+        let dir = std::env::temp_dir().join(format!("mcl-trace-writer-{}", std::process::id()));
+        let path = dir.join("t.jsonl");
+        let mut w = TraceWriter::create(&path).unwrap();
+        w.write(&Record::new(0.0, "fire")).unwrap();
+        w.write(&Record::new(0.5, "outcome")).unwrap();
+        assert_eq!(read_trace(&path).unwrap().len(), 2, "flushed at the outcome");
+        w.write(&Record::new(1.0, "fire")).unwrap();
+        std::thread::sleep(FLUSH_EVERY * 2 + std::time::Duration::from_millis(200));
+        assert_eq!(read_trace(&path).unwrap().len(), 3, "flushed by the timer");
+        w.write(&Record::new(2.0, "fire")).unwrap();
+        let f = w.flusher();
+        f.flush();
+        assert_eq!(read_trace(&path).unwrap().len(), 4, "flushed by a flusher");
+        drop(w);
+        f.flush();
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }

@@ -56,29 +56,79 @@ impl Diagnostic {
         Self::new(Severity::Warning, code, message, span)
     }
     pub fn new(severity: Severity, code: &'static str, message: impl Into<String>, span: Span) -> Self {
-        Diagnostic { severity, code, message: message.into(), span, labels: Vec::new(), help: None, notes: Vec::new() }
+        let message = bounded(message.into());
+        Diagnostic { severity, code, message, span, labels: Vec::new(), help: None, notes: Vec::new() }
     }
     /// Adds a secondary label in the same file.
     pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Self {
-        self.labels.push(Label { span, message: message.into(), file: None });
+        self.labels.push(Label { span, message: bounded(message.into()), file: None });
         self
     }
     /// Adds a secondary label in another file.
     pub fn with_label_in(mut self, file: Option<String>, span: Span, message: impl Into<String>) -> Self {
-        self.labels.push(Label { span, message: message.into(), file });
+        self.labels.push(Label { span, message: bounded(message.into()), file });
         self
     }
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
-        self.help = Some(help.into());
+        self.help = Some(bounded(help.into()));
         self
     }
     pub fn with_note(mut self, note: impl Into<String>) -> Self {
-        self.notes.push(note.into());
+        self.notes.push(bounded(note.into()));
         self
     }
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
     }
+}
+
+/// The longest name (a run of letters, digits, `_` and `$`) that a
+/// diagnostic's text shows whole; a longer one is cut after this many
+/// characters and an ellipsis, so that a 10 MB identifier gives a short
+/// message.
+pub const MAX_NAME_CHARS: usize = 64;
+/// The longest text of a message, label, help or note, in characters.
+pub const MAX_TEXT_CHARS: usize = 4000;
+
+/// `text` with its long names cut (see [`MAX_NAME_CHARS`]) and cut as a
+/// whole after [`MAX_TEXT_CHARS`] characters.
+pub fn bounded(text: String) -> String {
+    if text.len() <= MAX_NAME_CHARS {
+        return text;
+    }
+    let is_name = |c: char| c.is_alphanumeric() || c == '_' || c == '$';
+    let (mut run, mut count) = (0usize, 0usize);
+    let mut cut = false;
+    for c in text.chars() {
+        run = if is_name(c) { run + 1 } else { 0 };
+        count += 1;
+        if run > MAX_NAME_CHARS || count > MAX_TEXT_CHARS {
+            cut = true;
+            break;
+        }
+    }
+    if !cut {
+        return text;
+    }
+    let mut out = String::new();
+    let (mut run, mut count) = (0usize, 0usize);
+    for c in text.chars() {
+        run = if is_name(c) { run + 1 } else { 0 };
+        if run > MAX_NAME_CHARS {
+            if run == MAX_NAME_CHARS + 1 {
+                out.push('…');
+                count += 1;
+            }
+            continue;
+        }
+        if count >= MAX_TEXT_CHARS {
+            out.push('…');
+            break;
+        }
+        out.push(c);
+        count += 1;
+    }
+    out
 }
 
 /// Codes of the syntax layer. Every code has a long explanation in
@@ -106,4 +156,25 @@ pub mod codes {
     pub const NON_CANONICAL: &str = "W0015";
     /// Blocks or control structures nested deeper than the parser's limit.
     pub const NESTING_TOO_DEEP: &str = "E0016";
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_names_and_texts_are_cut() {
+        let name = "a".repeat(10_000_000);
+        let d = Diagnostic::error(codes::UNEXPECTED_TOKEN, format!("undefined task `{name}`"), Span::default())
+            .with_label(Span::default(), format!("`{name}` here"))
+            .with_help("short help");
+        let shown = format!("undefined task `{}…`", "a".repeat(MAX_NAME_CHARS));
+        assert_eq!(d.message, shown);
+        assert_eq!(d.labels[0].message, format!("`{}…` here", "a".repeat(MAX_NAME_CHARS)));
+        assert_eq!(d.help.as_deref(), Some("short help"));
+        let words = "word ".repeat(10_000);
+        assert_eq!(bounded(words).chars().count(), MAX_TEXT_CHARS + 1);
+        let fine = format!("`{}` and `{}`", "b".repeat(MAX_NAME_CHARS), "é".repeat(10));
+        assert_eq!(bounded(fine.clone()), fine);
+    }
 }

@@ -16,10 +16,10 @@ pub enum SemanticsChoice {
 }
 
 pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsChoice, threads: usize) -> u8 {
-    let text = match std::fs::read_to_string(path) {
+    let text = match mcl_net::input::read_source(path) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!("error: cannot read `{}`: {e}", path.display());
+            eprintln!("error: {e}");
             return 2;
         }
     };

@@ -1,5 +1,7 @@
 //! `mcl check`: diagnostics for files and everything they import, and the
 //! coordination analysis of every file with constraints (`mcl_coord::check`).
+//! A file that cannot be read (not UTF-8, not a regular file, over 16 MiB)
+//! is reported on standard error and the others are checked (exit status 2).
 
 use crate::{ColorChoice, Format};
 use mcl_compiler::diagnostics::{render_human, to_json};
@@ -18,13 +20,16 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
     };
     let db = Database::new();
     let mut roots: Vec<SourceFile> = Vec::new();
+    // A file that cannot be read is reported and the others are checked.
+    let mut unreadable = 0;
     for path in &files {
-        let f = db.file(path);
-        if f.text(&db).is_none() {
-            eprintln!("error: cannot read `{}` (is it UTF-8 text?)", path.display());
-            return 2;
+        match super::source_file(&db, path) {
+            Ok(f) => roots.push(f),
+            Err(e) => {
+                eprintln!("error: {e}");
+                unreadable += 1;
+            }
         }
-        roots.push(f);
     }
     // Imported files are checked too, each once.
     let mut to_check: Vec<SourceFile> = Vec::new();
@@ -60,15 +65,20 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
             let mut s = render_human(&db, &diags, use_color);
             let n = to_check.len();
             s.push_str(&format!(
-                "checked {n} file{}: {errors} error{}, {warnings} warning{}\n",
+                "checked {n} file{}: {errors} error{}, {warnings} warning{}{}\n",
                 if n == 1 { "" } else { "s" },
                 if errors == 1 { "" } else { "s" },
-                if warnings == 1 { "" } else { "s" }
+                if warnings == 1 { "" } else { "s" },
+                match unreadable {
+                    0 => String::new(),
+                    1 => "; 1 file could not be read".to_string(),
+                    k => format!("; {k} files could not be read"),
+                }
             ));
             stdout.write_all(s.as_bytes())
         }
     };
-    if written.is_err() {
+    if written.is_err() || unreadable > 0 {
         return 2;
     }
     u8::from(errors > 0)

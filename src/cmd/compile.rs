@@ -5,7 +5,7 @@
 
 use mcl_compiler::compile::{compile_file, dot::to_dot, CompileError};
 use mcl_compiler::diagnostics::render_human;
-use mcl_compiler::{check_file, Database, Db, SourceFile};
+use mcl_compiler::{check_file, Database, SourceFile};
 use mcl_coord::{AnalyzeOptions, VehicleNet, Verdict};
 use mcl_syntax::ast::Item;
 use std::io::IsTerminal;
@@ -106,16 +106,14 @@ pub fn coordination_summary(v: &VehicleNet) -> String {
 }
 
 pub fn run(o: Options<'_>) -> u8 {
-    if !o.file.is_file() {
-        eprintln!("error: no such file: `{}`", o.file.display());
-        return 2;
-    }
     let db = Database::new();
-    let file = db.file(o.file);
-    if file.text(&db).is_none() {
-        eprintln!("error: cannot read `{}` (is it UTF-8 text?)", o.file.display());
-        return 2;
-    }
+    let file = match super::source_file(&db, o.file) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
     let missions = match compile_file(&db, file) {
         Ok(m) => m,
         Err(CompileError::HasErrors) => {

@@ -74,15 +74,19 @@ pub fn run(paths: &[PathBuf], check: bool) -> u8 {
     }
 }
 
-fn read(path: &Path) -> Result<String, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    String::from_utf8(bytes).map_err(|_| format!("cannot read `{}`: it is not UTF-8 text", path.display()))
+fn read(path: &Path) -> Result<String, mcl_net::input::ReadError> {
+    mcl_net::input::read_source(path)
 }
 
 fn stdin(check: bool) -> u8 {
+    let limit = mcl_net::input::MAX_SOURCE_BYTES;
     let mut text = String::new();
-    if let Err(e) = std::io::stdin().read_to_string(&mut text) {
+    if let Err(e) = std::io::stdin().take(limit + 1).read_to_string(&mut text) {
         eprintln!("error: cannot read standard input: {e}");
+        return 2;
+    }
+    if text.len() as u64 > limit {
+        eprintln!("error: cannot read standard input: {}", mcl_net::input::Reason::TooLarge { limit });
         return 2;
     }
     match format(&text) {

@@ -14,6 +14,18 @@ pub mod run;
 
 use std::path::{Path, PathBuf};
 
+/// The input of an `.mcl` file given on the command line, or the error to
+/// print (`cannot read `path`: why`): files are read by `mcl_net::input`.
+pub fn source_file(db: &mcl_compiler::Database, path: &Path) -> Result<mcl_compiler::SourceFile, String> {
+    use mcl_compiler::Db;
+    let f = db.file(path);
+    match (f.text(db), f.unreadable(db)) {
+        (Some(_), _) => Ok(f),
+        (None, Some(why)) => Err(format!("cannot read `{}`: {why}", path.display())),
+        (None, None) => Err(format!("cannot read `{}`", path.display())),
+    }
+}
+
 /// Expands folders into the `*.mcl` files they hold (recursively, sorted,
 /// skipping hidden folders and build output). Errors name the missing path.
 pub fn collect_mcl_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
@@ -21,7 +33,8 @@ pub fn collect_mcl_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     for p in paths {
         if p.is_dir() {
             walk(p, &mut out).map_err(|e| format!("cannot read folder `{}`: {e}", p.display()))?;
-        } else if p.is_file() {
+        } else if p.exists() {
+            // A device, FIFO or socket too: the reader says why it is refused.
             out.push(p.clone());
         } else {
             return Err(format!("no such file or folder: `{}`", p.display()));

@@ -83,10 +83,7 @@ fn print_errors(errors: &[mcl_plan::Error]) {
 /// Type-checks the .mcl program (the file and its imports) with the compiler.
 fn check_mcl(path: &Path) -> Result<(), String> {
     let db = Database::new();
-    let root = db.file(path);
-    if root.text(&db).is_none() {
-        return Err(format!("cannot read `{}`", path.display()));
-    }
+    let root = super::source_file(&db, path)?;
     let std = db.stdlib();
     let mut diags: Vec<FileDiagnostic> = Vec::new();
     for &f in program(&db, root).files.iter() {
@@ -220,10 +217,10 @@ pub fn run(o: Options) -> u8 {
         return execute(domain, problem, &ops, &run_ops, algorithm(o.search, o.heuristic), o.max_states, x);
     }
     if let Some(plan_path) = &o.validate {
-        let text = match std::fs::read_to_string(plan_path) {
+        let text = match mcl_net::input::read_source(plan_path) {
             Ok(t) => t,
             Err(e) => {
-                eprintln!("error: cannot read `{}`: {e}", plan_path.display());
+                eprintln!("error: {e}");
                 return 2;
             }
         };
@@ -313,7 +310,7 @@ fn algorithm(search: SearchChoice, heuristic: HeuristicChoice) -> Algorithm {
 
 /// Trace file and live log of `--run`.
 struct RunSink {
-    trace: Option<std::io::BufWriter<std::fs::File>>,
+    trace: Option<mcl_runtime::trace::TraceWriter>,
     live: bool,
     error: Option<String>,
 }
@@ -321,10 +318,7 @@ struct RunSink {
 impl mcl_plan::run::RecordSink for RunSink {
     fn record(&mut self, record: serde_json::Value, live: Option<String>) {
         if let Some(w) = &mut self.trace {
-            let r = serde_json::to_writer(&mut *w, &record)
-                .map_err(|e| e.to_string())
-                .and_then(|()| w.write_all(b"\n").map_err(|e| e.to_string()));
-            if let Err(e) = r {
+            if let Err(e) = w.write_json(&record) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
             }
         }
@@ -448,6 +442,7 @@ fn execute(
 ) -> u8 {
     use mcl_plan::executor::Executor;
     use mcl_runtime::scenario::Scenario;
+    crate::interrupt::install();
     if x.mock == x.aac.is_some() {
         eprintln!("error: --run needs --mock (the in-process mock vehicle) or --aac HOST:PORT (a vehicle's AAC)");
         return 2;
@@ -469,13 +464,10 @@ fn execute(
         return 2;
     }
     let world_path = x.world.clone().unwrap_or_else(|| file.parent().unwrap_or(Path::new(".")).join("world.xml"));
-    let xml = match std::fs::read_to_string(&world_path) {
+    let xml = match mcl_net::input::read_source(&world_path) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!(
-                "error: cannot read the fact-provider scripts `{}`: {e} (give --world W.xml)",
-                world_path.display()
-            );
+            eprintln!("error: the fact-provider scripts: {e} (give --world W.xml)");
             return 2;
         }
     };
@@ -512,20 +504,10 @@ fn execute(
         }
     };
     ex.max_states = max_states;
-    let trace = match &x.trace {
-        Some(p) => {
-            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-                let _ = std::fs::create_dir_all(dir);
-            }
-            match std::fs::File::create(p) {
-                Ok(f) => Some(std::io::BufWriter::new(f)),
-                Err(e) => {
-                    eprintln!("error: cannot write trace `{}`: {e}", p.display());
-                    return 2;
-                }
-            }
-        }
-        None => None,
+    // The same traces as `mcl run`: whole lines, flushed on SIGINT/SIGTERM.
+    let trace = match super::run::open_trace(&x.trace) {
+        Ok(t) => t,
+        Err(code) => return code,
     };
     let mut sink = RunSink { trace, live: !x.quiet, error: None };
     let opts = mcl_plan::run::RunOptions {

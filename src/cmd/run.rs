@@ -119,13 +119,9 @@ pub struct LoadedMission {
 /// file. On error, prints it (diagnostics like `mcl check`) and returns the
 /// exit status.
 pub fn load_missions(file: &Path) -> Result<Vec<LoadedMission>, u8> {
-    if !file.is_file() {
-        eprintln!("error: no such file: `{}`", file.display());
-        return Err(2);
-    }
     if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml")) {
-        let text = std::fs::read_to_string(file).map_err(|e| {
-            eprintln!("error: cannot read `{}`: {e}", file.display());
+        let text = mcl_net::input::read_source(file).map_err(|e| {
+            eprintln!("error: {e}");
             2u8
         })?;
         let nets = mcl_net::read_pnml_nets(&text).map_err(|e| {
@@ -135,11 +131,10 @@ pub fn load_missions(file: &Path) -> Result<Vec<LoadedMission>, u8> {
         return Ok(nets.into_iter().map(|net| LoadedMission { name: net.name().to_string(), net }).collect());
     }
     let db = Database::new();
-    let f = db.file(file);
-    if f.text(&db).is_none() {
-        eprintln!("error: cannot read `{}` (is it UTF-8 text?)", file.display());
-        return Err(2);
-    }
+    let f = super::source_file(&db, file).map_err(|e| {
+        eprintln!("error: {e}");
+        2u8
+    })?;
     match compile_file(&db, f) {
         Ok(ms) => Ok(ms.into_iter().map(|m| LoadedMission { name: m.name, net: m.net }).collect()),
         Err(CompileError::HasErrors) => {
@@ -224,12 +219,28 @@ impl Sink for RunSink {
     }
 }
 
+/// The trace writer of `--trace FILE`, flushed on SIGINT and SIGTERM too.
+pub(crate) fn open_trace(path: &Option<PathBuf>) -> Result<Option<TraceWriter>, u8> {
+    let Some(p) = path else { return Ok(None) };
+    match TraceWriter::create(p) {
+        Ok(w) => {
+            let flusher = w.flusher();
+            crate::interrupt::on_signal(move || flusher.flush());
+            Ok(Some(w))
+        }
+        Err(e) => Err(usage(&format!("cannot write trace `{}`: {e}", p.display()))),
+    }
+}
+
 fn usage(msg: &str) -> u8 {
     eprintln!("error: {msg}");
     2
 }
 
 pub fn run(o: Options) -> u8 {
+    // Before any thread starts: SIGINT and SIGTERM flush the trace and exit
+    // with 130 or 143.
+    crate::interrupt::install();
     // Usage checks.
     if o.mock == o.aac.is_some() {
         return usage("give exactly one of --mock (in-process mock vehicle) and --aac HOST:PORT");
@@ -340,7 +351,7 @@ pub fn run(o: Options) -> u8 {
         (Some(entries), given) => {
             let Entry::Header { scenario, .. } = &entries[0] else { unreachable!("read_journal checks the header") };
             if let (Some(p), Some(text)) = (given, scenario) {
-                if std::fs::read_to_string(p).ok().as_deref() != Some(text.as_str()) {
+                if mcl_net::input::read_source(p).ok().as_deref() != Some(text.as_str()) {
                     return usage("--scenario differs from the scenario recorded in the journal");
                 }
             }
@@ -353,9 +364,9 @@ pub fn run(o: Options) -> u8 {
             }
         }
         (None, Some(p)) => {
-            let text = match std::fs::read_to_string(p) {
+            let text = match mcl_net::input::read_source(p) {
                 Ok(t) => t,
-                Err(e) => return usage(&format!("cannot read scenario `{}`: {e}", p.display())),
+                Err(e) => return usage(&format!("scenario: {e}")),
             };
             match Scenario::from_toml(&text, &p.display().to_string()) {
                 Ok(s) => (Some(text), s),
@@ -395,12 +406,9 @@ pub fn run(o: Options) -> u8 {
     let player = Player::new(net.clone(), PlayerOptions { seed, symbols: symbols.clone(), ..Default::default() });
     let mut sources = SourceMap::new();
     let tracer = Tracer::new(&net, mission_label, &mut sources);
-    let trace = match &o.trace {
-        Some(p) => match TraceWriter::create(p) {
-            Ok(w) => Some(w),
-            Err(e) => return usage(&format!("cannot write trace `{}`: {e}", p.display())),
-        },
-        None => None,
+    let trace = match open_trace(&o.trace) {
+        Ok(t) => t,
+        Err(code) => return code,
     };
     let mut sink =
         RunSink { trace, live: !o.quiet, verbose: o.verbose, quiet_replay: false, records: Vec::new(), error: None };
@@ -629,9 +637,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     }
     // Scenarios.
     let text = match &o.scenario {
-        Some(p) => match std::fs::read_to_string(p) {
+        Some(p) => match mcl_net::input::read_source(p) {
             Ok(t) => Some((t, p.display().to_string())),
-            Err(e) => return usage(&format!("cannot read scenario `{}`: {e}", p.display())),
+            Err(e) => return usage(&format!("scenario: {e}")),
         },
         None => None,
     };
@@ -680,12 +688,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         }
     }
 
-    let trace = match &o.trace {
-        Some(p) => match TraceWriter::create(p) {
-            Ok(w) => Some(w),
-            Err(e) => return usage(&format!("cannot write trace `{}`: {e}", p.display())),
-        },
-        None => None,
+    let trace = match open_trace(&o.trace) {
+        Ok(t) => t,
+        Err(code) => return code,
     };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         trace,

@@ -25,7 +25,9 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
                 PatternBody::Net(net) => check_net(cx, p, net),
                 PatternBody::File { path, path_span } => {
                     let full = resolve_relative(cx.db, cx.file, path);
-                    if !full.is_file() {
+                    // Anything else than a missing file (a folder, a FIFO, a
+                    // file too large) is reported with its reason below.
+                    if !full.exists() {
                         cx.out.push(
                             Diagnostic::error(
                                 codes::PNML_NOT_FOUND,
