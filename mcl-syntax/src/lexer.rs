@@ -214,7 +214,16 @@ fn is_ident_continue(c: char) -> bool {
 
 /// Splits `src` into tokens. Never fails: unknown characters become errors.
 pub fn lex(src: &str) -> Lexed<'_> {
+    lex_before(src, false)
+}
+
+/// [`lex`] for a text that a word follows in its file (an item cut before
+/// the next item's keyword): the tokens and errors are the ones the whole
+/// file gives for this part (`1.` right before the keyword is the number
+/// `1` and a `.`, as in `1.tasks`, not a malformed number).
+pub fn lex_before(src: &str, word_follows: bool) -> Lexed<'_> {
     let mut l = Lexer::new(src);
+    l.word_follows = word_follows;
     l.out.tokens.reserve(src.len() / 4);
     while l.step() {}
     l.out
@@ -230,11 +239,13 @@ pub struct Lexer<'src> {
     i: usize,
     /// What was lexed so far.
     pub out: Lexed<'src>,
+    /// A word follows `src` in its file ([`lex_before`]).
+    word_follows: bool,
 }
 
 impl<'src> Lexer<'src> {
     pub fn new(src: &'src str) -> Self {
-        Lexer { src, i: 0, out: Lexed::default() }
+        Lexer { src, i: 0, out: Lexed::default(), word_follows: false }
     }
 
     /// Lexes one more piece of the source; `false` at the end.
@@ -243,14 +254,14 @@ impl<'src> Lexer<'src> {
         if self.i >= self.src.len() {
             return false;
         }
-        self.i = lex_one(self.src, self.i, &mut self.out);
+        self.i = lex_one(self.src, self.i, &mut self.out, self.word_follows);
         true
     }
 }
 
 /// Lexes the piece of `src` that starts at `i`; returns where the next starts.
 #[inline]
-fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
+fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>, word_follows: bool) -> usize {
     let bytes = src.as_bytes();
     {
         let b = bytes[i];
@@ -339,11 +350,11 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
                 return i;
             }
             b'0'..=b'9' => {
-                i = lex_number(src, i, out);
+                i = lex_number(src, i, out, word_follows);
                 return i;
             }
             b'-' if bytes.get(i + 1).is_some_and(u8::is_ascii_digit) => {
-                i = lex_number(src, i + 1, out);
+                i = lex_number(src, i + 1, out, word_follows);
                 // lex_number pushed a token starting after '-': widen it.
                 if let Some((Token::Num(_), span)) = out.tokens.last_mut() {
                     *span = Span::new(start, span.end as usize);
@@ -472,8 +483,9 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
     }
 }
 
-/// Lexes `[0-9]+(\.[0-9]+)?` starting at `i`; pushes the token; returns the new position.
-fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usize {
+/// Lexes `[0-9]+(\.[0-9]+)?` starting at `i`; pushes the token; returns the
+/// new position. `word_follows`: a word follows the end of `src`.
+fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>, word_follows: bool) -> usize {
     let bytes = src.as_bytes();
     let start = i;
     while i < bytes.len() && bytes[i].is_ascii_digit() {
@@ -490,7 +502,7 @@ fn lex_number<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>) -> usiz
     if !fraction
         && i < bytes.len()
         && bytes[i] == b'.'
-        && !bytes.get(i + 1).is_some_and(|&b| b.is_ascii_digit() || is_ident_start(b as char))
+        && !bytes.get(i + 1).map_or(word_follows, |&b| b.is_ascii_digit() || is_ident_start(b as char))
     {
         // `1.`: a fraction without digits. Take the dot into the number so
         // that the parser sees one (malformed) number.

@@ -11,7 +11,7 @@
 
 use crate::ast::*;
 use crate::diag::{codes, Diagnostic};
-use crate::lexer::{lex, unescape, Comment, Kw, Token};
+use crate::lexer::{unescape, Comment, Kw, Token};
 use crate::span::Span;
 use chumsky::cache::{Cache, Cached};
 use chumsky::error::{EmptyErr, RichPattern, RichReason};
@@ -203,7 +203,7 @@ pub fn parse_item(src: &str, next: Option<(Kw, u32)>) -> Parse {
 /// `quick`: try the quick pass first (always, but in a test that compares
 /// it with the rich pass alone).
 fn parse_with(src: &str, next: Option<(Kw, u32)>, quick: bool) -> Parse {
-    let lexed = lex(src);
+    let lexed = crate::lexer::lex_before(src, next.is_some());
     let mut errors = lexed.errors;
     let why = if next.is_some() { "before the next item" } else { "at the end of the file" };
     let mut deep_regions = Vec::new();

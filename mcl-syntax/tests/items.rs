@@ -64,6 +64,16 @@ fn a_missing_brace_is_one_error_item_by_item() {
     assert_eq!(p.errors[0].code, "E0011");
 }
 
+#[test]
+fn a_number_with_a_dot_right_before_the_next_item_parses_the_same() {
+    // Cut at `tasks`, the item ends in `-8.`: alone it would lex as a
+    // malformed number; in the file, `-8.tasks` is `-8`, `.`, `tasks`.
+    let src = "mission : m1 {\n    Goto( [-8.tasks { /* open\n";
+    same(src).unwrap();
+    let src = "mission : m1 { Goto( 1.mission : m2 { Goto( 2 ) }\n";
+    same(src).unwrap();
+}
+
 /// Text that matters to the parser (delimiters, keywords, quotes, comment markers).
 fn pieces() -> impl Strategy<Value = &'static str> {
     prop::sample::select(mcl_syntax::gen::EDIT_PIECES.to_vec())
