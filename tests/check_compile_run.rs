@@ -136,13 +136,11 @@ struct Shape {
 fn pattern(r: &mut Rng, pname: &str, enable: &str, disable: &str, ok: &str, fail: &str) -> Shape {
     let mut used: Vec<String> = ["begin", "abort", "ok", "fail"].iter().map(|s| s.to_string()).collect();
     let mut n = |r: &mut Rng| name(r, &mut used, true);
-    let (places, transitions, arcs, bindings, param): (
-        Vec<String>,
-        Vec<String>,
-        Vec<(String, String)>,
-        Vec<String>,
-        _,
-    );
+    let places: Vec<String>;
+    let transitions: Vec<String>;
+    let arcs: Vec<(String, String)>;
+    let bindings: Vec<String>;
+    let param: Option<String>;
     let iface = |v: &mut Vec<String>| v.extend(["begin.1", "abort.1", "ok.1", "fail.1"].map(String::from));
     match r.below(7) {
         // A compact task pattern (figure 4.3(d) around a primitive).

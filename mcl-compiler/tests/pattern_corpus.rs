@@ -236,7 +236,7 @@ fn diagnostics(text: &str) -> (Database, mcl_compiler::SourceFile, Vec<mcl_synta
     let mut db = Database::new();
     let file = db.set_text(std::path::Path::new("/virtual/corpus/m.mcl"), text);
     let diags = check_file(&db, file)
-        .into_iter()
+        .iter()
         .map(|d| d.diag.clone())
         // The corpus shares one set of actions and events: some go unused;
         // some tasks wait for events the vehicle sends unasked (W0213).

@@ -499,29 +499,6 @@ pub fn program(lines: usize, seed: u64) -> String {
     w.out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn deterministic_and_sized() {
-        let a = program(2000, 7);
-        assert_eq!(a, program(2000, 7));
-        assert_ne!(a, program(2000, 8));
-        let n = a.lines().count();
-        assert!((1900..=2200).contains(&n), "{n} lines");
-    }
-
-    #[test]
-    fn parses_without_errors() {
-        for seed in 0..5 {
-            let text = program(1500, seed);
-            let p = crate::parse(&text);
-            assert!(p.errors.is_empty(), "seed {seed}: {:?}", p.errors.first());
-        }
-    }
-}
-
 /// Text that matters to the parser (delimiters, keywords, quotes, comment
 /// markers, whole small items): what random edits insert in the tests of
 /// incremental parsing and of the language server.
@@ -654,3 +631,26 @@ pub const MUTATION_PIECES: &[&str] = &[
     "B( 1, [2, 3] ) : l",
     "{ A() }",
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deterministic_and_sized() {
+        let a = program(2000, 7);
+        assert_eq!(a, program(2000, 7));
+        assert_ne!(a, program(2000, 8));
+        let n = a.lines().count();
+        assert!((1900..=2200).contains(&n), "{n} lines");
+    }
+
+    #[test]
+    fn parses_without_errors() {
+        for seed in 0..5 {
+            let text = program(1500, seed);
+            let p = crate::parse(&text);
+            assert!(p.errors.is_empty(), "seed {seed}: {:?}", p.errors.first());
+        }
+    }
+}

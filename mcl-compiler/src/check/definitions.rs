@@ -9,7 +9,7 @@ pub(crate) fn check(cx: &mut Cx<'_>) {
     for (id, name) in file_defs(cx.db, cx.file) {
         let id = *id;
         // Definitions of the standard library may be overridden.
-        let defs: Vec<_> = cx.scope.get(id.kind, &name).iter().filter(|d| !d.in_stdlib).copied().collect();
+        let defs: Vec<_> = cx.scope.get(id.kind, name).iter().filter(|d| !d.in_stdlib).copied().collect();
         let Some(first) = defs.first().copied() else {
             continue;
         };

@@ -277,6 +277,7 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> (Vec<I
             ti(b, &[S("start")], &[ext.begin], &start_out);
             ti(b, &[S("monitored_first_ok")], &[open, runs[0], par[0].ok], &[a_ok, done[0]]);
             ti(b, &[S("monitored_first_fail")], &[open, runs[0], par[0].fail], &[a_fail, done[0]]);
+            #[allow(clippy::needless_range_loop)] // j indexes trig, j + 1 runs, par and done
             for j in 0..k {
                 let i = j + 1;
                 ti(b, &[S("condition"), N(j), S("_ok")], &[open, runs[i], par[i].ok], &[trig[j], done[i]]);

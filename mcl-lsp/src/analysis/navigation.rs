@@ -18,7 +18,7 @@ use tower_lsp_server::ls_types::{
 /// The symbol under the cursor, with the occurrence it was found at.
 pub fn symbol_at(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<(Occ, Sym)> {
     let occs = occurrences(a.db, file);
-    let occ = occurrence_at(&occs, offset)?.clone();
+    let occ = occurrence_at(occs, offset)?.clone();
     let sym = resolve(a.db, file, &occ)?;
     Some((occ, sym))
 }
@@ -110,7 +110,7 @@ pub fn all_occurrences(a: &Analysis<'_>, sym: &Sym) -> Vec<(SourceFile, Occ)> {
             if occ.name != name || !may_be(sym, &occ.role) {
                 continue;
             }
-            if resolve(a.db, f, &occ).as_ref() == Some(sym) {
+            if resolve(a.db, f, occ).as_ref() == Some(sym) {
                 out.push((f, occ.clone()));
             }
         }
