@@ -561,25 +561,42 @@ impl Harness {
             }
         }
         let enabled = |s: StateId, t: TransitionId| net.pre(t).iter().all(|&(p, w)| ss.tokens(s, p) >= w);
-        // Whether some cascade into `s` started where `e` was not enabled.
-        let fresh = |s: StateId, e: TransitionId| {
-            let mut seen = vec![false; ss.len()];
-            let mut stack = vec![s];
-            while let Some(x) = stack.pop() {
-                if std::mem::replace(&mut seen[x.0 as usize], true) {
-                    continue;
-                }
-                let ps = &preds[x.0 as usize];
-                if x != s && (!ss.is_vanishing(x) || ps.is_empty()) || x == s && ps.is_empty() {
-                    if !enabled(x, e) {
-                        return true;
+        // For each event transition, the states that a cascade reaches which
+        // started where it was not enabled: a cascade starts in a tangible
+        // state (or the start) and goes on through vanishing states. One
+        // forward pass per event transition, linear in the state space.
+        let origin = |x: StateId| !ss.is_vanishing(x) || preds[x.0 as usize].is_empty();
+        let fresh: Vec<Vec<bool>> = waiting
+            .iter()
+            .map(|&(e, _)| {
+                let mut fresh = vec![false; ss.len()];
+                let mut stack = Vec::new();
+                for x in ss.states() {
+                    if preds[x.0 as usize].is_empty() && !enabled(x, e) && !fresh[x.0 as usize] {
+                        fresh[x.0 as usize] = true;
+                        stack.push(x);
                     }
-                    continue;
+                    if origin(x) && !enabled(x, e) {
+                        for &(_, d) in ss.successors(x) {
+                            if !std::mem::replace(&mut fresh[d.0 as usize], true) {
+                                stack.push(d);
+                            }
+                        }
+                    }
                 }
-                stack.extend(ps.iter().copied());
-            }
-            false
-        };
+                while let Some(x) = stack.pop() {
+                    if origin(x) {
+                        continue;
+                    }
+                    for &(_, d) in ss.successors(x) {
+                        if !std::mem::replace(&mut fresh[d.0 as usize], true) {
+                            stack.push(d);
+                        }
+                    }
+                }
+                fresh
+            })
+            .collect();
         let mut found: Vec<Premature> = Vec::new();
         for s in ss.states() {
             if self.was_aborted(ss, s) {
@@ -590,9 +607,9 @@ impl Harness {
                 if found.iter().any(|f| f.transition == tname) || !enabled(s, t) {
                     continue;
                 }
-                let hit = waiting.iter().find_map(|(e, event)| {
+                let hit = waiting.iter().zip(&fresh).find_map(|((e, event), fresh)| {
                     let shared = net.pre(t).iter().find(|(p, _)| net.pre(*e).iter().any(|(q, _)| q == p))?.0;
-                    (enabled(s, *e) && fresh(s, *e)).then(|| (*e, event.clone(), shared))
+                    (enabled(s, *e) && fresh[s.0 as usize]).then(|| (*e, event.clone(), shared))
                 });
                 if let Some((e, event, place)) = hit {
                     found.push(Premature {
