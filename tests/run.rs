@@ -513,8 +513,64 @@ fn live_log() {
     assert_eq!(out.status.code(), Some(0));
     let log = String::from_utf8_lossy(&out.stdout);
     let line = log.lines().find(|l| l.contains("eventAltitudeOk")).unwrap();
-    assert!(line.contains("[    10.000] event    eventAltitudeOk  task=Altitude  at examples/survey.mcl:16"), "{line}");
+    assert!(
+        line.contains("[    10.000] event    eventAltitudeOk  (ends ok)  task=Altitude  at examples/survey.mcl:16"),
+        "{line}"
+    );
     assert!(log.lines().last().unwrap().contains("MISSION OK"));
+}
+
+/// A vehicle whose names follow no convention (`navReady`, `navLost`,
+/// `mowDone`): what an event ends comes from the compiled net — the trace's
+/// `ends`, the live log, the chronogram's colours — and a time-out shows in
+/// the default live log.
+#[test]
+fn outcomes_come_from_the_net_not_from_names() {
+    let file = tmp("odd-names.mcl");
+    std::fs::write(
+        &file,
+        r#"
+actions {
+    startNav = NavPrimitive( c: enable );
+    stopNav = NavPrimitive( c: disable );
+    startMow = MowPrimitive( c: enable );
+    stopMow = MowPrimitive( c: disable );
+}
+events { navReady; navLost; mowDone; mowStuck; }
+tasks {
+    Nav(): AchieveOneGoal { a: startNav -> T0; a: stopNav -> T1, T6, T7; e: navReady -> T2; e: navLost -> T3; }
+    Mow( timeout ): AchieveOneGoalTimed { a: startMow -> T0; a: stopMow -> T1, T6, T7; e: mowDone -> T2; e: mowStuck -> T3; }
+}
+mission { Nav() ; try { Mow( 3 ) } catch { Mow( 100 ) } }
+"#,
+    )
+    .unwrap();
+    let trace = tmp("odd-names.jsonl");
+    let svg = tmp("odd-names.svg");
+    let out = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        file.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+        "--chronogram",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let log = String::from_utf8_lossy(&out.stdout);
+    assert!(log.lines().any(|l| l.contains("event    navReady  (ends ok)  task=Nav")), "{log}");
+    assert!(log.lines().any(|l| l.contains("[     8.000] TIME-OUT task.Mow.TO  task=Mow")), "{log}");
+    let records: Vec<Value> =
+        std::fs::read_to_string(&trace).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let events: Vec<&Value> = records.iter().filter(|r| r["kind"] == "event").collect();
+    assert!(!events.is_empty() && events.iter().all(|r| r["ends"] == "ok"), "{events:?}");
+    assert!(records.iter().any(|r| r["kind"] == "fire" && r["ends"] == "timeout"));
+    // Every bar of the chronogram ends ok (green) or timed out (orange);
+    // none is left "aborted / running" (blue, then only in the legend).
+    let drawing = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawing.contains("fill=\"#b7e2c0\"") && drawing.contains("fill=\"#f7d49a\""), "ok and time-out bars");
+    assert_eq!(drawing.matches("fill=\"#b9d2ee\"").count(), 1, "no bar left blue, only the legend's box");
 }
 
 /// Crash (abort right after a journal sync, before the actions are sent)

@@ -230,12 +230,15 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                     .or_else(|| r.task.clone())
                     .unwrap_or_else(|| "events".into());
                 let i = row_for(&mut rows, &mut row_of, &r.mission, &prim);
-                let kind = if ev.ends_with("Ok") || ev.ends_with("_ok") {
-                    MarkKind::Ok
-                } else if ev.ends_with("Fail") || ev.ends_with("_fail") {
-                    MarkKind::Fail
-                } else {
-                    MarkKind::Other
+                // What the event ends comes from the net (`ends`); traces
+                // written before it existed fall back to the event's name.
+                let kind = match r.ends.as_deref() {
+                    Some("ok") => MarkKind::Ok,
+                    Some("fail") => MarkKind::Fail,
+                    Some(_) => MarkKind::Other,
+                    None if ev.ends_with("Ok") || ev.ends_with("_ok") => MarkKind::Ok,
+                    None if ev.ends_with("Fail") || ev.ends_with("_fail") => MarkKind::Fail,
+                    None => MarkKind::Other,
                 };
                 let details = format!(
                     "t={} event {ev}{}{}",

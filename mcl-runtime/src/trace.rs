@@ -115,6 +115,14 @@ pub struct Record {
     /// when the link is up again.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub queued: Option<bool>,
+    /// What an event or a firing ends, from the compiled net (never from
+    /// names): on an `event`, `ok` or `fail` when it is one of its task's ok
+    /// or fail events (the net's `task_events` property), `none` when it is
+    /// neither; on a `fire`,
+    /// `timeout` when the transition is a task's timed transition (a
+    /// time-out, shown in the live log without `-v`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ends: Option<String>,
 }
 
 impl Record {
@@ -173,6 +181,10 @@ pub struct Tracer {
     mission: Option<String>,
     ids: Vec<String>,
     tasks: Vec<Option<String>>,
+    /// Per transition: a timed transition of a task (a time-out).
+    timeouts: Vec<bool>,
+    /// Per task: its ok and fail events (the net's `task_events`).
+    outcomes: HashMap<String, mcl_net::TaskEvents>,
     /// Per call site: (label, `file:line`).
     calls: HashMap<u32, (Option<String>, Option<String>)>,
 }
@@ -195,8 +207,37 @@ impl Tracer {
                 .iter()
                 .map(|t| t.provenance.task.clone().or_else(|| t.binding.as_ref().map(|b| b.task.clone())))
                 .collect(),
+            timeouts: net
+                .transitions()
+                .iter()
+                .map(|t| {
+                    // A timed transition of a task's own net (not a call
+                    // adapter's deferred release, not a zero delay).
+                    let timed = match &t.kind {
+                        mcl_net::TransitionKind::Timed(mcl_net::Delay::Fixed(d)) => *d > 0.0,
+                        mcl_net::TransitionKind::Timed(mcl_net::Delay::Param(_)) => true,
+                        _ => false,
+                    };
+                    timed && t.provenance.task.is_some() && t.provenance.call_site.is_none()
+                })
+                .collect(),
+            outcomes: net.task_events().map(|(t, e)| (t.to_string(), e)).collect(),
             calls,
         }
+    }
+
+    /// `ok` or `fail` when `event` is one of `task`'s ok or fail events,
+    /// `none` when it is neither (a progress or condition event); `None`
+    /// when the net does not say (a net without `task_events`).
+    fn ends(&self, task: Option<&str>, event: &str) -> Option<String> {
+        let e = self.outcomes.get(task?)?;
+        Some(if e.ok.iter().any(|x| x == event) {
+            "ok".into()
+        } else if e.fail.iter().any(|x| x == event) {
+            "fail".into()
+        } else {
+            "none".into()
+        })
     }
 
     /// The mission name written on records.
@@ -230,6 +271,9 @@ impl Tracer {
                 let mut r = Record::new(*t, "fire");
                 r.transition = Some(self.ids[transition.index()].clone());
                 r.task = self.tasks[transition.index()].clone();
+                if self.timeouts[transition.index()] {
+                    r.ends = Some("timeout".into());
+                }
                 r.call_site = *call_site;
                 r.label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
                 r
@@ -238,6 +282,7 @@ impl Tracer {
                 let mut r = Record::new(*t, "event");
                 r.event = Some(event.clone());
                 r.task = self.tasks[transition.index()].clone();
+                r.ends = self.ends(r.task.as_deref(), event);
                 r.transition = Some(self.ids[transition.index()].clone());
                 r.activation = *activation;
                 self.call(&mut r, *call_site);
@@ -300,7 +345,11 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
                 r.action.as_ref().map(|a| format!("  [{a}]")).unwrap_or_default()
             ) + if r.queued == Some(true) { "  (queued: the AAC is not connected)" } else { "" }
         }
-        "event" => format!("event    {}", r.event.as_deref().unwrap_or("?")),
+        "event" => format!(
+            "event    {}{}",
+            r.event.as_deref().unwrap_or("?"),
+            r.ends.as_deref().filter(|e| *e != "none").map(|e| format!("  (ends {e})")).unwrap_or_default()
+        ),
         "unexpected_event" => {
             format!("UNEXPECTED event {} ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
         }
@@ -336,6 +385,9 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
             r.result.as_deref().unwrap_or("?").to_uppercase(),
             r.messages.unwrap_or_default()
         ),
+        "fire" if r.ends.as_deref() == Some("timeout") => {
+            format!("TIME-OUT {}", r.transition.as_deref().unwrap_or("?"))
+        }
         "fire" if verbose => format!("fire     {}", r.transition.as_deref().unwrap_or("?")),
         "timer" if verbose => format!(
             "timer    {} until {}",
