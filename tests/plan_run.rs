@@ -67,6 +67,13 @@ fn the_dry_run_follows_the_seed_plan_replans_on_each_divergence_and_reaches_the_
     let (o, rs) = run_cable("cable.jsonl", &["--holding", "Holding", "--seed", "7"]);
     assert_eq!(o.status.code(), Some(0), "{}\n{}", text(&o.stdout), text(&o.stderr));
     assert!(text(&o.stderr).contains("planned mission: OK"), "{}", text(&o.stderr));
+    // Re-planning aborts steps and stops the holding mission: they say so,
+    // and nothing is reported stuck in a run that ends ok.
+    assert!(!text(&o.stdout).contains("STUCK"), "{}", text(&o.stdout));
+    assert!(!rs.iter().any(|r| r["kind"] == "outcome" && r["result"] == "stuck"));
+    assert!(rs
+        .iter()
+        .any(|r| r["kind"] == "outcome" && r["result"] == "aborted" && r["reason"] == "aborted to re-plan"));
 
     // The first plan is the seed's seven steps, with the MCL instances drawn from the attributes.
     let plans = kind(&rs, "plan");

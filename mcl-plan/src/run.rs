@@ -407,6 +407,10 @@ struct Run<'a> {
     steps: u32,
     /// Why the running step was aborted.
     aborted: Option<String>,
+    /// Why the executor is aborting the running mission now (set during
+    /// [`Run::abort_running`]): the player's outcome is then `aborted`, not
+    /// `stuck`.
+    aborting: Option<&'static str>,
     started: Instant,
 }
 
@@ -495,7 +499,16 @@ impl Run<'_> {
         let index = run.index;
         let mut records = Vec::new();
         for o in &out {
-            records.push(run.tracer.record(o));
+            let mut r = run.tracer.record(o);
+            // An aborted mission is left with nothing to fire: that is the
+            // executor's doing, not a stuck mission.
+            if let (Some(why), "outcome") = (self.aborting, r.kind.as_str()) {
+                if r.result.as_deref() == Some("stuck") {
+                    r.result = Some("aborted".into());
+                    r.reason = Some(why.into());
+                }
+            }
+            records.push(r);
             if let Output::Send { action, .. } = o {
                 self.seq += 1;
                 let a = Action {
@@ -537,10 +550,12 @@ impl Run<'_> {
         self.apply(Input::Start(self.t));
     }
 
-    /// Aborts the running mission through its abort hook.
-    fn abort_running(&mut self) {
+    /// Aborts the running mission through its abort hook, for `why`.
+    fn abort_running(&mut self, why: &'static str) {
         if self.running.as_ref().is_some_and(|r| r.player.outcome().is_none()) {
+            self.aborting = Some(why);
             self.apply(Input::Event(self.t, ABORT_EVENT.to_string(), None));
+            self.aborting = None;
         }
     }
 
@@ -573,7 +588,7 @@ impl Run<'_> {
             list(&missing),
             list(&extra)
         ));
-        self.abort_running();
+        self.abort_running("aborted to re-plan");
         self.end_step(false);
     }
 
@@ -649,7 +664,7 @@ impl Run<'_> {
             self.ex.replan(&facts).map(|_| ())
         };
         if let Some(name) = self.opts.holding.clone().filter(|_| self.running.is_some()) {
-            self.abort_running();
+            self.abort_running("holding mission stopped: a plan is ready");
             self.running = None;
             self.emit("holding", json!({ "mission": name, "state": "stopped" }));
         }
@@ -674,7 +689,7 @@ impl Run<'_> {
     }
 
     fn finish(&mut self, result: &str, reason: Option<String>) -> Report {
-        self.abort_running();
+        self.abort_running("the planned run ended");
         self.running = None;
         let mut f = json!({ "result": result, "plans": self.ex.replans + 1, "steps": self.steps });
         if let Some(r) = &reason {
@@ -816,7 +831,7 @@ impl Run<'_> {
                         "warning",
                         json!({ "message": format!("the mission waits for {} and nothing more can happen: the step fails", awaited.join(", ")) }),
                     );
-                    self.abort_running();
+                    self.abort_running("the step waits for what can no longer happen");
                     self.end_step(false);
                     continue;
                 }
@@ -912,6 +927,7 @@ fn run_with<'a>(
         players: 0,
         steps: 0,
         aborted: None,
+        aborting: None,
         started: Instant::now(),
     };
     run.go()

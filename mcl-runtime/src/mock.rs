@@ -105,6 +105,8 @@ pub struct MockVehicle {
     last_seq: u64,
     initialised: bool,
     warnings: Vec<String>,
+    /// (task, outcome) pairs already warned about.
+    warned: std::collections::HashSet<(String, &'static str)>,
     /// Times each event was sent (for perceptions scripted `after` an event).
     sent: HashMap<String, u32>,
 }
@@ -142,6 +144,7 @@ impl MockVehicle {
             last_seq: 0,
             initialised: false,
             warnings: Vec::new(),
+            warned: Default::default(),
             sent: HashMap::new(),
         }
     }
@@ -242,10 +245,13 @@ impl MockVehicle {
             OutcomeRule::Ok | OutcomeRule::Fail => rule.event.clone().or_else(|| {
                 let evs = self.tasks.get(task);
                 let e = evs.and_then(|e| if outcome == OutcomeRule::Ok { e.ok.first() } else { e.fail.first() });
-                if e.is_none() {
+                let what = if outcome == OutcomeRule::Ok { "ok" } else { "fail" };
+                // Said once per task and outcome, not at every activation.
+                if e.is_none() && self.warned.insert((task.to_string(), what)) {
                     self.warnings.push(format!(
-                        "mock: task `{task}` has no {} event in the net (property task_events:{task}); it will not answer",
-                        if outcome == OutcomeRule::Ok { "ok" } else { "fail" }
+                        "mock: task `{task}` binds no event that ends it {what}, so the mock vehicle cannot answer it {what}: \
+                         it will not answer (bind the primitive's {what} event in the task, or name one in the scenario: \
+                         `[tasks.{task}]` with `event = \"...\"`)"
                     ));
                 }
                 e.cloned()
@@ -415,6 +421,19 @@ mod tests {
         assert!(m.on_action(6.0, &action(3, "Cond", "disable", 3)).is_empty());
         assert!(m.on_action(6.0, &action(4, "Cond", "disable", 3)).is_empty());
         assert_eq!(m.next_deadline(), None);
+    }
+
+    #[test]
+    fn a_task_that_cannot_be_answered_is_reported_once() {
+        // `Other` is in no task_events: its activations cannot be answered.
+        let mut m = mock("");
+        for seq in [1, 3, 5] {
+            assert!(m.on_action(0.0, &action(seq, "Other", "enable", 9)).is_empty());
+            assert!(m.on_action(0.0, &action(seq + 1, "Other", "disable", 9)).is_empty());
+        }
+        let w = m.take_warnings();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("task `Other` binds no event that ends it ok"), "{}", w[0]);
     }
 
     #[test]
