@@ -392,7 +392,7 @@ fn unexpected_events_are_traced_and_not_fatal() {
     let sc = tmp("unexpected.toml");
     std::fs::write(
         &sc,
-        "[[events]]\nat = 1\nevent = \"eventSurfaceOk\"\n[[events]]\nat = 2\nevent = \"noSuchEvent\"\n",
+        "[[events]]\nat = 1\nevent = \"eventSurfaceOk\"\n[[events]]\nat = 2\nevent = \"noSuchEvent\"\nunexpected = true\n",
     )
     .unwrap();
     let (code, tr, out) = run_virtual("examples/survey.mcl", &["--scenario", sc.to_str().unwrap()], "unexp.jsonl");
@@ -474,12 +474,26 @@ fn usage_and_compile_errors_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("bad.toml:3:1: unknown field `delai`"), "{}", stderr(&out));
 
-    // Scenarios naming tasks the mission never calls are reported.
-    std::fs::write(&sc, "[tasks.Gotoo]\ndelay = 4\n").unwrap();
+    // A scenario is checked against the program when loaded: a task the
+    // mission never calls, a label no call has, an event no transition
+    // waits for are errors with their line and a did-you-mean; nothing runs.
+    std::fs::write(
+        &sc,
+        "[tasks.Gotoo]\ndelay = 4\n[tasks.Altitude.label.nope]\noutcome = \"fail\"\n\n[[events]]\nat = 120.0\nevent = \"eventAlarmOkk\"\n\n[[perceptions]]\nafter = \"batteryLo\"\nname = \"battery\"\nvalue = 0.1\n",
+    )
+    .unwrap();
     let out =
         mcl(&["run", "--mock", "--virtual-time", "-q", "examples/survey.mcl", "--scenario", sc.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(0));
-    assert!(stderr(&out).contains("never calls task `Gotoo`"));
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(err.contains("bad.toml:1:1: the mission never calls task `Gotoo`"), "{err}");
+    assert!(err.contains("bad.toml:3:1: no call of `Altitude` is labelled `nope`"), "{err}");
+    assert!(
+        err.contains("bad.toml:8:9: event `eventAlarmOkk` at 120 s: no transition waits for it (add `unexpected = true` to send it on purpose); did you mean `eventAlarmOk`?"),
+        "{err}"
+    );
+    assert!(err.contains("bad.toml:11:9: perception `battery` comes after event `batteryLo`"), "{err}");
+    assert!(!err.contains("MISSION"), "nothing ran: {err}");
 }
 
 #[test]

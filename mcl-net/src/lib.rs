@@ -38,6 +38,7 @@ mod name;
 pub mod pnml;
 pub mod semantics;
 pub mod structural;
+pub mod suggest;
 mod xml;
 pub mod xml_id;
 

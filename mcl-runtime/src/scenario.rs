@@ -67,6 +67,50 @@ pub struct Scenario {
     /// Perceptions sent at fixed times.
     #[serde(default)]
     pub perceptions: Vec<ScriptedPerception>,
+    /// The file name it was read from (for messages).
+    #[serde(skip)]
+    pub origin: String,
+    /// The text it was read from, to locate what [`Scenario::check_against`]
+    /// reports (empty for a scenario built in code: locations are 1:1).
+    #[serde(skip)]
+    pub text: String,
+}
+
+/// The names a program offers a scenario: the tasks its missions call,
+/// their labelled calls, and the events its nets wait for.
+#[derive(Clone, Debug, Default)]
+pub struct ProgramNames {
+    pub tasks: Vec<String>,
+    /// (task, label) of every labelled call.
+    pub labels: Vec<(String, String)>,
+    pub events: Vec<String>,
+}
+
+impl ProgramNames {
+    /// The names of the missions compiled into `nets`.
+    pub fn of<'a>(nets: impl IntoIterator<Item = &'a mcl_net::Net>) -> Self {
+        let mut p = ProgramNames::default();
+        for net in nets {
+            for t in net.transitions() {
+                if let Some(b) = &t.binding {
+                    p.tasks.push(b.task.clone());
+                    if let Some(l) = &b.label {
+                        p.labels.push((b.task.clone(), l.clone()));
+                    }
+                }
+                if let mcl_net::TransitionKind::Event(e) = &t.kind {
+                    p.events.push(e.clone());
+                }
+            }
+        }
+        for v in [&mut p.tasks, &mut p.events] {
+            v.sort();
+            v.dedup();
+        }
+        p.labels.sort();
+        p.labels.dedup();
+        p
+    }
 }
 
 /// How a task's primitive ends.
@@ -203,6 +247,11 @@ pub struct ScriptedEvent {
     pub at: f64,
     /// Event name.
     pub event: String,
+    /// Sent on purpose although no transition waits for it (to test how a
+    /// mission takes an unexpected event); otherwise such an event is an
+    /// error when the scenario is loaded (a misspelt name).
+    #[serde(default)]
+    pub unexpected: bool,
 }
 
 /// A perception sent at a fixed time (`at`), or `delay` seconds after the
@@ -292,7 +341,8 @@ impl Scenario {
     /// Parses a scenario. Errors name the line and column (and `origin`, a
     /// file name for messages).
     pub fn from_toml(text: &str, origin: &str) -> Result<Scenario, String> {
-        let s: Scenario = toml::from_str(text).map_err(|e| format_toml_error(origin, text, &e))?;
+        let mut s: Scenario = toml::from_str(text).map_err(|e| format_toml_error(origin, text, &e))?;
+        (s.origin, s.text) = (origin.to_string(), text.to_string());
         for (task, rule) in &s.tasks {
             let levels = std::iter::once((format!("tasks.{task}"), rule.base()))
                 .chain(rule.label.iter().map(|(l, r)| (format!("tasks.{task}.label.{l}"), r.clone())))
@@ -329,23 +379,88 @@ impl Scenario {
         Scenario::from_toml(&text, &path.display().to_string())
     }
 
-    /// Warnings about names the mission does not know: tasks never called,
-    /// labels no call carries.
-    pub fn check_against(&self, tasks: &[String], labels: &[(String, String)]) -> Vec<String> {
-        let mut w = Vec::new();
+    /// Errors (`file:line:col: ...`, with a did-you-mean when a known name is
+    /// close) for what the scenario names and the program does not have: a
+    /// task its missions never call, a label no call of that task has, an
+    /// event no transition waits for (`event = ...` of a rule, `[[events]]`,
+    /// a perception's `after`).
+    pub fn check_against(&self, p: &ProgramNames) -> Vec<String> {
+        let (origin, text) = (&self.origin, &self.text);
+        let mut errors = Vec::new();
+        let mut report = |(line, col): (usize, usize), what: String, name: &str, known: &[&str]| {
+            let hint = mcl_net::suggest::closest(name, known.iter().copied())
+                .map(|b| format!("; did you mean `{b}`?"))
+                .unwrap_or_default();
+            errors.push(format!("{origin}:{line}:{col}: {what}{hint}"));
+        };
+        let tasks: Vec<&str> = p.tasks.iter().map(String::as_str).collect();
+        let events: Vec<&str> = p.events.iter().map(String::as_str).collect();
         for (name, rule) in &self.tasks {
-            if !tasks.contains(name) {
-                w.push(format!("scenario: the mission never calls task `{name}`"));
+            if !p.tasks.contains(name) {
+                report(
+                    find_key(text, &format!("tasks.{name}")),
+                    format!("the mission never calls task `{name}`"),
+                    name,
+                    &tasks,
+                );
                 continue;
             }
+            let labels: Vec<&str> = p.labels.iter().filter(|(t, _)| t == name).map(|(_, l)| l.as_str()).collect();
             for l in rule.label.keys() {
-                if !labels.iter().any(|(t, lab)| t == name && lab == l) {
-                    w.push(format!("scenario: no call of `{name}` is labelled `{l}`"));
+                if !labels.contains(&l.as_str()) {
+                    let at = find_key(text, &format!("tasks.{name}.label.{l}"));
+                    report(at, format!("no call of `{name}` is labelled `{l}`"), l, &labels);
+                }
+            }
+            let overrides = std::iter::once(rule.event.as_ref())
+                .chain(rule.label.values().map(|r| r.event.as_ref()))
+                .chain(rule.activation.values().map(|r| r.event.as_ref()));
+            for e in overrides.flatten() {
+                if !p.events.contains(e) {
+                    let at = find_value(text, e);
+                    report(
+                        at,
+                        format!("task `{name}` answers with event `{e}`, which no transition waits for"),
+                        e,
+                        &events,
+                    );
                 }
             }
         }
-        w
+        for e in &self.events {
+            if !e.unexpected && !p.events.contains(&e.event) {
+                let at = find_value(text, &e.event);
+                let what = format!(
+                    "event `{}` at {} s: no transition waits for it (add `unexpected = true` to send it on purpose)",
+                    e.event, e.at
+                );
+                report(at, what, &e.event, &events);
+            }
+        }
+        for per in &self.perceptions {
+            if let Some(e) = per.after.as_ref().filter(|e| !p.events.contains(e)) {
+                report(
+                    find_value(text, e),
+                    format!("perception `{}` comes after event `{e}`, which no transition waits for", per.name),
+                    e,
+                    &events,
+                );
+            }
+        }
+        errors
     }
+}
+
+/// The line and column (1-based) of the string value `"value"` in the
+/// text, (1, 1) if not found.
+fn find_value(text: &str, value: &str) -> (usize, usize) {
+    let quoted = format!("\"{value}\"");
+    for (i, line) in text.lines().enumerate() {
+        if let Some(c) = line.find(&quoted) {
+            return (i + 1, c + 1);
+        }
+    }
+    (1, 1)
 }
 
 /// The line and column (1-based) of the `n`-th (0-based) `header` line, (1, 1) if not found.

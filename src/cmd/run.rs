@@ -16,7 +16,7 @@ use mcl_runtime::driver::{self, End, Limits, Session, Sink};
 use mcl_runtime::journal::{self, Entry, JournalWriter};
 use mcl_runtime::mock::MockVehicle;
 use mcl_runtime::player::{Output, Player, PlayerOptions};
-use mcl_runtime::scenario::Scenario;
+use mcl_runtime::scenario::{ProgramNames, Scenario};
 use mcl_runtime::trace::{live_line, Record, SourceMap, TraceWriter, Tracer};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -413,20 +413,12 @@ pub fn run(o: Options) -> u8 {
     let mut sink =
         RunSink { trace, live: !o.quiet, verbose: o.verbose, quiet_replay: false, records: Vec::new(), error: None };
     if o.mock {
-        let called: Vec<String> = {
-            let mut v: Vec<String> =
-                net.transitions().iter().filter_map(|t| t.binding.as_ref().map(|b| b.task.clone())).collect();
-            v.sort();
-            v.dedup();
-            v
-        };
-        let labels: Vec<(String, String)> = net
-            .transitions()
-            .iter()
-            .filter_map(|t| t.binding.as_ref().and_then(|b| b.label.clone().map(|l| (b.task.clone(), l))))
-            .collect();
-        for w in scenario.check_against(&called, &labels) {
-            eprintln!("warning: {w}");
+        let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
+        for e in &errors {
+            eprintln!("error: scenario: {e}");
+        }
+        if !errors.is_empty() {
+            return 2;
         }
     }
     let mut mock = MockVehicle::from_net(&net, scenario, mock_seed);
@@ -663,29 +655,17 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             }
         }
     }
-    // Tasks and labels of every vehicle: a task of the scenario is checked
-    // against all of them (one scenario serves every vehicle).
-    let mut called: Vec<String> = Vec::new();
-    let mut labels: Vec<(String, String)> = Vec::new();
-    for v in &vehicles {
-        for t in v.net.transitions() {
-            if let Some(b) = &t.binding {
-                called.push(b.task.clone());
-                if let Some(l) = &b.label {
-                    labels.push((b.task.clone(), l.clone()));
-                }
-            }
-        }
-    }
-    called.sort();
-    called.dedup();
-    let mut warned = std::collections::BTreeSet::new();
+    // The names of every vehicle: one scenario serves them all.
+    let known = ProgramNames::of(vehicles.iter().map(|v| &v.net));
+    let mut errors = std::collections::BTreeSet::new();
     for s in &scenarios {
-        for w in s.check_against(&called, &labels) {
-            if warned.insert(w.clone()) {
-                eprintln!("warning: {w}");
-            }
-        }
+        errors.extend(s.check_against(&known));
+    }
+    for e in &errors {
+        eprintln!("error: scenario: {e}");
+    }
+    if !errors.is_empty() {
+        return 2;
     }
 
     let trace = match open_trace(&o.trace) {
