@@ -255,10 +255,11 @@ fn player_killed_and_resumed_against_a_running_mock_aac() {
     }
 }
 
-/// The player and `mcl mock-aac` both killed, the mock restarted before the
-/// player is resumed. With `--state` the session survives (the mock
-/// rebuilds the events it had sent, with their numbers) and the run is
-/// that of an uninterrupted one. Without, the AAC welcomes the run in a new
+/// The player and `mcl mock-aac` both killed (after the mock answered Goto
+/// to nobody), the mock restarted before the player is resumed. With
+/// `--state` the session survives (the mock rebuilds its outbox: the events
+/// it had sent, with their numbers) and the run is that of an
+/// uninterrupted one. Without, the AAC welcomes the run in a new
 /// session: the player sends the running Goto's enable again with a new
 /// sequence number (the primitive restarts) and the mission ends ok; no
 /// sequence number is executed twice.
@@ -276,6 +277,8 @@ fn mock_aac_restarted_while_the_player_is_down() {
         let journal = dir.join(format!("j-{state}.jsonl"));
         let trace = dir.join(format!("t-{state}.jsonl"));
         crashed_run(&addr, &file, &journal, &["--speed", "10"], Kill::After(3));
+        // Goto's answer is in the first mock's outbox when it dies.
+        goto_answered(&first);
         first.kill();
         let second = resume_aac(&dir, &addr, extra);
         let (code, ctx) = resumed_run(&addr, &file, &journal, &trace, &["--speed", "10", "-q"]);
