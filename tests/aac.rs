@@ -193,3 +193,148 @@ fn real_time_over_tcp_credits_each_event_to_its_call() {
     // Not asserted (it depends on timing), but worth seeing when it happens.
     eprintln!("{stale} stale answers ignored over TCP");
 }
+
+/// `mcl mock-aac` serving [`resume_mission`] at 10 times real time.
+fn resume_aac(dir: &std::path::Path, listen: &str, extra: &[&str]) -> Proc {
+    let scenario = dir.join("resume.toml");
+    std::fs::write(&scenario, RESUME_SCENARIO).unwrap();
+    let mut cmd = mcl();
+    cmd.arg("mock-aac")
+        .arg("--net")
+        .arg(dir.join("resume.mcl"))
+        .arg("--scenario")
+        .arg(&scenario)
+        .args(["--listen", listen, "--speed", "10"])
+        .args(extra);
+    Proc::spawn(cmd)
+}
+
+/// Waits until the mock has answered Goto (while the player is down).
+fn goto_answered(aac: &Proc) {
+    aac.wait_log("Goto's answer", |l| l.contains(" sends ") && l.contains("eventGotoOk"));
+}
+
+/// The player killed at several moments against a running `mcl mock-aac`
+/// (with and without `--state`), the vehicle going on meanwhile (Goto
+/// answers while the player is down), then resumed with `--resume`: the
+/// mission ends ok with the actions and events of an uninterrupted run,
+/// each event handled once (the AAC sends again what followed the last
+/// event journaled), and every action executed exactly once.
+#[test]
+fn player_killed_and_resumed_against_a_running_mock_aac() {
+    let dir = scratch("resume-player");
+    let file = resume_mission(&dir);
+    let reference = reference_calls(&dir, &file, RESUME_SCENARIO);
+    let cases = [
+        (Kill::After(1), false),
+        (Kill::After(3), false),
+        (Kill::After(4), true),
+        (Kill::When("eventAltitudeOk"), false),
+        (Kill::When("\"eventGotoOk\""), true),
+    ];
+    for (i, (kill, state)) in cases.into_iter().enumerate() {
+        let state_file = dir.join(format!("state{i}.json"));
+        let state_arg = state_file.to_str().unwrap().to_string();
+        let with_state = ["--state", state_arg.as_str()];
+        let aac = resume_aac(&dir, "127.0.0.1:0", if state { &with_state } else { &[] });
+        let journal = dir.join(format!("j{i}.jsonl"));
+        let trace = dir.join(format!("t{i}.jsonl"));
+        crashed_run(&aac.addr, &file, &journal, &["--speed", "10"], kill);
+        if matches!(kill, Kill::After(3) | Kill::When("eventAltitudeOk")) {
+            goto_answered(&aac);
+        }
+        let (code, ctx) = resumed_run(&aac.addr, &file, &journal, &trace, &["--speed", "10", "-q"]);
+        let ctx = format!("{kill:?} state={state}\n{ctx}\nAAC:\n{}", aac.log().join("\n"));
+        assert_eq!(code, Some(0), "{ctx}");
+        assert_eq!(calls(&trace), reference, "{ctx}");
+        assert_eq!(of_kind(&trace, &["unexpected_event", "stale_event"]), Vec::<serde_json::Value>::new(), "{ctx}");
+        let mut executed = aac.executed();
+        assert!(unique(&executed), "an action was executed twice\n{ctx}");
+        executed.sort_unstable();
+        assert_eq!(executed, sent(&trace), "every action sent executed once\n{ctx}");
+    }
+}
+
+/// The player and `mcl mock-aac` both killed (after the mock answered Goto
+/// to nobody), the mock restarted before the player is resumed. With
+/// `--state` the session survives (the mock rebuilds its outbox: the events
+/// it had sent, with their numbers) and the run is that of an
+/// uninterrupted one. Without, the AAC welcomes the run in a new
+/// session: the player sends the running Goto's enable again with a new
+/// sequence number (the primitive restarts) and the mission ends ok; no
+/// sequence number is executed twice.
+#[test]
+fn mock_aac_restarted_while_the_player_is_down() {
+    let dir = scratch("resume-both");
+    let file = resume_mission(&dir);
+    let reference = reference_calls(&dir, &file, RESUME_SCENARIO);
+    for state in [true, false] {
+        let state_file = dir.join(format!("state-{state}.json"));
+        let state_arg = state_file.to_str().unwrap().to_string();
+        let extra: &[&str] = if state { &["--state", &state_arg] } else { &[] };
+        let mut first = resume_aac(&dir, "127.0.0.1:0", extra);
+        let addr = first.addr.clone();
+        let journal = dir.join(format!("j-{state}.jsonl"));
+        let trace = dir.join(format!("t-{state}.jsonl"));
+        crashed_run(&addr, &file, &journal, &["--speed", "10"], Kill::After(3));
+        // Goto's answer is in the first mock's outbox when it dies.
+        goto_answered(&first);
+        first.kill();
+        let second = resume_aac(&dir, &addr, extra);
+        let (code, ctx) = resumed_run(&addr, &file, &journal, &trace, &["--speed", "10", "-q"]);
+        let ctx = format!(
+            "state={state}\n{ctx}\nfirst AAC:\n{}\nsecond AAC:\n{}",
+            first.log().join("\n"),
+            second.log().join("\n")
+        );
+        assert_eq!(code, Some(0), "{ctx}");
+        let (one, two) = (first.executed(), second.executed());
+        let mut all = one.clone();
+        all.extend(&two);
+        assert!(unique(&all), "a sequence number was executed twice\n{ctx}");
+        let restarts = of_kind(&trace, &["warning"])
+            .iter()
+            .filter(|r| r["message"].as_str().is_some_and(|m| m.contains("lost its state")))
+            .count();
+        if state {
+            assert_eq!(calls(&trace), reference, "{ctx}");
+            all.sort_unstable();
+            assert_eq!(all, sent(&trace), "{ctx}");
+            assert_eq!(restarts, 0, "{ctx}");
+        } else {
+            assert_eq!(restarts, 1, "{ctx}");
+            let gotos = calls(&trace).iter().filter(|c| c.starts_with("action \"enableGoto\"")).count();
+            assert_eq!(gotos, 2, "Goto restarted\n{ctx}");
+            assert!(two.iter().all(|s| one.iter().all(|o| s > o)), "{ctx}");
+            assert_eq!(calls(&trace).last().map(String::as_str), Some("outcome \"ok\""), "{ctx}");
+        }
+    }
+}
+
+/// `mcl mock-aac` without `--state` killed and restarted under a running
+/// player (no journal): the player's link comes back to a new session, the
+/// player restarts what runs, and the mission ends ok.
+#[test]
+fn mock_aac_restarted_without_state_under_a_running_player() {
+    let dir = scratch("restart-stateless");
+    let file = resume_mission(&dir);
+    let mut first = resume_aac(&dir, "127.0.0.1:0", &[]);
+    let addr = first.addr.clone();
+    let trace = dir.join("trace.jsonl");
+    let mut cmd = mcl();
+    cmd.args(["run", "--aac", &addr, "--speed", "10", "-q"]).arg(&file).arg("--trace").arg(&trace);
+    let player = std::thread::spawn(move || run_bounded(cmd, Duration::from_secs(30)));
+    first.wait_log("Goto's enable", |l| l.contains("executed seq=") && l.contains("enableGoto"));
+    first.kill();
+    let second = resume_aac(&dir, &addr, &[]);
+    let (code, out, err) = player.join().unwrap();
+    let ctx = format!(
+        "stdout:\n{out}\nstderr:\n{err}\nfirst AAC:\n{}\nsecond AAC:\n{}",
+        first.log().join("\n"),
+        second.log().join("\n")
+    );
+    assert_eq!(code, Some(0), "{ctx}");
+    let text = std::fs::read_to_string(&trace).unwrap();
+    assert!(text.contains("lost its state"), "{ctx}");
+    assert!(!second.executed().is_empty(), "{ctx}");
+}

@@ -99,3 +99,67 @@ fn python_aac_event_mapping_from_a_file() {
     assert_eq!(code, Some(0), "{ctx}");
     assert!(!out.contains("EmergencySurfacePrimitive enable"), "the alarm never fires\n{ctx}");
 }
+
+/// The actions and events of a trace, sorted: the reference AAC answers
+/// Goto and Altitude at the same time, in either order.
+fn sorted_calls(trace: &std::path::Path) -> Vec<String> {
+    let mut v = calls(trace);
+    v.sort();
+    v
+}
+
+/// The player killed at several moments against the running Python
+/// reference AAC (which answers meanwhile), then resumed with `--resume`:
+/// the mission ends ok with the actions and events of an uninterrupted
+/// run, every action executed exactly once.
+#[test]
+fn player_killed_and_resumed_against_the_python_aac() {
+    if python().is_none() {
+        return;
+    }
+    let dir = scratch("python-resume");
+    let file = resume_mission(&dir);
+    let mut reference = reference_calls(&dir, &file, "default_duration = 1\n");
+    reference.sort();
+    for (i, kill) in [Kill::After(1), Kill::After(3), Kill::When("eventDepthOk")].into_iter().enumerate() {
+        let Some(aac) = python_aac(&["--delay", "0.3"]) else { return };
+        let journal = dir.join(format!("j{i}.jsonl"));
+        let trace = dir.join(format!("t{i}.jsonl"));
+        crashed_run(&aac.addr, &file, &journal, &[], kill);
+        // The vehicle goes on while the player is down.
+        std::thread::sleep(Duration::from_millis(800));
+        let (code, ctx) = resumed_run(&aac.addr, &file, &journal, &trace, &["-q"]);
+        let ctx = format!("{kill:?}\n{ctx}\nAAC:\n{}", aac.log().join("\n"));
+        assert_eq!(code, Some(0), "{ctx}");
+        assert_eq!(sorted_calls(&trace), reference, "{ctx}");
+        assert_eq!(of_kind(&trace, &["unexpected_event", "stale_event"]), Vec::<serde_json::Value>::new(), "{ctx}");
+        let mut executed = aac.executed();
+        assert!(unique(&executed), "an action was executed twice\n{ctx}");
+        executed.sort_unstable();
+        let mut sent = sent(&trace);
+        sent.sort_unstable();
+        assert_eq!(executed, sent, "{ctx}");
+    }
+}
+
+/// The Python reference AAC keeps no state: killed and restarted while the
+/// player is down, it welcomes the resumed run in a new session; the player
+/// restarts the primitives its marking says run, and the mission ends ok.
+#[test]
+fn python_aac_restarted_while_the_player_is_down() {
+    let dir = scratch("python-restart");
+    let file = resume_mission(&dir);
+    let Some(mut first) = python_aac(&["--delay", "0.3"]) else { return };
+    let addr = first.addr.clone();
+    let journal = dir.join("j.jsonl");
+    let trace = dir.join("t.jsonl");
+    crashed_run(&addr, &file, &journal, &[], Kill::After(2));
+    first.kill();
+    let Some(second) = python_aac(&["--delay", "0.3", "--listen", &addr]) else { return };
+    let (code, ctx) = resumed_run(&addr, &file, &journal, &trace, &["-q"]);
+    let ctx = format!("{ctx}\nfirst AAC:\n{}\nsecond AAC:\n{}", first.log().join("\n"), second.log().join("\n"));
+    assert_eq!(code, Some(0), "{ctx}");
+    assert!(std::fs::read_to_string(&trace).unwrap().contains("lost its state"), "{ctx}");
+    let (one, two) = (first.executed(), second.executed());
+    assert!(two.iter().all(|s| one.iter().all(|o| s > o)), "no sequence number executed twice\n{ctx}");
+}

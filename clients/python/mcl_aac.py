@@ -51,6 +51,7 @@ PROTOCOL_VERSION = 1
 MAX_LINE = 64 * 1024
 DEFAULT_ADDR = "127.0.0.1:7010"
 DEFAULT_TIMEOUT = 5.0
+MAX_OUTBOX = 100000  # events and perceptions kept per session until a player confirms them
 MESSAGE_TYPES = ("hello", "welcome", "action", "ping", "ack", "event", "perception", "pong", "error")
 
 
@@ -132,7 +133,10 @@ class _Session(object):
         self.id = "%x-%x-%s" % (int(time.time() * 1e6), os.getpid(), os.urandom(3).hex())
         self.last_seq = 0
         self.last_event = 0
-        self.outbox = []  # [(n, line bytes)] not yet confirmed by the player
+        # [(n, line bytes)] sent or to send, not yet confirmed by the player
+        # (its ping's or hello's `last_event`): re-sent after a reconnection
+        # or a restart of the player (docs/aac-protocol.md, section 6).
+        self.outbox = []
         self.conn = None
 
 
@@ -168,8 +172,9 @@ class AacServer(object):
     """An AAC server: see the module documentation."""
 
     def __init__(self, host="127.0.0.1", port=7010, token=None, on_action=None, timeout=DEFAULT_TIMEOUT,
-                 max_line=MAX_LINE, log=_log_stderr, verbose=False, name="mcl_aac.py/1"):
+                 max_line=MAX_LINE, log=_log_stderr, verbose=False, name="mcl_aac.py/1", max_outbox=MAX_OUTBOX):
         self.token = token
+        self.max_outbox = max_outbox
         self.on_action = on_action
         self.timeout = timeout
         self.max_line = max_line
@@ -247,6 +252,9 @@ class AacServer(object):
             msg["n"] = s.last_event
             line = encode(msg)
             s.outbox.append((s.last_event, line))
+            if len(s.outbox) > self.max_outbox:
+                # Bounded: the oldest are forgotten (the player logs the gap).
+                del s.outbox[:len(s.outbox) - self.max_outbox]
             conn = s.conn
         if conn is not None:
             if self.verbose:

@@ -130,6 +130,42 @@ class Server(unittest.TestCase):
         finally:
             server.close()
 
+    def test_a_resumed_player_gets_what_followed_its_last_event(self):
+        # Events sent while no player is connected are kept (at most
+        # max_outbox), and a hello naming the session and its last event
+        # gets those after it again; another session's name gets them all.
+        import json
+        import socket
+        server = mcl_aac.AacServer("127.0.0.1", 0, log=None, max_outbox=3)
+        server.start()
+        try:
+            def hello(extra):
+                sock = socket.create_connection(server.address, timeout=5)
+                f = sock.makefile("rb")
+                h = {"type": "hello", "version": 1, "mission": "m", "run": "r"}
+                h.update(extra)
+                sock.sendall((json.dumps(h) + "\n").encode())
+                return sock, f, json.loads(f.readline())
+
+            sock, f, w = hello({})
+            f.close()
+            sock.close()
+            self.assertTrue(wait_for(lambda: server._current is not None and server._current.conn is None))
+            for i in range(5):
+                server.send_event("e%d" % (i + 1))
+            sock, f, w = hello({"session": w["session"], "last_event": 3})
+            self.assertEqual((w["type"], w["last_event"]), ("welcome", 5))
+            self.assertEqual([json.loads(f.readline())["n"] for _ in range(2)], [4, 5])
+            f.close()
+            sock.close()
+            self.assertTrue(wait_for(lambda: server._current.conn is None))
+            sock, f, w = hello({"session": "an older one", "last_event": 4})
+            self.assertEqual([json.loads(f.readline())["event"] for _ in range(2)], ["e4", "e5"])
+            f.close()
+            sock.close()
+        finally:
+            server.close()
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -638,11 +638,11 @@ impl Run<'_> {
                 Some(_) => self.apply(Input::Event(self.t, event, None)),
                 None => self.emit("unexpected_event", json!({ "event": event, "reason": "no mission is running" })),
             },
-            Inbound::Perception { name, value } => self.perceive(name, value),
+            Inbound::Perception { name, value, .. } => self.perceive(name, value),
             Inbound::Disconnected => self.emit("warning", json!({ "message": "link to the AAC lost; reconnecting" })),
             Inbound::Connected => self.emit("warning", json!({ "message": "link to the AAC up" })),
             Inbound::Notice { message } => self.emit("link", json!({ "message": message })),
-            Inbound::Ack { .. } => {}
+            Inbound::Ack { .. } | Inbound::Session { .. } => {}
         }
     }
 

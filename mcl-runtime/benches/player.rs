@@ -389,7 +389,7 @@ fn link_latency(net: &Arc<Net>) -> Vec<Duration> {
             if end.actions.is_empty() {
                 if let Some(ev) = pending.pop() {
                     sent_at = Some(Instant::now());
-                    if end.inbound.send(Inbound::Event { event: ev, activation: None }).is_err() {
+                    if end.inbound.send(Inbound::Event { event: ev, activation: None, n: None }).is_err() {
                         break;
                     }
                 }

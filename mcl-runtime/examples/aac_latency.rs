@@ -76,7 +76,7 @@ async fn measure(mut end: AacEnd, n: usize) -> Vec<Duration> {
     let mut out = Vec::with_capacity(n);
     for _ in 0..n {
         let t0 = Instant::now();
-        end.inbound.send(Inbound::Event { event: "tick".into(), activation: None }).unwrap();
+        end.inbound.send(Inbound::Event { event: "tick".into(), activation: None, n: None }).unwrap();
         let a = end.actions.recv().await.expect("player gone");
         out.push(t0.elapsed());
         std::hint::black_box(a);
@@ -131,7 +131,7 @@ async fn measure_warm(end: &mut AacEnd) -> Vec<Duration> {
     let mut v = Vec::new();
     for _ in 0..1000 {
         let t0 = Instant::now();
-        end.inbound.send(Inbound::Event { event: "tick".into(), activation: None }).unwrap();
+        end.inbound.send(Inbound::Event { event: "tick".into(), activation: None, n: None }).unwrap();
         end.actions.recv().await.unwrap();
         v.push(t0.elapsed());
     }

@@ -16,7 +16,7 @@
 
 use crate::clock::Clock;
 use crate::journal::{Entry, Input, JournalWriter};
-use crate::link::{AacEnd, Action, Inbound, Link};
+use crate::link::{AacEnd, Action, Delivered, Inbound, Link};
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player};
 use crate::trace::{Record, Tracer};
@@ -114,13 +114,25 @@ pub struct Session<'a> {
     /// The link to the AAC is down (or not yet up): actions are queued, and
     /// their records say so (`queued`).
     pub link_down: bool,
+    /// The AAC session the run is in (from the journal when resuming) and
+    /// the events handled in it, told to the link once journaled.
+    pub delivered: Delivered,
     syncs: u64,
 }
 
 impl<'a> Session<'a> {
     /// A session without journal.
     pub fn new(player: Player, tracer: Tracer, sink: &'a mut (dyn Sink + Send)) -> Self {
-        Session { player, tracer, sink, journal: None, crash_after: None, link_down: false, syncs: 0 }
+        Session {
+            player,
+            tracer,
+            sink,
+            journal: None,
+            crash_after: None,
+            link_down: false,
+            delivered: Delivered::default(),
+            syncs: 0,
+        }
     }
 
     /// Records one output (used for replayed outputs too).
@@ -145,9 +157,16 @@ impl<'a> Session<'a> {
     /// outputs and returns them; the caller sends their actions
     /// ([`actions`]).
     pub fn step(&mut self, input: Input) -> Result<Vec<Output>, String> {
+        self.step_numbered(input, None)
+    }
+
+    /// [`Session::step`] for an event or perception that the AAC numbered
+    /// `n` in its session: the number is journaled with it, then told to the
+    /// link ([`Session::delivered`]).
+    pub fn step_numbered(&mut self, input: Input, n: Option<u64>) -> Result<Vec<Output>, String> {
         let out = input.apply(&mut self.player);
         if let Some(j) = &mut self.journal {
-            j.append(&input.entry());
+            j.append(&input.entry_numbered(n));
             let ids = self.player.net().transitions();
             for o in &out {
                 if let Output::Fired { t, transition, .. } = o {
@@ -160,10 +179,36 @@ impl<'a> Session<'a> {
                 std::process::abort();
             }
         }
+        if let (Some(n), (Some(session), _)) = (n, self.delivered.get()) {
+            self.delivered.set(&session, n);
+        }
         for o in &out {
             self.emit(o);
         }
         Ok(out)
+    }
+
+    /// The AAC welcomed the run in session `id`: journals it when it is
+    /// another session than the run's (synced: the AAC may send events of
+    /// it at once), and, when the AAC lost its memory (`restarted`),
+    /// re-establishes the running primitives ([`Input::Restart`]). Returns
+    /// the outputs, whose actions the caller sends.
+    pub fn on_session(&mut self, now: f64, id: &str, restarted: bool) -> Result<Vec<Output>, String> {
+        self.link_down = false;
+        if self.delivered.get().0.as_deref() == Some(id) {
+            return Ok(Vec::new());
+        }
+        self.delivered.set(id, 0);
+        if let Some(j) = &mut self.journal {
+            j.append(&Entry::Session { id: id.to_string() });
+            if !restarted {
+                j.sync()?;
+            }
+        }
+        if !restarted || self.player.outcome().is_some() {
+            return Ok(Vec::new());
+        }
+        self.step(Input::Restart(now.max(self.player.now())))
     }
 
     /// Journals an acknowledgement (written with the next sync).
@@ -279,8 +324,16 @@ impl SameInstant {
 
 pub(crate) fn perception_or_event(t: f64, m: Inbound) -> Option<Input> {
     match m {
-        Inbound::Event { event, activation } => Some(Input::Event(t, event, activation)),
-        Inbound::Perception { name, value } => Some(Input::Perception(t, name, value)),
+        Inbound::Event { event, activation, .. } => Some(Input::Event(t, event, activation)),
+        Inbound::Perception { name, value, .. } => Some(Input::Perception(t, name, value)),
+        _ => None,
+    }
+}
+
+/// The number the AAC gave an event or a perception.
+fn number(m: &Inbound) -> Option<u64> {
+    match m {
+        Inbound::Event { n, .. } | Inbound::Perception { n, .. } => *n,
         _ => None,
     }
 }
@@ -357,6 +410,11 @@ fn started(s: &Session) -> bool {
 
 /// Runs `s` over `link` in real time with `clock` until the mission ends or
 /// the time limit passes. `resend` are actions to send first (after a resume).
+///
+/// A link that reports [`Inbound::Session`] with `restarted` must have
+/// dropped the actions it had not got acknowledged (the TCP link with
+/// [`ConnectOptions::reestablish`](crate::tcp::ConnectOptions::reestablish)):
+/// the player then sends what re-establishes its running primitives.
 pub async fn run_real_time(
     s: &mut Session<'_>,
     link: &mut Link,
@@ -409,11 +467,15 @@ pub async fn run_real_time(
                         Vec::new()
                     }
                     Some(Inbound::Connected) => { s.link_down = false; s.warn(now, "link to the AAC up".into()); Vec::new() }
+                    Some(Inbound::Session { id, restarted }) => s.on_session(now, &id, restarted)?,
                     Some(Inbound::Notice { message }) => { s.link_notice(now, message); Vec::new() }
-                    Some(m) => match perception_or_event(now, m) {
-                        Some(input) => s.step(input)?,
-                        None => Vec::new(),
-                    },
+                    Some(m) => {
+                        let n = number(&m);
+                        match perception_or_event(now, m) {
+                            Some(input) => s.step_numbered(input, n)?,
+                            None => Vec::new(),
+                        }
+                    }
                 }
             }
             _ = sleep => {

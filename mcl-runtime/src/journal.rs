@@ -13,6 +13,16 @@
 //! synced: losing one only re-sends an action, which the AAC drops by its
 //! `seq`).
 //!
+//! Against a TCP AAC (version 2), each event and perception is journaled
+//! with its number `n` in the AAC's session, and [`Entry::Session`] records
+//! the session the following numbers belong to (synced when it changes).
+//! A resumed player tells the AAC the session and the last number it
+//! journaled ([`Replayed::resume_point`]), and the AAC sends again every
+//! event after it: nothing the AAC sent is lost, and nothing is handled
+//! twice. [`Entry::Restart`] is the input that re-established the running
+//! primitives when the AAC came back with another session (it lost its
+//! memory: [`Player::reestablish`]).
+//!
 //! The player is deterministic for a seed and a sequence of inputs, so
 //! resuming ([`replay`]) feeds the journaled inputs again, at their
 //! journaled times, to a fresh player with the journaled seed: this restores
@@ -34,8 +44,13 @@ use serde_json::Value;
 use crate::link::{Action, Inbound};
 use crate::player::{Output, Player};
 
-/// Journal format version.
-pub const VERSION: u32 = 1;
+/// Journal format version. Version 2 added event numbers (`n`),
+/// [`Entry::Session`] and [`Entry::Restart`]; a version 1 journal is still
+/// read, and resumed as before (without a resume point for the AAC).
+pub const VERSION: u32 = 2;
+
+/// The oldest journal version this player reads.
+pub const OLDEST_VERSION: u32 = 1;
 
 /// One line of a journal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -81,6 +96,9 @@ pub enum Entry {
         /// The activation it named, if any.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         activation: Option<u64>,
+        /// Its number in the AAC's session, if the AAC numbered it.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        n: Option<u64>,
     },
     /// A perception was received.
     Perception {
@@ -90,6 +108,21 @@ pub enum Entry {
         name: String,
         /// Value.
         value: Value,
+        /// Its number in the AAC's session, if the AAC numbered it.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        n: Option<u64>,
+    },
+    /// The AAC welcomed the run in this session: the numbers `n` of the
+    /// entries that follow are in it. Written when the session changes.
+    Session {
+        /// The AAC's session id.
+        id: String,
+    },
+    /// The AAC came back with another session (it lost its memory): the
+    /// player re-established its running primitives (an input).
+    Restart {
+        /// Mission time.
+        t: f64,
     },
     /// The player was woken for its timers.
     Timer {
@@ -122,16 +155,26 @@ pub enum Input {
     Perception(f64, String, Value),
     /// Timers.
     Timer(f64),
+    /// The vehicle lost its memory: re-establish what runs
+    /// ([`Player::reestablish`]).
+    Restart(f64),
 }
 
 impl Input {
     /// Its journal entry.
     pub fn entry(&self) -> Entry {
+        self.entry_numbered(None)
+    }
+
+    /// Its journal entry, with the number `n` the AAC gave the event or
+    /// perception.
+    pub fn entry_numbered(&self, n: Option<u64>) -> Entry {
         match self {
             Input::Start(t) => Entry::Start { t: *t },
-            Input::Event(t, e, a) => Entry::Event { t: *t, event: e.clone(), activation: *a },
-            Input::Perception(t, n, v) => Entry::Perception { t: *t, name: n.clone(), value: v.clone() },
+            Input::Event(t, e, a) => Entry::Event { t: *t, event: e.clone(), activation: *a, n },
+            Input::Perception(t, name, v) => Entry::Perception { t: *t, name: name.clone(), value: v.clone(), n },
             Input::Timer(t) => Entry::Timer { t: *t },
+            Input::Restart(t) => Entry::Restart { t: *t },
         }
     }
 
@@ -139,9 +182,10 @@ impl Input {
     pub fn of_entry(e: &Entry) -> Option<Input> {
         Some(match e {
             Entry::Start { t } => Input::Start(*t),
-            Entry::Event { t, event, activation } => Input::Event(*t, event.clone(), *activation),
-            Entry::Perception { t, name, value } => Input::Perception(*t, name.clone(), value.clone()),
+            Entry::Event { t, event, activation, .. } => Input::Event(*t, event.clone(), *activation),
+            Entry::Perception { t, name, value, .. } => Input::Perception(*t, name.clone(), value.clone()),
             Entry::Timer { t } => Input::Timer(*t),
+            Entry::Restart { t } => Input::Restart(*t),
             _ => return None,
         })
     }
@@ -153,14 +197,15 @@ impl Input {
             Input::Event(t, e, a) => p.on_event_from(*t, e, *a),
             Input::Perception(t, n, v) => p.on_perception(*t, n, v.clone()),
             Input::Timer(t) => p.on_timer(*t),
+            Input::Restart(t) => p.reestablish(*t),
         }
     }
 
     /// The message a vehicle sent for this input, if it is one.
     pub fn message(&self) -> Option<Inbound> {
         match self {
-            Input::Event(_, e, a) => Some(Inbound::Event { event: e.clone(), activation: *a }),
-            Input::Perception(_, n, v) => Some(Inbound::Perception { name: n.clone(), value: v.clone() }),
+            Input::Event(_, e, a) => Some(Inbound::Event { event: e.clone(), activation: *a, n: None }),
+            Input::Perception(_, n, v) => Some(Inbound::Perception { name: n.clone(), value: v.clone(), n: None }),
             _ => None,
         }
     }
@@ -168,7 +213,11 @@ impl Input {
     /// Its time.
     pub fn time(&self) -> f64 {
         match self {
-            Input::Start(t) | Input::Event(t, _, _) | Input::Perception(t, _, _) | Input::Timer(t) => *t,
+            Input::Start(t)
+            | Input::Event(t, _, _)
+            | Input::Perception(t, _, _)
+            | Input::Timer(t)
+            | Input::Restart(t) => *t,
         }
     }
 }
@@ -256,10 +305,11 @@ pub fn read_journal(path: &Path) -> Result<Vec<Entry>, String> {
         out.push(e);
     }
     match out.first() {
-        Some(Entry::Header { version, .. }) if *version == VERSION => Ok(out),
-        Some(Entry::Header { version, .. }) => {
-            Err(format!("{}: journal version {version}, this player reads version {VERSION}", path.display()))
-        }
+        Some(Entry::Header { version, .. }) if (OLDEST_VERSION..=VERSION).contains(version) => Ok(out),
+        Some(Entry::Header { version, .. }) => Err(format!(
+            "{}: journal version {version}, this player reads versions {OLDEST_VERSION} to {VERSION}",
+            path.display()
+        )),
         _ => Err(format!("{}: not a journal (no header line)", path.display())),
     }
 }
@@ -275,12 +325,19 @@ pub struct Replayed {
     pub acked: BTreeSet<u64>,
     /// Time of the last journaled input.
     pub last_time: f64,
+    /// The actions up to this seq were dropped when the AAC came back with
+    /// another session ([`Entry::Restart`]): never sent again.
+    pub dropped_upto: u64,
+    /// Where the run stands with its AAC: the last [`Entry::Session`] and
+    /// the highest event number journaled in it. `None` for a version 1
+    /// journal (its events carry no numbers).
+    pub resume_point: Option<(Option<String>, u64)>,
 }
 
 impl Replayed {
-    /// Actions to send again: those never acknowledged.
+    /// Actions to send again: those never acknowledged (nor dropped).
     pub fn unacknowledged(&self) -> Vec<Action> {
-        self.actions.iter().filter(|a| !self.acked.contains(&a.seq)).cloned().collect()
+        self.actions.iter().filter(|a| a.seq > self.dropped_upto && !self.acked.contains(&a.seq)).cloned().collect()
     }
 }
 
@@ -298,9 +355,25 @@ pub fn replay(
     while i < entries.len() {
         let e = &entries[i];
         i += 1;
-        if let Entry::Ack { seq } = e {
-            r.acked.insert(*seq);
-            continue;
+        match e {
+            Entry::Header { version, .. } if *version >= 2 => r.resume_point = Some((None, 0)),
+            Entry::Ack { seq } => {
+                r.acked.insert(*seq);
+                continue;
+            }
+            Entry::Session { id } => {
+                if let Some(p) = &mut r.resume_point {
+                    *p = (Some(id.clone()), 0);
+                }
+                continue;
+            }
+            Entry::Event { n: Some(n), .. } | Entry::Perception { n: Some(n), .. } => {
+                if let Some(p) = &mut r.resume_point {
+                    p.1 = p.1.max(*n);
+                }
+            }
+            Entry::Restart { .. } => r.dropped_upto = player.last_seq(),
+            _ => {}
         }
         let Some(input) = Input::of_entry(e) else { continue };
         let mut expected: Vec<&str> = Vec::new();
@@ -381,7 +454,7 @@ mod tests {
         let path = dir.join("j.jsonl");
         let mut w = JournalWriter::create(&path, &header()).unwrap();
         w.append(&Entry::Start { t: 0.0 });
-        w.append(&Entry::Event { t: 2.0, event: "e".into(), activation: None });
+        w.append(&Entry::Event { t: 2.0, event: "e".into(), activation: None, n: None });
         w.append(&Entry::Fire { t: 2.0, transition: "a".into() });
         w.append(&Entry::Ack { seq: 1 });
         w.sync().unwrap();
@@ -396,17 +469,82 @@ mod tests {
         assert_eq!((r.inputs, seen, r.last_time, r.acked.len()), (2, 2, 2.0, 1));
         assert_eq!(p.marking().0, vec![0, 1, 0]);
         let mut w = JournalWriter::append_to(&path).unwrap();
-        w.append(&Entry::Event { t: 3.0, event: "e".into(), activation: None });
+        w.append(&Entry::Event { t: 3.0, event: "e".into(), activation: None, n: None });
         w.sync().unwrap();
         assert_eq!(read_journal(&path).unwrap().len(), 6);
 
         // A journal that disagrees with the net is refused.
         let mut bad = entries.clone();
         bad[3] = Entry::Fire { t: 2.0, transition: "c".into() };
-        bad.push(Entry::Event { t: 3.0, event: "e".into(), activation: None });
+        bad.push(Entry::Event { t: 3.0, event: "e".into(), activation: None, n: None });
         let mut p = Player::new(net(), PlayerOptions::default());
         let e = replay(&mut p, &bad, |_, _| {}).unwrap_err();
         assert!(e.contains("the journal fired `c` where the player fires `a`"), "{e}");
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    /// p --(start: enable X)--> q --(event e)--> mission.ok
+    fn net_with_action() -> Arc<mcl_net::Net> {
+        let mut b = NetBuilder::new("m");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let q = b.add_place(Place::new("q"));
+        let ok = b.add_place(Place::new("mission.ok"));
+        let enable = mcl_net::ActionRef {
+            action: "enableX".into(),
+            primitive: "XPrimitive".into(),
+            command: "enable".into(),
+            params: vec![],
+        };
+        let a = b.add_transition(Transition::new("a").with_action(enable));
+        let c = b.add_transition(Transition::new("c").with_kind(TransitionKind::Event("e".into())));
+        b.add_input(p, a, 1).add_output(a, q, 1);
+        b.add_input(q, c, 1).add_output(c, ok, 1);
+        Arc::new(b.build().unwrap())
+    }
+
+    /// Version 2: where the run stands with its AAC (the last session and
+    /// the last event number journaled in it), and a restart that drops the
+    /// actions sent before it and re-sends what runs.
+    #[test]
+    fn resume_point_and_restart() {
+        let header = |v| match header() {
+            Entry::Header { mission, seed, symbols, scenario, mock_seed, run, unix_start, .. } => Entry::Header {
+                version: v,
+                mission,
+                seed,
+                fingerprint: fingerprint(&net_with_action()),
+                symbols,
+                scenario,
+                mock_seed,
+                run,
+                unix_start,
+            },
+            e => e,
+        };
+        let mut entries = vec![
+            header(VERSION),
+            Entry::Start { t: 0.0 },
+            Entry::Fire { t: 0.0, transition: "a".into() },
+            Entry::Session { id: "s1".into() },
+            Entry::Perception { t: 1.0, name: "x".into(), value: Value::Null, n: Some(1) },
+            Entry::Perception { t: 1.5, name: "x".into(), value: Value::Null, n: Some(2) },
+        ];
+        let mut p = Player::new(net_with_action(), PlayerOptions::default());
+        let r = replay(&mut p, &entries, |_, _| {}).unwrap();
+        assert_eq!(r.resume_point, Some((Some("s1".to_string()), 2)));
+        assert_eq!(r.unacknowledged().iter().map(|a| a.seq).collect::<Vec<_>>(), [1]);
+        // The AAC lost its state: a new session, enableX sent again as #2.
+        entries.push(Entry::Session { id: "s2".into() });
+        entries.push(Entry::Restart { t: 2.0 });
+        entries.push(Entry::Perception { t: 3.0, name: "x".into(), value: Value::Null, n: Some(1) });
+        let mut p = Player::new(net_with_action(), PlayerOptions::default());
+        let r = replay(&mut p, &entries, |_, _| {}).unwrap();
+        assert_eq!(r.resume_point, Some((Some("s2".to_string()), 1)));
+        assert_eq!((r.dropped_upto, r.unacknowledged().iter().map(|a| a.seq).collect::<Vec<_>>()), (1, vec![2]));
+        assert!(p.is_live_activation(2) && !p.is_live_activation(1));
+        // A version 1 journal has no resume point.
+        entries[0] = header(1);
+        let mut p = Player::new(net_with_action(), PlayerOptions::default());
+        assert_eq!(replay(&mut p, &entries, |_, _| {}).unwrap().resume_point, None);
     }
 }

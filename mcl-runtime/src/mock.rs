@@ -170,11 +170,11 @@ impl MockVehicle {
         self.initialised = true;
         let mut out: Vec<(f64, Inbound)> = Vec::new();
         for e in &self.scenario.events {
-            out.push((e.at, Inbound::Event { event: e.event.clone(), activation: None }));
+            out.push((e.at, Inbound::Event { event: e.event.clone(), activation: None, n: None }));
         }
         for p in &self.scenario.perceptions {
             if let Some(at) = p.at {
-                out.push((at, Inbound::Perception { name: p.name.clone(), value: p.value.clone() }));
+                out.push((at, Inbound::Perception { name: p.name.clone(), value: p.value.clone(), n: None }));
             }
         }
         out.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -260,7 +260,7 @@ impl MockVehicle {
         let mut out = Vec::new();
         let at = event.map(|event| {
             let t = now + delay;
-            let msg = Inbound::Event { event, activation: Some(a.seq) };
+            let msg = Inbound::Event { event, activation: Some(a.seq), n: None };
             out.push((t, msg.clone()));
             (t, self.schedule(t, msg, Some(task.to_string())))
         });
@@ -323,7 +323,7 @@ impl MockVehicle {
     /// is none.
     pub fn take_delivered(&mut self, msg: &Inbound) -> bool {
         let same = |p: &Inbound| match (p, msg) {
-            (Inbound::Event { event: a, activation: x }, Inbound::Event { event: b, activation: y }) => {
+            (Inbound::Event { event: a, activation: x, .. }, Inbound::Event { event: b, activation: y, .. }) => {
                 a == b && (y.is_none() || x == y)
             }
             _ => p == msg,
@@ -348,7 +348,10 @@ impl MockVehicle {
                 .iter()
                 .filter(|s| s.after.as_deref() == Some(event.as_str()) && s.occurrence.is_none_or(|o| o == n))
                 .map(|s| {
-                    (t + s.delay.unwrap_or(0.0), Inbound::Perception { name: s.name.clone(), value: s.value.clone() })
+                    (
+                        t + s.delay.unwrap_or(0.0),
+                        Inbound::Perception { name: s.name.clone(), value: s.value.clone(), n: None },
+                    )
                 })
                 .collect();
             for (at, m) in due {
@@ -401,12 +404,12 @@ mod tests {
     }
 
     fn ev(e: &str) -> Inbound {
-        Inbound::Event { event: e.into(), activation: None }
+        Inbound::Event { event: e.into(), activation: None, n: None }
     }
 
     /// The answer to the action `seq`.
     fn ans(e: &str, seq: u64) -> Inbound {
-        Inbound::Event { event: e.into(), activation: Some(seq) }
+        Inbound::Event { event: e.into(), activation: Some(seq), n: None }
     }
 
     #[test]
@@ -480,7 +483,7 @@ name = "second"
 value = 2
 "#,
         );
-        let p = |n: &str, v: serde_json::Value| Inbound::Perception { name: n.into(), value: v };
+        let p = |n: &str, v: serde_json::Value| Inbound::Perception { name: n.into(), value: v, n: None };
         assert!(m.initial().is_empty());
         m.on_action(0.0, &action(1, "Goto", "enable", 4));
         assert_eq!(m.pop_due(10.0), Some((10.0, ans("evGotoOk", 1))));

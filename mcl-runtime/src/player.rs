@@ -316,10 +316,10 @@ pub struct Player {
     fired: u64,
     /// Delay warnings already given (each is given once).
     warned: BTreeSet<String>,
-    /// Per primitive: its current activations, the seqs of the actions sent
-    /// to it since it was last disabled, or the seq of that `disable` while
-    /// it stays disabled (`stopped`).
-    live: Vec<Vec<u64>>,
+    /// Per primitive: its current activations, the actions sent to it since
+    /// it was last disabled, or that `disable` while it stays disabled
+    /// (`stopped`).
+    live: Vec<Vec<Action>>,
     stopped: Vec<bool>,
     /// Every seq of `live`.
     live_seqs: HashSet<u64>,
@@ -509,6 +509,58 @@ impl Player {
                 }
             }
             self.stabilize(&mut out);
+        }
+        out
+    }
+
+    /// The vehicle lost its memory at time `now` (its AAC welcomed the run
+    /// in another session: it restarted without its state), so the
+    /// primitives the player has running run no more. Each of them (a
+    /// primitive sent actions since its last `disable`) is started again:
+    /// those actions are sent again, in their order, with new sequence
+    /// numbers, and only the new ones are its current activations (an
+    /// answer naming an old one is stale). The marking, the bindings and the
+    /// timers are unchanged: a call's time-out still counts from its start.
+    /// Timers due by `now` fire first, as before any input.
+    pub fn reestablish(&mut self, now: f64) -> Vec<Output> {
+        let mut out = Vec::new();
+        self.advance_to(now, &mut out);
+        if !self.started || self.outcome.is_some() {
+            return out;
+        }
+        let t = self.now;
+        let mut running: Vec<(usize, Action)> = Vec::new();
+        for (prim, live) in self.live.iter_mut().enumerate() {
+            if self.stopped[prim] || live.is_empty() {
+                continue;
+            }
+            for a in live.drain(..) {
+                self.live_seqs.remove(&a.seq);
+                running.push((prim, a));
+            }
+        }
+        running.sort_by_key(|(_, a)| a.seq);
+        let mut names: Vec<&str> = Vec::new();
+        for (_, a) in &running {
+            if !names.contains(&a.primitive.as_str()) {
+                names.push(&a.primitive);
+            }
+        }
+        let message = if names.is_empty() {
+            "the vehicle lost its state (its AAC started a new session): no primitive was running".to_string()
+        } else {
+            format!(
+                "the vehicle lost its state (its AAC started a new session): {} restarted, its actions sent again with new sequence numbers",
+                names.join(", ")
+            )
+        };
+        out.push(Output::Warning { t, message });
+        for (prim, mut a) in running {
+            self.seq += 1;
+            a.seq = self.seq;
+            self.live[prim].push(a.clone());
+            self.live_seqs.insert(a.seq);
+            out.push(Output::Send { t, action: a });
         }
         out
     }
@@ -814,14 +866,12 @@ impl Player {
         // now on (but an event about the disable itself is not); the next
         // action starts a new run.
         if tmpl.stops || self.stopped[prim] {
-            for s in self.live[prim].drain(..) {
-                self.live_seqs.remove(&s);
+            for a in self.live[prim].drain(..) {
+                self.live_seqs.remove(&a.seq);
             }
         }
         self.stopped[prim] = tmpl.stops;
-        self.live[prim].push(self.seq);
-        self.live_seqs.insert(self.seq);
-        Action {
+        let action = Action {
             seq: self.seq,
             action: tmpl.action.clone(),
             primitive: tmpl.primitive.clone(),
@@ -829,7 +879,10 @@ impl Player {
             params,
             task: info.task.map(|i| self.tasks[i as usize].name.clone()),
             call_site,
-        }
+        };
+        self.live[prim].push(action.clone());
+        self.live_seqs.insert(self.seq);
+        action
     }
 
     /// The delay of timed transition `t` under the current binding.
@@ -1020,6 +1073,28 @@ mod tests {
         let out = p.on_event_from(2.0, "e", Some(3));
         assert_eq!(kinds(&out), ["event e", "fire 2", "outcome ok"]);
         assert!(matches!(out[0], Output::Event { activation: Some(3), .. }));
+    }
+
+    /// A vehicle that lost its state gets the running primitive's actions
+    /// again, with new seqs: only those are current; a disabled primitive
+    /// is left alone.
+    #[test]
+    fn reestablish_sends_the_running_primitives_again() {
+        let mut p = Player::new(twice(), PlayerOptions::seeded(1));
+        assert_eq!(kinds(&p.reestablish(0.0)), Vec::<String>::new(), "not started: nothing runs");
+        p.start(0.0);
+        let out = p.on_event_from(1.0, "e", Some(1));
+        assert_eq!(kinds(&out), ["event e", "fire 1", "send disableX", "send enableX"]);
+        let out = p.reestablish(2.0);
+        assert_eq!(kinds(&out), ["warning", "send enableX"]);
+        let Output::Send { action, .. } = &out[1] else { panic!() };
+        assert_eq!((action.seq, action.command.as_str()), (4, "enable"));
+        let Output::Warning { message, .. } = &out[0] else { panic!() };
+        assert!(message.contains("XPrimitive restarted"), "{message}");
+        assert!(!p.is_live_activation(3) && p.is_live_activation(4));
+        assert_eq!(kinds(&p.on_event_from(3.0, "e", Some(3))), ["stale e #3"]);
+        assert_eq!(kinds(&p.on_event_from(3.0, "e", Some(4))), ["event e", "fire 2", "outcome ok"]);
+        assert_eq!(kinds(&p.reestablish(4.0)), Vec::<String>::new(), "the mission is over");
     }
 
     /// An event about a disable (a primitive confirming it stopped) names

@@ -205,8 +205,10 @@ impl Message {
     pub fn to_inbound(&self) -> Option<Inbound> {
         match self {
             Message::Ack { seq } => Some(Inbound::Ack { seq: *seq }),
-            Message::Event(e) => Some(Inbound::Event { event: e.event.clone(), activation: e.activation }),
-            Message::Perception(p) => Some(Inbound::Perception { name: p.name.clone(), value: p.value.clone() }),
+            Message::Event(e) => Some(Inbound::Event { event: e.event.clone(), activation: e.activation, n: e.n }),
+            Message::Perception(p) => {
+                Some(Inbound::Perception { name: p.name.clone(), value: p.value.clone(), n: p.n })
+            }
             _ => None,
         }
     }

@@ -33,7 +33,7 @@ use tokio::sync::{mpsc, Notify};
 use tokio::task::JoinHandle;
 use tokio::time::{sleep, sleep_until, timeout, timeout_at, Instant};
 
-use crate::link::{pair, AacEnd, Action, Inbound, Link};
+use crate::link::{pair, AacEnd, Action, Delivered, Inbound, Link};
 use crate::protocol::{
     encode, parse, token_matches, truncate, ActionMsg, ErrorCode, EventMsg, Hello, Line, LineReader, Message,
     PerceptionMsg, Ping, Welcome, DEFAULT_PING_INTERVAL, DEFAULT_TIMEOUT, MAX_LINE, VERSION,
@@ -85,13 +85,19 @@ pub struct ConnectOptions {
     pub run: Option<String>,
     /// Player software sent in `hello`.
     pub player: String,
-    /// Resuming an interrupted run (same `run`): the number of events and
-    /// perceptions the player had received in it (the AAC re-sends the ones
-    /// after), and, if known, the AAC session id they were numbered in (see
-    /// [`LinkStats`]). `None`: a new run.
-    pub resume_last_event: Option<u64>,
-    /// See `resume_last_event`.
-    pub resume_session: Option<String>,
+    /// The player says itself which events it has handled (once it has
+    /// journaled them): `ping` and `hello` then confirm what this handle
+    /// holds, not what the link received, so that the AAC keeps what a
+    /// crash of the player would lose. A handle that names a session at
+    /// connect resumes an interrupted run (same `run`): the first `hello`
+    /// names that session and its last event, and the AAC re-sends the
+    /// events after it. `None`: the link confirms what it received.
+    pub delivered: Option<Delivered>,
+    /// When the AAC welcomes the run in another session than the one it
+    /// knew (the AAC lost its memory), drop the actions not acknowledged
+    /// instead of sending them again: the player re-establishes what it
+    /// has running ([`Inbound::Session`]). `false`: they are sent again.
+    pub reestablish: bool,
     /// Interval between two pings.
     pub ping_interval: Duration,
     /// Silence (and connect / write time) after which the AAC is considered gone.
@@ -116,8 +122,8 @@ impl Default for ConnectOptions {
             mission: "mission".into(),
             run: None,
             player: concat!("mcl/", env!("CARGO_PKG_VERSION")).into(),
-            resume_last_event: None,
-            resume_session: None,
+            delivered: None,
+            reestablish: false,
             ping_interval: DEFAULT_PING_INTERVAL,
             timeout: DEFAULT_TIMEOUT,
             backoff_min: Duration::from_millis(100),
@@ -202,9 +208,11 @@ pub fn connect_with_handle(
 ) -> (Link, JoinHandle<Result<LinkStats, LinkError>>) {
     let (link, end) = pair();
     let run = options.run.clone().unwrap_or_else(new_id);
-    let session = options.resume_session.clone();
-    let received = options.resume_last_event.unwrap_or(0);
-    let resumed = session.is_some() || options.resume_last_event.is_some();
+    let (session, received) = options.delivered.as_ref().map(Delivered::get).unwrap_or_default();
+    // A player that tracks what it handled always says it (0: nothing, in
+    // a session it may not know yet: the AAC sends again all it holds).
+    let resumed = options.delivered.is_some();
+    let resuming = session.is_some();
     let player = Player {
         addr: addr.into(),
         opts: options,
@@ -215,7 +223,7 @@ pub fn connect_with_handle(
         session,
         received,
         resumed,
-        resuming: resumed,
+        resuming,
         attempts: 0,
         linger_deadline: None,
         stats: LinkStats { run, ..LinkStats::default() },
@@ -231,10 +239,12 @@ struct Player {
     inbound: mpsc::UnboundedSender<Inbound>,
     /// Actions sent or to send, not yet acknowledged, by seq.
     pending: BTreeMap<u64, Action>,
-    /// The AAC session id and the highest event number received in it.
+    /// The AAC session id and the highest event number received in it
+    /// (handed to the player).
     session: Option<String>,
     received: u64,
-    /// Whether `received` is meaningful (a welcome was received, or resuming).
+    /// Whether the event numbers are meaningful (a welcome was received,
+    /// or resuming).
     resumed: bool,
     /// This link continues an interrupted run (the AAC may have executed
     /// its actions before).
@@ -280,6 +290,15 @@ impl Player {
 
     fn finished(&self) -> bool {
         !self.actions_open && self.pending.is_empty()
+    }
+
+    /// The highest event number to confirm to the AAC: what the player
+    /// handled ([`ConnectOptions::delivered`]), else what the link received.
+    fn confirmed(&self) -> u64 {
+        match &self.opts.delivered {
+            Some(d) => d.in_session(self.session.as_deref()).min(self.received),
+            None => self.received,
+        }
     }
 
     fn stats(&mut self) -> LinkStats {
@@ -366,6 +385,22 @@ impl Player {
         Err(LinkError::Unacknowledged(seqs))
     }
 
+    /// Takes every action the player has already produced.
+    fn drain_actions(&mut self) {
+        use tokio::sync::mpsc::error::TryRecvError;
+        while self.actions_open {
+            match self.actions.try_recv() {
+                Ok(a) => {
+                    self.take_action(Some(a));
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    self.take_action(None);
+                }
+            }
+        }
+    }
+
     /// Waits `d` while collecting actions; false when the player is gone.
     async fn pause(&mut self, d: Duration) -> bool {
         let deadline = Instant::now() + d;
@@ -407,7 +442,7 @@ impl Player {
             mission: Some(self.opts.mission.clone()),
             run: Some(self.stats.run.clone()),
             session: self.session.clone(),
-            last_event: self.resumed.then_some(self.received),
+            last_event: self.resumed.then(|| self.confirmed()),
         });
         if let Err(e) = self.write(&mut wr, &hello).await {
             return lost(format!("cannot send hello to {peer}: {e}"));
@@ -458,14 +493,24 @@ impl Player {
                 message: format!("the AAC welcomed us with version {}, we speak {VERSION}", welcome.version),
             });
         }
-        match &self.session {
-            Some(s) if *s != welcome.session => {
+        let restarted = self.session.as_ref().is_some_and(|s| *s != welcome.session);
+        if restarted {
+            self.received = 0;
+            if self.opts.reestablish {
+                // Those the player produced before this welcome are dropped too.
+                self.drain_actions();
+                let dropped: Vec<u64> = std::mem::take(&mut self.pending).into_keys().collect();
+                self.notice(format!(
+                    "{peer} started a new session (it lost its state?): event numbers restart; actions {dropped:?} not sent again (the player re-establishes what runs)"
+                ));
+            } else {
                 self.notice(format!("{peer} started a new session (it lost its state?): event numbers restart"));
-                self.received = 0;
             }
-            _ => {}
         }
         self.session = Some(welcome.session.clone());
+        if self.inbound.send(Inbound::Session { id: welcome.session.clone(), restarted }).is_err() {
+            return End::PlayerGone;
+        }
         self.resumed = true;
         let confirmed: Vec<u64> = self.pending.range(..=welcome.last_seq).map(|(&s, _)| s).collect();
         for seq in confirmed {
@@ -534,7 +579,7 @@ impl Player {
                     }
                 }
                 _ = ping.tick() => {
-                    let p = Message::Ping(Ping { last_event: Some(self.received) });
+                    let p = Message::Ping(Ping { last_event: Some(self.confirmed()) });
                     if let Err(e) = self.write(&mut wr, &p).await {
                         return lost(format!("writing to {peer}: {e}"));
                     }
@@ -853,14 +898,14 @@ async fn pump(session: Weak<SessionState>, mut rx: mpsc::UnboundedReceiver<Inbou
         let Some(s) = session.upgrade() else { return };
         let mut g = lock(&s.inner);
         match item {
-            Inbound::Event { event, activation } => {
+            Inbound::Event { event, activation, .. } => {
                 g.last_event += 1;
                 let n = g.last_event;
                 let line = encode(&Message::Event(EventMsg { event, n: Some(n), activation }));
                 g.send(line.clone());
                 g.outbox.push_back((n, line));
             }
-            Inbound::Perception { name, value } => {
+            Inbound::Perception { name, value, .. } => {
                 g.last_event += 1;
                 let n = g.last_event;
                 let line = encode(&Message::Perception(PerceptionMsg { name, value, n: Some(n) }));
@@ -880,7 +925,7 @@ async fn pump(session: Weak<SessionState>, mut rx: mpsc::UnboundedReceiver<Inbou
                     }
                 }
             }
-            Inbound::Connected | Inbound::Disconnected | Inbound::Notice { .. } => {}
+            Inbound::Connected | Inbound::Disconnected | Inbound::Session { .. } | Inbound::Notice { .. } => {}
         }
         if g.outbox.len() > opts.max_outbox {
             let excess = g.outbox.len() - opts.max_outbox;

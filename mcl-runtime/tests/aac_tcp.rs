@@ -5,7 +5,7 @@
 use std::collections::BTreeSet;
 use std::time::Duration;
 
-use mcl_runtime::link::{Action, Inbound};
+use mcl_runtime::link::{Action, Delivered, Inbound};
 use mcl_runtime::protocol::{Line, LineReader};
 use mcl_runtime::tcp::{self, connect_with_handle, serve, AckMode, ConnectOptions, LinkError, ServeOptions, Session};
 use serde_json::{json, Value};
@@ -37,9 +37,32 @@ struct Raw {
 
 impl Raw {
     async fn connect(addr: std::net::SocketAddr) -> Raw {
-        let s = TcpStream::connect(addr).await.unwrap();
+        Raw::of(TcpStream::connect(addr).await.unwrap())
+    }
+
+    fn of(s: TcpStream) -> Raw {
         let (rd, wr) = s.into_split();
         Raw { rd: LineReader::new(BufReader::new(rd), 1 << 20), wr }
+    }
+
+    /// The next message that is not a `ping`.
+    async fn recv_no_ping(&mut self) -> Option<Value> {
+        loop {
+            let m = self.recv().await?;
+            if m["type"] != "ping" {
+                return Some(m);
+            }
+        }
+    }
+
+    /// The `last_event` of the next `ping`.
+    async fn next_ping(&mut self) -> Value {
+        loop {
+            let m = self.recv().await.expect("closed");
+            if m["type"] == "ping" {
+                return m["last_event"].clone();
+            }
+        }
     }
 
     async fn send_raw(&mut self, bytes: &[u8]) {
@@ -77,6 +100,8 @@ async fn next_item(link: &mut mcl_runtime::link::Link, notices: &mut Vec<String>
     loop {
         match timeout(T, link.inbound.recv()).await.expect("nothing from the link within 10 s") {
             Some(Inbound::Notice { message }) => notices.push(message),
+            // The session a welcome names: told before `Connected`.
+            Some(Inbound::Session { id, restarted }) => notices.push(format!("session {id} restarted={restarted}")),
             other => return other,
         }
     }
@@ -252,9 +277,9 @@ async fn ack_by_handler_and_events_numbered_and_replayed() {
     c.send(json!({"type":"action","seq":1,"action":"a","primitive":"p","command":"enable"})).await;
     c.send(json!({"type":"ping"})).await;
     assert_eq!(c.recv().await.unwrap(), json!({"type":"pong"}));
-    s.end.inbound.send(Inbound::Event { event: "e1".into(), activation: Some(1) }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e1".into(), activation: Some(1), n: None }).unwrap();
     s.end.inbound.send(Inbound::Ack { seq: a.seq }).unwrap();
-    s.end.inbound.send(Inbound::Perception { name: "depth".into(), value: json!(3.5) }).unwrap();
+    s.end.inbound.send(Inbound::Perception { name: "depth".into(), value: json!(3.5), n: None }).unwrap();
     assert_eq!(c.recv().await.unwrap(), json!({"type":"event","event":"e1","n":1,"activation":1}));
     assert_eq!(c.recv().await.unwrap(), json!({"type":"ack","seq":1}));
     assert_eq!(c.recv().await.unwrap(), json!({"type":"ack","seq":1}), "the duplicate's ack");
@@ -263,7 +288,7 @@ async fn ack_by_handler_and_events_numbered_and_replayed() {
     drop(c);
     // Events while nobody is connected are kept…
     tokio::time::sleep(Duration::from_millis(50)).await;
-    s.end.inbound.send(Inbound::Event { event: "e3".into(), activation: None }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e3".into(), activation: None, n: None }).unwrap();
     // …and re-sent to a player naming the session, after its last event.
     let mut c = Raw::connect(addr).await;
     let w = c.hello(json!({"session": sid, "last_event": 1})).await;
@@ -282,11 +307,11 @@ async fn ack_by_handler_and_events_numbered_and_replayed() {
     assert_eq!(c.recv().await, None);
     c2.send(json!({"type":"ping"})).await;
     assert_eq!(c2.recv().await.unwrap(), json!({"type":"pong"}), "nothing re-sent");
-    s.end.inbound.send(Inbound::Event { event: "e4".into(), activation: None }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e4".into(), activation: None, n: None }).unwrap();
     assert_eq!(c2.recv().await.unwrap()["n"], 4);
     drop(c2);
     tokio::time::sleep(Duration::from_millis(50)).await;
-    s.end.inbound.send(Inbound::Event { event: "e5".into(), activation: None }).unwrap();
+    s.end.inbound.send(Inbound::Event { event: "e5".into(), activation: None, n: None }).unwrap();
     // Without `last_event`, nothing is re-sent…
     let mut c3 = Raw::connect(addr).await;
     assert_eq!(c3.hello(json!({})).await["last_event"], 5);
@@ -397,8 +422,11 @@ async fn cut_connections_lose_and_repeat_nothing() {
             tokio::spawn(async move {
                 while let Some(a) = s.end.actions.recv().await {
                     ex.lock().unwrap().push(a.seq);
-                    let _ =
-                        s.end.inbound.send(Inbound::Event { event: format!("done{}", a.seq), activation: Some(a.seq) });
+                    let _ = s.end.inbound.send(Inbound::Event {
+                        event: format!("done{}", a.seq),
+                        activation: Some(a.seq),
+                        n: None,
+                    });
                 }
             });
         }
@@ -430,7 +458,7 @@ async fn cut_connections_lose_and_repeat_nothing() {
             proxy.cut();
         }
         match timeout(Duration::from_millis(20), link.inbound.recv()).await {
-            Ok(Some(Inbound::Event { event, activation })) => {
+            Ok(Some(Inbound::Event { event, activation, .. })) => {
                 assert_eq!(
                     Some(format!("done{}", activation.unwrap())),
                     Some(event.clone()),
@@ -438,7 +466,7 @@ async fn cut_connections_lose_and_repeat_nothing() {
                 );
                 events.push(event)
             }
-            Ok(Some(Inbound::Notice { .. })) => {}
+            Ok(Some(Inbound::Notice { .. } | Inbound::Session { .. })) => {}
             Ok(Some(Inbound::Ack { seq })) => assert!(acks.insert(seq), "ack {seq} twice"),
             Ok(Some(Inbound::Connected)) => connected += 1,
             Ok(Some(Inbound::Disconnected)) => disconnected += 1,
@@ -568,14 +596,17 @@ async fn player_side_survives_a_garbage_aac() {
     let (mut link, _h) = connect_with_handle(addr.to_string(), ConnectOptions::default());
     let mut notices = Vec::new();
     assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Connected));
-    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Event { event: "e1".into(), activation: None }));
     assert_eq!(
         next_item(&mut link, &mut notices).await,
-        Some(Inbound::Perception { name: "depth".into(), value: json!([1, 2]) })
+        Some(Inbound::Event { event: "e1".into(), activation: None, n: Some(1) })
     );
     assert_eq!(
         next_item(&mut link, &mut notices).await,
-        Some(Inbound::Event { event: "e9".into(), activation: Some(4) })
+        Some(Inbound::Perception { name: "depth".into(), value: json!([1, 2]), n: Some(2) })
+    );
+    assert_eq!(
+        next_item(&mut link, &mut notices).await,
+        Some(Inbound::Event { event: "e9".into(), activation: Some(4), n: Some(5) })
     );
     // The player is told of every bad message, the duplicate, the gap and the AAC's error.
     let told = |what: &str| notices.iter().filter(|n| n.contains(what)).count();
@@ -592,4 +623,63 @@ async fn player_side_survives_a_garbage_aac() {
     assert_eq!(codes, ["malformed", "malformed", "unknown_type", "malformed", "too_long", "pong"]);
     // An error from the AAC gets no reply; nothing else came.
     assert!(timeout(Duration::from_millis(200), replies.recv()).await.is_err());
+}
+
+/// A player that confirms what it handled ([`Delivered`], as `mcl run`
+/// does once events are journaled): its `hello` resumes at the session and
+/// event it names, its pings confirm only what it handled (not what the
+/// link received), and when the AAC comes back with another session (it
+/// lost its memory) the actions not acknowledged are dropped, not re-sent:
+/// the player re-establishes what runs.
+#[tokio::test]
+async fn a_player_that_confirms_resumes_where_it_stands() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let delivered = Delivered::new(Some("s1".into()), 2);
+    let opts = ConnectOptions {
+        delivered: Some(delivered.clone()),
+        reestablish: true,
+        ping_interval: Duration::from_millis(30),
+        backoff_min: Duration::from_millis(10),
+        ..ConnectOptions::default()
+    };
+    let (mut link, _h) = connect_with_handle(addr.to_string(), opts);
+    link.actions.send(action(3, "a")).unwrap();
+    let mut aac = Raw::of(listener.accept().await.unwrap().0);
+    let hello = aac.recv().await.unwrap();
+    assert_eq!((hello["session"].as_str(), hello["last_event"].as_u64()), (Some("s1"), Some(2)), "{hello}");
+    aac.send(json!({"type":"welcome","version":1,"last_seq":2,"last_event":4,"session":"s1"})).await;
+    assert_eq!(aac.recv_no_ping().await.unwrap()["seq"], 3);
+    aac.send(json!({"type":"ack","seq":3})).await;
+    aac.send(json!({"type":"event","event":"e3","n":3})).await;
+    aac.send(json!({"type":"event","event":"e4","n":4})).await;
+    let mut notices = Vec::new();
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Connected));
+    assert!(notices.iter().any(|n| n == "session s1 restarted=false"), "{notices:?}");
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Ack { seq: 3 }));
+    for n in [3, 4] {
+        let Some(Inbound::Event { n: got, .. }) = next_item(&mut link, &mut notices).await else { panic!() };
+        assert_eq!(got, Some(n));
+    }
+    // Received, not handled yet: the AAC must keep them.
+    assert_eq!(aac.next_ping().await, 2);
+    aac.next_ping().await;
+    delivered.set("s1", 4);
+    aac.next_ping().await;
+    assert_eq!(aac.next_ping().await, 4);
+    // The AAC restarts without its state.
+    drop(aac);
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Disconnected));
+    link.actions.send(action(5, "b")).unwrap();
+    let mut aac = Raw::of(listener.accept().await.unwrap().0);
+    let hello = aac.recv().await.unwrap();
+    assert_eq!((hello["session"].as_str(), hello["last_event"].as_u64()), (Some("s1"), Some(4)), "{hello}");
+    aac.send(json!({"type":"welcome","version":1,"last_seq":0,"last_event":0,"session":"s2"})).await;
+    assert_eq!(next_item(&mut link, &mut notices).await, Some(Inbound::Connected));
+    assert!(notices.iter().any(|n| n == "session s2 restarted=true"), "{notices:?}");
+    assert!(notices.iter().any(|n| n.contains("actions [5] not sent again")), "{notices:?}");
+    // Nothing re-sent; numbers restart in the new session.
+    assert_eq!(aac.next_ping().await, 0);
+    link.actions.send(action(6, "c")).unwrap();
+    assert_eq!(aac.recv_no_ping().await.unwrap()["seq"], 6);
 }

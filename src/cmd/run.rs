@@ -429,6 +429,8 @@ pub fn run(o: Options) -> u8 {
     let mut resend = Vec::new();
     let mut offset = 0.0;
     let mut journal_writer = None;
+    // Where the run stands with its AAC (from a journal of version 2).
+    let mut resume_point = None;
     if let (Some(entries), Some(path)) = (&resume_entries, &o.resume) {
         sink.quiet_replay = true;
         let replayed = journal::replay(&mut player, entries, |input, outs| {
@@ -450,6 +452,7 @@ pub fn run(o: Options) -> u8 {
         let _ = mock.take_warnings();
         offset = replayed.last_time;
         resend = replayed.unacknowledged();
+        resume_point = replayed.resume_point.clone();
         if !o.quiet {
             println!(
                 "[{offset:>10.3}] resumed from {}: {} inputs replayed, {} transitions fired, {} actions sent{}",
@@ -495,6 +498,13 @@ pub fn run(o: Options) -> u8 {
     session.crash_after = o.crash_after;
     // Until the AAC welcomes the player, actions are queued.
     session.link_down = o.aac.is_some();
+    // The events the run handled in its AAC session: told to the AAC once
+    // journaled, and, when resuming, where the AAC takes up again.
+    let delivered = match &resume_point {
+        Some((id, n)) => mcl_runtime::link::Delivered::new(id.clone(), *n),
+        None => mcl_runtime::link::Delivered::default(),
+    };
+    session.delivered = delivered.clone();
     let result: Result<End, String> = if o.virtual_time {
         driver::run_virtual(&mut session, &mut mock, limits)
     } else {
@@ -522,6 +532,10 @@ pub fn run(o: Options) -> u8 {
                         token,
                         mission: mission_name,
                         run: run_id,
+                        // A version 1 journal has no event numbers: its run
+                        // resumes without a resume point.
+                        delivered: (o.resume.is_none() || resume_point.is_some()).then_some(delivered),
+                        reestablish: true,
                         ..Default::default()
                     };
                     let (mut link, handle) = mcl_runtime::tcp::connect_with_handle(addr, opts);

@@ -292,3 +292,119 @@ pub fn at_root(p: &str) -> PathBuf {
 pub fn exists(p: &Path) -> bool {
     p.exists()
 }
+
+// ---------------------------------------------------------------------------
+// The player killed and resumed (`--journal`, `--resume`) against an AAC
+// ---------------------------------------------------------------------------
+
+/// Dive; then go to a way-point while reaching an altitude (the altitude
+/// first, the way-point later); then surface. Written in `dir`, importing
+/// the examples' vehicle.
+pub fn resume_mission(dir: &Path) -> PathBuf {
+    let vehicle = at_root("examples/vehicle.mcl");
+    let text = format!(
+        "import {:?};\n\nmission {{\n    Depth( 15, \"achieve\" ) ;\n    parallel {{\n        Goto( [24, 12] )\n    }} and {{\n        Altitude( 2.5, 60, \"achieve\" )\n    }} ;\n    Depth( 0, \"achieve\" )\n}}\n",
+        vehicle.to_str().unwrap()
+    );
+    let p = dir.join("resume.mcl");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// How the mock answers [`resume_mission`]: 2 s for each primitive, 4 s
+/// for Goto. Its inputs: 1 the start, 2 the dive's end, 3 the altitude's
+/// end (Goto still runs), 4 Goto's end, 5 the surface.
+pub const RESUME_SCENARIO: &str = "default_duration = 2\n[tasks.Goto]\ndelay = 4\n";
+
+/// Where the player dies.
+#[derive(Clone, Copy, Debug)]
+pub enum Kill {
+    /// `--crash-after N`: aborts right after journaling its N-th input,
+    /// before that input's actions leave.
+    After(u64),
+    /// SIGKILL as soon as the journal holds this text, wherever the player is.
+    When(&'static str),
+}
+
+/// `mcl run --aac ADDR FILE --journal JOURNAL ARGS`, killed as `kill` says.
+pub fn crashed_run(addr: &str, file: &Path, journal: &Path, args: &[&str], kill: Kill) {
+    let mut cmd = mcl();
+    cmd.args(["run", "--aac", addr, "-q"]).arg(file).arg("--journal").arg(journal).args(args);
+    match kill {
+        Kill::After(n) => {
+            cmd.args(["--crash-after", &n.to_string()]);
+            let (code, out, err) = run_bounded(cmd, Duration::from_secs(30));
+            assert_eq!(code, None, "{kill:?}: the player must die of its abort\nstdout:\n{out}\nstderr:\n{err}");
+        }
+        Kill::When(text) => {
+            cmd.stdout(Stdio::null()).stderr(Stdio::null()).stdin(Stdio::null());
+            let mut child = cmd.spawn().unwrap();
+            let deadline = Instant::now() + STEP;
+            while !std::fs::read_to_string(journal).unwrap_or_default().contains(text) {
+                assert!(Instant::now() < deadline, "{kill:?}: the journal never held {text}");
+                assert!(child.try_wait().unwrap().is_none(), "{kill:?}: the run ended before it was killed");
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// `mcl run --aac ADDR FILE --resume JOURNAL --trace TRACE ARGS`: its exit
+/// status, standard output and standard error.
+pub fn resumed_run(addr: &str, file: &Path, journal: &Path, trace: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let mut cmd = mcl();
+    cmd.args(["run", "--aac", addr]).arg(file).arg("--resume").arg(journal).arg("--trace").arg(trace).args(args);
+    let (code, out, err) = run_bounded(cmd, Duration::from_secs(30));
+    (code, format!("resumed player stdout:\n{out}\nresumed player stderr:\n{err}"))
+}
+
+/// The records of a trace file.
+pub fn records(trace: &Path) -> Vec<Value> {
+    std::fs::read_to_string(trace).unwrap().lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
+}
+
+/// Every action and event of a trace with the call it is credited to (no
+/// times, no sequence numbers), and the outcome.
+pub fn calls(trace: &Path) -> Vec<String> {
+    records(trace)
+        .iter()
+        .filter_map(|r| match r["kind"].as_str()? {
+            "action" => {
+                Some(format!("action {} {} task {} call {}", r["action"], r["params"], r["task"], r["call_site"]))
+            }
+            "event" => Some(format!("event {} task {} call {}", r["event"], r["task"], r["call_site"])),
+            "outcome" => Some(format!("outcome {}", r["result"])),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The sequence numbers of the actions of a trace.
+pub fn sent(trace: &Path) -> Vec<u64> {
+    records(trace).iter().filter(|r| r["kind"] == "action").filter_map(|r| r["seq"].as_u64()).collect()
+}
+
+/// The records of a trace of these kinds.
+pub fn of_kind(trace: &Path, kinds: &[&str]) -> Vec<Value> {
+    records(trace).into_iter().filter(|r| kinds.iter().any(|k| r["kind"] == *k)).collect()
+}
+
+/// [`calls`] of the uninterrupted run of `file` on the in-process mock, in
+/// virtual time, with `scenario`.
+pub fn reference_calls(dir: &Path, file: &Path, scenario: &str) -> Vec<String> {
+    let sc = dir.join("reference.toml");
+    std::fs::write(&sc, scenario).unwrap();
+    let trace = dir.join("reference.jsonl");
+    let mut cmd = mcl();
+    cmd.args(["run", "--mock", "--virtual-time", "-q"]).arg(file).arg("--scenario").arg(&sc).arg("--trace").arg(&trace);
+    let (code, _, err) = run_bounded(cmd, Duration::from_secs(30));
+    assert_eq!(code, Some(0), "{err}");
+    calls(&trace)
+}
+
+/// No duplicates in `v`.
+pub fn unique(v: &[u64]) -> bool {
+    v.iter().collect::<std::collections::BTreeSet<_>>().len() == v.len()
+}
