@@ -932,30 +932,64 @@ fn unreachable_aac_is_told_in_the_live_log() {
         "run",
         "--aac",
         &addr,
-        "--time-limit",
+        "--connect-timeout",
         "1.5",
         "examples/extract-5-4.mcl",
         "--trace",
         tp.to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    // Nobody answers: exit 2 after the connect timeout, and the mission never
+    // started (no action queued, no time-out counting down meanwhile).
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let log = String::from_utf8_lossy(&out.stdout);
-    let first = log.lines().next().unwrap();
-    assert!(first.contains("DepthPrimitive enable") && first.contains("(queued: the AAC is not connected)"), "{log}");
     let attempts: Vec<&str> = log.lines().filter(|l| l.contains("link     cannot connect to")).collect();
     assert!(attempts.len() >= 2, "{log}");
     assert!(attempts.iter().all(|l| l.contains("retrying in") && l.contains("(attempt ")), "{log}");
-    assert!(log.lines().last().unwrap().contains("MISSION TIME_LIMIT"), "{log}");
+    assert!(!log.contains("action "), "{log}");
     let err = stderr(&out);
-    assert!(err.contains("the AAC was never reached: actions [1] were never sent"), "{err}");
-    assert!(err.contains("TIME_LIMIT at t=1.500 s"), "{err}");
-    // The trace has the attempts and the queued action.
+    assert!(err.contains("no vehicle answered within 1.5 s"), "{err}");
+    // The trace has the attempts and nothing else happened.
     let tr = trace(&tp);
     assert!(of_kinds(&tr, &["link"]).len() >= 2);
-    assert_eq!(of_kinds(&tr, &["action"])[0]["queued"], true);
+    assert!(of_kinds(&tr, &["action"]).is_empty());
     // -q: no live log, but the link's news on standard error.
-    let out = mcl(&["run", "--aac", &addr, "-q", "--time-limit", "1", "examples/extract-5-4.mcl"]);
+    let out = mcl(&["run", "--aac", &addr, "-q", "--connect-timeout", "1", "examples/extract-5-4.mcl"]);
+    assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("link: cannot connect to"), "{}", stderr(&out));
+}
+
+/// The mission clock starts when the vehicle is connected: an AAC that
+/// starts listening 1.5 s after the player does not eat into the mission's
+/// time-outs, and the first action is sent at mission time 0.
+#[test]
+fn the_mission_starts_when_the_vehicle_is_connected() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let addr = format!("127.0.0.1:{port}");
+    let tp = tmp("late-aac.jsonl");
+    let player = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--aac", &addr, "-q", "--speed", "20", "examples/extract-5-4.mcl", "--trace"])
+        .arg(&tp)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let mut aac = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["mock-aac", "--net", "examples/extract-5-4.mcl", "--listen", &addr, "--speed", "20", "--quiet"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = player.wait_with_output().unwrap();
+    let _ = aac.kill();
+    let _ = aac.wait();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let tr = trace(&tp);
+    let first = &of_kinds(&tr, &["action"])[0];
+    // Mission time at speed 20: the 1.5 s without a vehicle would be 30 s.
+    assert!(first["t"].as_f64().unwrap() < 1.0, "{first}");
+    assert!(first.get("queued").is_none(), "{first}");
+    assert!(tr.iter().any(|r| r["kind"] == "link" && r["message"] == "link to the AAC up"));
 }
 
 fn png_size(path: &Path) -> Option<(u32, u32, u64)> {

@@ -266,6 +266,9 @@ pub struct Limits {
     /// The time limit is [`DEFAULT_VIRTUAL_TIME_LIMIT`], not one the user gave
     /// (the message says how to change it).
     pub default_limit: bool,
+    /// Wall-clock seconds to wait for the vehicle (an AAC link that is down
+    /// when the run starts) before the mission starts; `None`: for ever.
+    pub connect_timeout: Option<f64>,
 }
 
 impl Limits {
@@ -273,15 +276,15 @@ impl Limits {
     /// An infinite `given` means no limit.
     pub fn virtual_time(given: Option<f64>) -> Limits {
         match given {
-            Some(t) if t.is_infinite() => Limits { time_limit: None, default_limit: false },
-            Some(t) => Limits { time_limit: Some(t), default_limit: false },
-            None => Limits { time_limit: Some(DEFAULT_VIRTUAL_TIME_LIMIT), default_limit: true },
+            Some(t) if t.is_infinite() => Limits { time_limit: None, default_limit: false, connect_timeout: None },
+            Some(t) => Limits { time_limit: Some(t), default_limit: false, connect_timeout: None },
+            None => Limits { time_limit: Some(DEFAULT_VIRTUAL_TIME_LIMIT), default_limit: true, connect_timeout: None },
         }
     }
 
     /// The limits of a real-time run (no limit unless given).
     pub fn real_time(given: Option<f64>) -> Limits {
-        Limits { time_limit: given.filter(|t| t.is_finite()), default_limit: false }
+        Limits { time_limit: given.filter(|t| t.is_finite()), default_limit: false, connect_timeout: None }
     }
 
     /// Why a run stopped at the time limit `limit`.
@@ -408,6 +411,40 @@ fn started(s: &Session) -> bool {
     s.player.is_started()
 }
 
+/// What the player does with one message from the link, at mission time
+/// `now`; returns its outputs (actions to send). Link states are `link`
+/// records (a lost link is also a warning: actions are queued meanwhile).
+fn on_inbound(s: &mut Session<'_>, now: f64, m: Inbound) -> Result<Vec<Output>, String> {
+    Ok(match m {
+        Inbound::Ack { seq } => {
+            s.ack(seq);
+            Vec::new()
+        }
+        Inbound::Disconnected => {
+            s.link_down = true;
+            s.warn(now, "link to the AAC lost; reconnecting (actions are queued meanwhile)".into());
+            Vec::new()
+        }
+        Inbound::Connected => {
+            s.link_down = false;
+            s.link_notice(now, "link to the AAC up".into());
+            Vec::new()
+        }
+        Inbound::Session { id, restarted } => s.on_session(now, &id, restarted)?,
+        Inbound::Notice { message } => {
+            s.link_notice(now, message);
+            Vec::new()
+        }
+        m => {
+            let n = number(&m);
+            match perception_or_event(now, m) {
+                Some(input) => s.step_numbered(input, n)?,
+                None => Vec::new(),
+            }
+        }
+    })
+}
+
 /// Runs `s` over `link` in real time with `clock` until the mission ends or
 /// the time limit passes. `resend` are actions to send first (after a resume).
 ///
@@ -430,6 +467,37 @@ pub async fn run_real_time(
         }
         Ok(())
     };
+    let mut clock = clock;
+    if !started(s) && s.link_down {
+        // The mission starts when the vehicle is there: no time-out runs,
+        // and no action waits in a queue, while nobody answers. Mission time
+        // stands still meanwhile.
+        let at = clock.now();
+        let wait = async {
+            loop {
+                match link.inbound.recv().await {
+                    None => return Err("the link to the AAC closed".to_string()),
+                    Some(m) => {
+                        let connected = !matches!(m, Inbound::Notice { .. } | Inbound::Session { .. });
+                        let out = on_inbound(s, at, m)?;
+                        send(link, out)?;
+                        if connected {
+                            return Ok(());
+                        }
+                    }
+                }
+            }
+        };
+        match limits.connect_timeout {
+            Some(t) => {
+                tokio::time::timeout(std::time::Duration::from_secs_f64(t.max(0.0)), wait).await.map_err(|_| {
+                    format!("no vehicle answered within {t} s (--connect-timeout SECONDS waits longer, `inf` for ever)")
+                })??
+            }
+            None => wait.await?,
+        }
+        clock = Clock::new(clock.speed(), at);
+    }
     for a in resend {
         link.actions.send(a).map_err(|_| "the link to the AAC is closed".to_string())?;
     }
@@ -460,22 +528,7 @@ pub async fn run_real_time(
                 let now = clock.now().max(s.player.now());
                 match m {
                     None => return Err("the link to the AAC closed".into()),
-                    Some(Inbound::Ack { seq }) => { s.ack(seq); Vec::new() }
-                    Some(Inbound::Disconnected) => {
-                        s.link_down = true;
-                        s.warn(now, "link to the AAC lost; reconnecting (actions are queued meanwhile)".into());
-                        Vec::new()
-                    }
-                    Some(Inbound::Connected) => { s.link_down = false; s.warn(now, "link to the AAC up".into()); Vec::new() }
-                    Some(Inbound::Session { id, restarted }) => s.on_session(now, &id, restarted)?,
-                    Some(Inbound::Notice { message }) => { s.link_notice(now, message); Vec::new() }
-                    Some(m) => {
-                        let n = number(&m);
-                        match perception_or_event(now, m) {
-                            Some(input) => s.step_numbered(input, n)?,
-                            None => Vec::new(),
-                        }
-                    }
+                    Some(m) => on_inbound(s, now, m)?,
                 }
             }
             _ = sleep => {
@@ -661,7 +714,12 @@ mod tests {
         let mut mock = MockVehicle::from_net(&net, Scenario::from_toml("[tasks.X]\ndelay = 50", "s").unwrap(), 3);
         mock.initial();
         assert_eq!(
-            run_virtual(&mut s, &mut mock, Limits { time_limit: Some(10.0), default_limit: false }).unwrap(),
+            run_virtual(
+                &mut s,
+                &mut mock,
+                Limits { time_limit: Some(10.0), default_limit: false, connect_timeout: None }
+            )
+            .unwrap(),
             End::TimeLimit(10.0)
         );
     }

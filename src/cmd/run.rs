@@ -68,6 +68,11 @@ pub struct Options {
     /// Stop (exit status 3) when mission time passes SECONDS (virtual time: 86400 unless given; `inf`: no limit).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+    /// With --aac: give up (exit status 2) when no vehicle has answered within SECONDS
+    /// of wall-clock time (`inf`: wait for ever). The mission starts, and its clock runs,
+    /// only once the vehicle is connected.
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    pub connect_timeout: f64,
     /// Run only this mission of a file that defines several (default: all of them
     /// coordinated with --mock, the first with --aac).
     #[arg(long, value_name = "NAME")]
@@ -258,6 +263,9 @@ pub fn run(o: Options) -> u8 {
     }
     if o.journal.is_some() && o.resume.is_some() {
         return usage("--resume FILE continues the journal FILE; do not give --journal as well");
+    }
+    if o.connect_timeout.is_nan() || o.connect_timeout < 0.0 {
+        return usage("--connect-timeout takes a number of seconds >= 0, or `inf`");
     }
     if o.time_limit.is_some_and(|t| t.is_nan() || t < 0.0) {
         return usage("--time-limit must be a number of seconds ≥ 0 (or `inf`: no limit)");
@@ -492,7 +500,8 @@ pub fn run(o: Options) -> u8 {
         }
     }
 
-    let limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
+    let mut limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
+    limits.connect_timeout = Some(o.connect_timeout).filter(|t| t.is_finite());
     let mut session = Session::new(player, tracer, &mut sink);
     session.journal = journal_writer;
     session.crash_after = o.crash_after;
