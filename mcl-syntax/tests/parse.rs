@@ -500,8 +500,11 @@ fn unicode_arrow_and_text() {
     let src = "pattern { P { places { é_not_ascii_is_not_an_identifier; } transitions { t; } arcs { a → t; } } }";
     let p = parse(src);
     check_invariants(src, &p);
+    // One error for the whole identifier, which names the letter.
     assert_eq!(p.errors.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0001"]);
-    assert_eq!(text(src, p.errors[0].span), "é");
+    assert_eq!(text(src, p.errors[0].span), "é_not_ascii_is_not_an_identifier");
+    assert_eq!(p.errors[0].labels[0].message, "`é` is not an ASCII letter");
+    assert_eq!(p.errors[0].help.as_deref(), Some("identifiers are ASCII: letters a-z A-Z, digits, `_`, `$`, `-`, `/`; write `e_not_ascii_is_not_an_identifier`"));
     let p = ok("mission { Search( \"câble → ü\" ) }");
     assert_eq!(sexp(&p.file), "(mission {Search(\"câble → ü\")})");
 }

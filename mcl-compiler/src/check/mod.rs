@@ -11,6 +11,7 @@ mod planning;
 mod tasks;
 mod unused;
 
+use crate::codes;
 use crate::db::{Db, SourceFile};
 use crate::diagnostics::FileDiagnostic;
 use crate::queries::{file_items, item_start, parse_item, program, syntax_errors, ItemText};
@@ -25,13 +26,23 @@ use mcl_syntax::{Diagnostic, Severity, Shift, Span};
 /// and are reused across edits that do not concern them.
 #[salsa::tracked(returns(ref))]
 pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
-    let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
-    diags.extend(syntax_errors(db, file).iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
+    let mut checked = Vec::new();
     for c in file_items(db, file) {
         let local = check_item(db, ItemCheckKey::new(db, file, c.text));
-        local.place(db, file, c.start, &mut diags);
+        local.place(db, file, c.start, &mut checked);
     }
-    check_definitions(db, file).place(db, file, 0, &mut diags);
+    check_definitions(db, file).place(db, file, 0, &mut checked);
+    // What follows from an error already reported is not reported again:
+    // a name with a character the lexer refused.
+    let syntax = syntax_errors(db, file);
+    let lexical: Vec<Span> = syntax.iter().filter(|d| d.code == codes::UNKNOWN_CHAR).map(|d| d.span).collect();
+    checked.retain(|d| {
+        let s = d.diag.span;
+        !lexical.iter().any(|l| l.start <= s.start && s.end <= l.end)
+    });
+    let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
+    diags.extend(syntax.iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
+    diags.extend(checked);
     diags.sort_by(|a, b| {
         (a.diag.span.start, a.diag.span.end, a.diag.code).cmp(&(b.diag.span.start, b.diag.span.end, b.diag.code))
     });
