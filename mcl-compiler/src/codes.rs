@@ -64,6 +64,10 @@ pub const PLAN_MAP_PARAMETER: &str = "E0707";
 
 // Imports.
 pub const IMPORT_NOT_FOUND: &str = "E0501";
+/// The codes of a name that is not defined: not reported while an import
+/// of the program cannot be read, since that file may define it.
+pub const UNDEFINED_NAMES: &[&str] =
+    &[UNDEFINED_TASK, UNDEFINED_ACTION, UNDEFINED_EVENT, UNDEFINED_PATTERN, UNKNOWN_MISSION, PLAN_UNKNOWN_TYPE];
 pub const IMPORT_CYCLE: &str = "E0502";
 
 // Warnings.

@@ -211,6 +211,10 @@ pub struct Program {
     pub diagnostics: Vec<FileDiagnostic>,
 }
 
+/// What an import that cannot be read leaves unchecked (see `check_file`).
+const UNCHECKED_NAMES: &str = "until it is read, names that it may define are not checked: \
+     uses of undefined tasks, actions, events, patterns, missions and planning types are not reported";
+
 /// The program rooted at `root`.
 #[salsa::tracked(returns(ref))]
 pub fn program(db: &dyn Db, root: SourceFile) -> Program {
@@ -241,7 +245,8 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
                 )
                 .with_label(imp.path_span, "no readable file at this path")
                 .with_help("import paths are relative to the folder of the importing file")
-            };
+            }
+            .with_note(UNCHECKED_NAMES);
             diagnostics.push(FileDiagnostic { file: root, diag: d });
             continue;
         }

@@ -14,7 +14,7 @@ mod unused;
 use crate::codes;
 use crate::db::{Db, SourceFile};
 use crate::diagnostics::FileDiagnostic;
-use crate::queries::{file_items, item_start, parse_item, program, syntax_errors, ItemText};
+use crate::queries::{file_items, imports, item_start, parse_item, program, syntax_errors, ItemText};
 use crate::scope::{local_scope, DefId, Scope};
 use mcl_syntax::{Diagnostic, Severity, Shift, Span};
 
@@ -33,12 +33,15 @@ pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     }
     check_definitions(db, file).place(db, file, 0, &mut checked);
     // What follows from an error already reported is not reported again:
-    // a name with a character the lexer refused.
+    // a name with a character the lexer refused, a name that a file that
+    // could not be imported may define.
     let syntax = syntax_errors(db, file);
     let lexical: Vec<Span> = syntax.iter().filter(|d| d.code == codes::UNKNOWN_CHAR).map(|d| d.span).collect();
+    let lost_import = import_failed(db, file);
     checked.retain(|d| {
         let s = d.diag.span;
         !lexical.iter().any(|l| l.start <= s.start && s.end <= l.end)
+            && !(lost_import && codes::UNDEFINED_NAMES.contains(&d.diag.code))
     });
     let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
     diags.extend(syntax.iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
@@ -92,6 +95,12 @@ pub fn check_definitions(db: &dyn Db, root: SourceFile) -> LocalDiagnostics {
     definitions::check_imported_clashes(&mut cx);
     unused::check_definitions(&mut cx);
     cx.finish()
+}
+
+/// Whether a file of the program rooted at `file` has an import that
+/// could not be read: the names it would define are then unknown.
+fn import_failed(db: &dyn Db, file: SourceFile) -> bool {
+    program(db, file).files.iter().any(|&f| imports(db, f).iter().any(|i| i.target.text(db).is_none()))
 }
 
 /// True when any diagnostic is an error.
