@@ -386,8 +386,13 @@ fn indent_of(src: &str, item: usize, at: usize) -> usize {
 
 /// The column of `at` when it is the first token of its line.
 fn first_on_line(src: &str, item: usize, at: usize) -> Option<usize> {
-    let ls = line_start(src, item, at);
-    src.as_bytes()[ls..at].iter().all(|&b| b == b' ' || b == b'\t' || b == b'\r').then_some(at - ls)
+    // Only the blanks before `at` are read: a long line costs nothing.
+    let b = src.as_bytes();
+    let mut i = at;
+    while i > item && matches!(b[i - 1], b' ' | b'\t' | b'\r') {
+        i -= 1;
+    }
+    (i == item || b[i - 1] == b'\n').then_some(at - i)
 }
 
 /// For a `}` at `at` that would close `stack[inner]`: the outer `{` it is
@@ -418,9 +423,10 @@ fn block_ends(
     stack: &[(Token<'_>, Span)],
     from: usize,
 ) -> Vec<Option<usize>> {
-    // The depth before each token, back to the outermost `{` asked about.
+    // The depth before each token, back to the outermost `{` asked about
+    // (from the end: `rev[0]` is the last token's).
     let n = stack.len();
-    let mut depth = vec![0usize; out.len()];
+    let mut rev = Vec::new();
     // The first opener seen at depth `d` going back is `stack[d]`: the
     // depth stays above `d` after it.
     let mut opened = vec![None; n];
@@ -437,8 +443,9 @@ fn block_ends(
         } else if is_closer(t) {
             d += 1;
         }
-        depth[k] = d;
+        rev.push(d);
     }
+    let depth = |k: usize| rev[out.len() - 1 - k];
     let mut ends = Vec::new();
     let mut after = 0;
     for j in (from..n).rev() {
@@ -450,7 +457,7 @@ fn block_ends(
         let start = after.max(open + 1);
         let end = (start..out.len()).find(|&k| {
             let (_, span) = out[k];
-            depth[k] == n
+            depth(k) == n
                 && !span.is_empty()
                 && first_on_line(src, item, span.start as usize).is_some_and(|col| col <= indent)
         });
@@ -477,7 +484,7 @@ fn block_ends(
         let end =
             end.map(
                 |k| {
-                    if control && k > start && out[k - 1].0 == Token::Semi && depth[k - 1] == n {
+                    if control && k > start && out[k - 1].0 == Token::Semi && depth(k - 1) == n {
                         k - 1
                     } else {
                         k
@@ -811,7 +818,7 @@ fn close_item<'s>(
     why: &str,
     errors: &mut Vec<Diagnostic>,
     out: &mut Vec<(Token<'s>, Span)>,
-    unclosed: &dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic,
+    unclosed: &Unclosed,
 ) {
     if item.by_indent && !stack.is_empty() && stack.len() <= 3 && stack.iter().all(|(t, _)| *t == Token::LBrace) {
         let shut = Shut { fallback: Span::at(at), why, closer: None };
@@ -832,7 +839,7 @@ fn close_by_indent<'s>(
     shut: Shut<'_>,
     errors: &mut Vec<Diagnostic>,
     out: &mut Vec<(Token<'s>, Span)>,
-    unclosed: &dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic,
+    unclosed: &Unclosed,
 ) {
     let ends = block_ends(src, item.start, out, item.out, stack, from);
     let mut inserts = Vec::new();
@@ -858,6 +865,10 @@ fn close_by_indent<'s>(
     stack.truncate(from);
 }
 
+/// Builds the error of a delimiter left open: the opener, where its closer
+/// was expected, and why there.
+type Unclosed = dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic;
+
 /// Closes every delimiter still open at `at`, one error each; beyond a few
 /// (generated or pasted text), one error at the outermost says how many more
 /// are open inside it.
@@ -867,7 +878,7 @@ fn close_all<'s>(
     why: &str,
     errors: &mut Vec<Diagnostic>,
     out: &mut Vec<(Token<'s>, Span)>,
-    unclosed: &dyn Fn((Token<'_>, Span), Span, &str) -> Diagnostic,
+    unclosed: &Unclosed,
 ) {
     const SHOWN: usize = 3;
     let n = stack.len();

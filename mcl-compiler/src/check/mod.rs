@@ -40,8 +40,11 @@ pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     let lost_import = import_failed(db, file);
     checked.retain(|d| {
         let s = d.diag.span;
-        !lexical.iter().any(|l| l.start <= s.start && s.end <= l.end)
-            && !(lost_import && codes::UNDEFINED_NAMES.contains(&d.diag.code))
+        // Lexical errors are in source order and do not overlap.
+        let last = lexical.partition_point(|l| l.start <= s.start);
+        let in_lexical = last > 0 && s.end <= lexical[last - 1].end;
+        let maybe_imported = lost_import && codes::UNDEFINED_NAMES.contains(&d.diag.code);
+        !(in_lexical || maybe_imported)
     });
     let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
     diags.extend(syntax.iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
