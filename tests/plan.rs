@@ -185,6 +185,34 @@ fn exit_2_on_bad_input_with_located_errors() {
     assert!(stderr(&o).contains("have errors"), "{}", stderr(&o));
 }
 
+/// A misspelt predicate in an action is one error, at the line and column
+/// where it is first written (not at the action), however often it is used.
+#[test]
+fn a_misspelt_predicate_is_one_error_at_its_use() {
+    let dir = tmp("misspelt");
+    let domain = std::fs::read_to_string(root().join("examples/planning/move/domain.pddl"))
+        .unwrap()
+        .replace(":precondition (and (in ?v ?l1)", ":precondition (and (inn ?v ?l1)")
+        .replace("(not (in ?v ?l1))", "(not (inn ?v ?l1))");
+    let (d, p) =
+        write(&dir, &domain, &std::fs::read_to_string(root().join("examples/planning/move/problem.pddl")).unwrap());
+    let o = mcl(&["--domain", &d, "--problem", &p]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let (line, text) = domain.lines().enumerate().find(|(_, l)| l.contains("(inn ")).unwrap();
+    let column = text.find("inn").unwrap() + 1;
+    let err = stderr(&o);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(
+        errors,
+        [format!(
+            "error: {d}:{}:{column}: action `move`: unknown predicate `inn` (declared: in); also written on line {}",
+            line + 1,
+            line + 2
+        )],
+        "{err}"
+    );
+}
+
 #[test]
 fn validates_plans() {
     let plan = tmp("validate").join("plan.txt");

@@ -65,9 +65,14 @@ pub const PLAN_RELATION_ARITY: &str = "E0704";
 pub const PLAN_MISSION: &str = "E0705";
 pub const PLAN_DUPLICATE: &str = "E0706";
 pub const PLAN_MAP_PARAMETER: &str = "E0707";
+pub const PLAN_NEVER_HOLDS: &str = "W0708";
 
 // Imports.
 pub const IMPORT_NOT_FOUND: &str = "E0501";
+/// The codes of a name that is not defined: not reported while an import
+/// of the program cannot be read, since that file may define it.
+pub const UNDEFINED_NAMES: &[&str] =
+    &[UNDEFINED_TASK, UNDEFINED_ACTION, UNDEFINED_EVENT, UNDEFINED_PATTERN, UNKNOWN_MISSION, PLAN_UNKNOWN_TYPE];
 pub const IMPORT_CYCLE: &str = "E0502";
 
 // Warnings.
@@ -148,6 +153,7 @@ registry! {
     "E0705" => "planning operator runs an unknown mission or with the wrong arity",
     "E0706" => "duplicate planning definition",
     "E0707" => "mapping argument that is not a parameter of the mapping",
+    "W0708" => "planning relation that never holds, spelt like one that does",
     "W0901" => "unused definition",
     "W0902" => "unused mission parameter",
 }

@@ -211,6 +211,10 @@ pub struct Program {
     pub diagnostics: Vec<FileDiagnostic>,
 }
 
+/// What an import that cannot be read leaves unchecked (see `check_file`).
+const UNCHECKED_NAMES: &str = "until it is read, names that it may define are not checked: \
+     uses of undefined tasks, actions, events, patterns, missions and planning types are not reported";
+
 /// The program rooted at `root`.
 #[salsa::tracked(returns(ref))]
 pub fn program(db: &dyn Db, root: SourceFile) -> Program {
@@ -225,7 +229,7 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
     let mut diagnostics = Vec::new();
     for imp in imports(db, root) {
         if imp.target.text(db).is_none() {
-            diagnostics.push(FileDiagnostic { file: root, diag: unreadable_import(db, imp) });
+            diagnostics.push(FileDiagnostic { file: root, diag: unreadable_import(db, imp).with_note(UNCHECKED_NAMES) });
             continue;
         }
         if imp.target == root {

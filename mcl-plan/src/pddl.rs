@@ -8,6 +8,7 @@
 
 use crate::sexpr::{self, Error, Sexpr, Source, Span};
 use serde::Serialize;
+use std::cell::RefCell;
 use std::collections::HashSet;
 use std::fmt;
 
@@ -237,6 +238,17 @@ type R<T> = Result<T, Error>;
 struct P<'a> {
     src: Source<'a>,
     errors: Vec<Error>,
+    /// Every atom of the actions read so far, in source order, so that a
+    /// predicate's error is located at its use.
+    uses: RefCell<Vec<PredicateUse>>,
+}
+
+/// An atom of an action: its predicate, number of arguments and place.
+struct PredicateUse {
+    action: String,
+    pred: String,
+    arity: usize,
+    span: Span,
 }
 
 fn is_number(s: &str) -> bool {
@@ -369,6 +381,15 @@ impl<'a> P<'a> {
         Ok(Atom { pred, args })
     }
 
+    /// An atom of a predicate in an action, recorded for `check_domain`.
+    fn pred_atom(&self, l: &[Sexpr], span: Span, scope: &[TypedName]) -> R<Atom> {
+        let a = self.atom(l, span, scope)?;
+        let at = l.first().map_or(span, Sexpr::span);
+        let arity = a.args.len();
+        self.uses.borrow_mut().push(PredicateUse { action: String::new(), pred: a.pred.clone(), arity, span: at });
+        Ok(a)
+    }
+
     /// `?l.x` as a fluent term.
     fn attr_atom(&self, a: &str, span: Span, scope: &[TypedName]) -> R<Option<(Term, String)>> {
         if !a.starts_with('?') {
@@ -487,7 +508,7 @@ impl<'a> P<'a> {
                 format!("`{h}` in a precondition is not supported: this planner reads STRIPS preconditions (atoms, `not`, `=`, comparisons)"),
             )),
             _ => {
-                pre.push(Literal { atom: self.atom(l, span, scope)?, positive });
+                pre.push(Literal { atom: self.pred_atom(l, span, scope)?, positive });
                 Ok(())
             }
         }
@@ -513,7 +534,7 @@ impl<'a> P<'a> {
                 let inner = l.get(1).and_then(|x| x.list()).filter(|_| l.len() == 2);
                 match inner {
                     Some(il) => {
-                        a.del.push(self.atom(il, l[1].span(), scope)?);
+                        a.del.push(self.pred_atom(il, l[1].span(), scope)?);
                         Ok(())
                     }
                     None => Err(self.err(span, "expected one atom inside `not`: `(not (predicate arg ...))`")),
@@ -539,7 +560,7 @@ impl<'a> P<'a> {
                 Err(self.err(span, format!("`{h}` is not supported: numeric fluents are static attributes, only `(increase (total-cost) n)` changes")))
             }
             _ => {
-                a.add.push(self.atom(l, span, scope)?);
+                a.add.push(self.pred_atom(l, span, scope)?);
                 Ok(())
             }
         }
@@ -693,7 +714,7 @@ impl<'a> P<'a> {
 
 /// Parses a domain file. `file` names it in errors.
 pub fn parse_domain(file: &str, text: &str) -> Result<Domain, Vec<Error>> {
-    let mut p = P { src: Source::new(file, text), errors: Vec::new() };
+    let mut p = P { src: Source::new(file, text), errors: Vec::new(), uses: RefCell::default() };
     let top = sexpr::read(&p.src).map_err(|e| vec![e])?;
     let (name, sections) = p.define(&top, "domain", Span::default()).map_err(|e| vec![e])?;
     let mut d = Domain { file: file.to_string(), name, ..Domain::default() };
@@ -721,7 +742,20 @@ pub fn parse_domain(file: &str, text: &str) -> Result<Domain, Vec<Error>> {
                 ":constants" => d.constants.extend(p.typed_list(&l[1..], "a constant")?),
                 ":predicates" => d.predicates.extend(p.signatures(&l[1..], "predicate")?),
                 ":functions" => d.functions.extend(p.signatures(&l[1..], "function")?),
-                ":action" => d.actions.push(p.action(l, s.span())?),
+                ":action" => {
+                    // The atoms of an action that does not parse are not checked.
+                    let mark = p.uses.borrow().len();
+                    match p.action(l, s.span()) {
+                        Ok(a) => {
+                            p.uses.borrow_mut()[mark..].iter_mut().for_each(|u| u.action = a.name.clone());
+                            d.actions.push(a);
+                        }
+                        Err(e) => {
+                            p.uses.borrow_mut().truncate(mark);
+                            return Err(e);
+                        }
+                    }
+                }
                 ":durative-action" | ":derived" | ":process" | ":event" => {
                     return Err(p.err(s.span(), format!("`{key}` is not supported: this planner reads STRIPS actions")))
                 }
@@ -776,29 +810,42 @@ fn check_domain(p: &P<'_>, d: &Domain) -> Vec<Error> {
         for x in &a.params {
             check_types(&mut errs, x, a.line);
         }
-        let atoms = a.pre.iter().map(|l| &l.atom).chain(&a.add).chain(&a.del);
-        for at in atoms {
-            match d.predicates.iter().find(|s| s.name == at.pred) {
-                None => errs.push(Error {
-                    file: d.file.clone(),
-                    line: a.line,
-                    column: 1,
-                    message: format!("action `{}`: unknown predicate `{}`", a.name, at.pred),
-                }),
-                Some(s) if s.params.len() != at.args.len() => errs.push(Error {
-                    file: d.file.clone(),
-                    line: a.line,
-                    column: 1,
-                    message: format!(
-                        "action `{}`: predicate `{}` takes {} argument(s), given {}",
-                        a.name,
-                        at.pred,
-                        s.params.len(),
-                        at.args.len()
-                    ),
-                }),
-                _ => {}
+    }
+    // Each atom where it is written; an unknown predicate once, at its
+    // first use (one misspelling, one error).
+    let uses = p.uses.borrow();
+    let mut unknown = HashSet::new();
+    for u in uses.iter() {
+        match d.predicates.iter().find(|s| s.name == u.pred) {
+            None if unknown.insert(&u.pred) => {
+                let declared: Vec<&str> = d.predicates.iter().map(|s| s.name.as_str()).collect();
+                let mut message = format!("action `{}`: unknown predicate `{}`", u.action, u.pred);
+                if !declared.is_empty() {
+                    message.push_str(&format!(" (declared: {})", declared.join(", ")));
+                }
+                let mut again: Vec<String> = uses
+                    .iter()
+                    .filter(|v| v.pred == u.pred)
+                    .skip(1)
+                    .map(|v| p.src.line_col(v.span.start).0.to_string())
+                    .collect();
+                again.dedup();
+                if !again.is_empty() {
+                    message.push_str(&format!("; also written on line {}", again.join(", ")));
+                }
+                errs.push(p.src.error(u.span, message));
             }
+            Some(s) if s.params.len() != u.arity => errs.push(p.src.error(
+                u.span,
+                format!(
+                    "action `{}`: predicate `{}` takes {} argument(s), given {}",
+                    u.action,
+                    u.pred,
+                    s.params.len(),
+                    u.arity
+                ),
+            )),
+            _ => {}
         }
     }
     let mut names = HashSet::new();
@@ -825,7 +872,7 @@ fn check_domain(p: &P<'_>, d: &Domain) -> Vec<Error> {
 
 /// Parses a problem file.
 pub fn parse_problem(file: &str, text: &str) -> Result<Problem, Vec<Error>> {
-    let mut p = P { src: Source::new(file, text), errors: Vec::new() };
+    let mut p = P { src: Source::new(file, text), errors: Vec::new(), uses: RefCell::default() };
     let top = sexpr::read(&p.src).map_err(|e| vec![e])?;
     let (name, sections) = p.define(&top, "problem", Span::default()).map_err(|e| vec![e])?;
     let mut pr = Problem { file: file.to_string(), name, ..Problem::default() };

@@ -212,6 +212,61 @@ fn is_ident_continue(c: char) -> bool {
     c.is_ascii_alphanumeric() || matches!(c, '_' | '$' | '-' | '/')
 }
 
+/// A letter (or a combining accent) outside ASCII, which identifiers may not hold.
+fn is_foreign_letter(c: char) -> bool {
+    !c.is_ascii() && (c.is_alphanumeric() || ('\u{300}'..='\u{36f}').contains(&c))
+}
+
+/// The ASCII spelling of a Latin letter with a diacritic, if it has one.
+fn ascii_of(c: char) -> Option<&'static str> {
+    const FOLDS: [(&str, &str); 14] = [
+        ("àáâãäåāăą", "a"),
+        ("ÀÁÂÃÄÅĀĂĄ", "A"),
+        ("çćĉċč", "c"),
+        ("ÇĆĈĊČ", "C"),
+        ("èéêëēĕėęě", "e"),
+        ("ÈÉÊËĒĔĖĘĚ", "E"),
+        ("ìíîïĩīĭį", "i"),
+        ("ÌÍÎÏĨĪĬĮ", "I"),
+        ("ñńņň", "n"),
+        ("ÑŃŅŇ", "N"),
+        ("òóôõöøōŏő", "o"),
+        ("ÒÓÔÕÖØŌŎŐ", "O"),
+        ("ùúûüũūŭůűų", "u"),
+        ("ÙÚÛÜŨŪŬŮŰŲ", "U"),
+    ];
+    if ('\u{300}'..='\u{36f}').contains(&c) {
+        return Some("");
+    }
+    match c {
+        'ß' => return Some("ss"),
+        'æ' => return Some("ae"),
+        'Æ' => return Some("AE"),
+        'œ' => return Some("oe"),
+        'Œ' => return Some("OE"),
+        'ý' | 'ÿ' => return Some("y"),
+        'Ý' => return Some("Y"),
+        _ => {}
+    }
+    FOLDS.iter().find(|(from, _)| from.contains(c)).map(|(_, to)| *to)
+}
+
+/// The one error of an identifier that holds a letter outside ASCII, with
+/// its ASCII spelling when every such letter has one.
+fn foreign_letter(text: &str, span: Span, c: char) -> Diagnostic {
+    let ascii: Option<String> = text
+        .chars()
+        .map(|c| if c.is_ascii() { Some(c.to_string()) } else { ascii_of(c).map(str::to_string) })
+        .collect();
+    let mut help = "identifiers are ASCII: letters a-z A-Z, digits, `_`, `$`, `-`, `/`".to_string();
+    if let Some(a) = ascii.filter(|a| !a.is_empty()) {
+        help.push_str(&format!("; write `{a}`"));
+    }
+    Diagnostic::error(codes::UNKNOWN_CHAR, format!("identifier `{text}` has the non-ASCII letter `{c}`"), span)
+        .with_label(span, format!("`{c}` is not an ASCII letter"))
+        .with_help(help)
+}
+
 /// Splits `src` into tokens. Never fails: unknown characters become errors.
 pub fn lex(src: &str) -> Lexed<'_> {
     lex_before(src, false)
@@ -400,11 +455,23 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>, word_follo
             return i;
         }
         let c = src[i..].chars().next().expect("i is a char boundary inside src");
-        if is_ident_start(c) {
-            i += 1;
+        if is_ident_start(c) || is_foreign_letter(c) {
+            // A letter outside ASCII (`Plongée`) stays in the identifier, so
+            // that it is one error and one name, not two names in a row.
+            let mut foreign = (!c.is_ascii()).then_some(c);
+            i += c.len_utf8();
             while i < bytes.len() {
+                if !bytes[i].is_ascii() {
+                    let c = src[i..].chars().next().expect("boundary");
+                    if !is_foreign_letter(c) {
+                        break;
+                    }
+                    foreign = foreign.or(Some(c));
+                    i += c.len_utf8();
+                    continue;
+                }
                 let c = bytes[i] as char;
-                if !bytes[i].is_ascii() || !is_ident_continue(c) {
+                if !is_ident_continue(c) {
                     break;
                 }
                 // `-` before `>` is an arrow; `/` before `/` or `*` starts a comment.
@@ -415,6 +482,9 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>, word_follo
                 i += 1;
             }
             let text = &src[start..i];
+            if let Some(ch) = foreign {
+                out.errors.push(foreign_letter(text, Span::new(start, i), ch));
+            }
             let tok = match Kw::from_str(text) {
                 Some(k) => Token::Kw(k),
                 None => Token::Ident(text),

@@ -500,8 +500,11 @@ fn unicode_arrow_and_text() {
     let src = "pattern { P { places { é_not_ascii_is_not_an_identifier; } transitions { t; } arcs { a → t; } } }";
     let p = parse(src);
     check_invariants(src, &p);
+    // One error for the whole identifier, which names the letter.
     assert_eq!(p.errors.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0001"]);
-    assert_eq!(text(src, p.errors[0].span), "é");
+    assert_eq!(text(src, p.errors[0].span), "é_not_ascii_is_not_an_identifier");
+    assert_eq!(p.errors[0].labels[0].message, "`é` is not an ASCII letter");
+    assert_eq!(p.errors[0].help.as_deref(), Some("identifiers are ASCII: letters a-z A-Z, digits, `_`, `$`, `-`, `/`; write `e_not_ascii_is_not_an_identifier`"));
     let p = ok("mission { Search( \"câble → ü\" ) }");
     assert_eq!(sexp(&p.file), "(mission {Search(\"câble → ü\")})");
 }
@@ -553,7 +556,7 @@ fn missing_semicolon_is_one_error_and_both_statements_are_kept() {
 
 #[test]
 fn missing_closing_brace_before_next_item_is_one_error() {
-    let src = "mission : a {\n  if ( A() ) {\n    B()\n  ;\n  C()\n}\nmission : b { D() }\ntasks { }";
+    let src = "mission : a {\n  if ( A() ) {\n    B()\n  ;\n  C()\n  }\nmission : b { D() }\ntasks { }";
     let (codes, t, p) = bad(src);
     assert_eq!(codes, ["E0011"], "{}", render_errors(src, &p));
     assert_eq!(t, "(mission a {(if {A()} {B(); C()})})\n(mission b {D()})\n(tasks)");
@@ -562,6 +565,29 @@ fn missing_closing_brace_before_next_item_is_one_error() {
     assert_eq!(p.errors[0].span.start as usize, src.find('{').unwrap());
     let expected_at = p.errors[0].labels.iter().find(|l| l.message.contains("expected")).expect("a label says where");
     assert_eq!(expected_at.span.start as usize, src.find("mission : b").unwrap());
+}
+
+#[test]
+fn missing_closing_brace_is_placed_by_indentation() {
+    // The `}` indented like `mission` closes the mission: the `if` block is
+    // the one left open, and it ends where its indented block ends (before
+    // the `;` at the indentation of the `if`).
+    let src = "mission : a {\n  if ( A() ) {\n    B()\n  ;\n  C()\n}\nmission : b { D() }\ntasks { }";
+    let (codes, t, p) = bad(src);
+    assert_eq!(codes, ["E0011"], "{}", render_errors(src, &p));
+    assert_eq!(t, "(mission a {(if {A()} {B()}); C()})\n(mission b {D()})\n(tasks)");
+    assert_eq!(p.errors[0].span.start as usize, src.find("{\n    B").unwrap());
+    let expected_at = p.errors[0].labels.iter().find(|l| l.message.contains("expected")).expect("a label says where");
+    assert_eq!(expected_at.span.start as usize, src.find("B()").unwrap() + 3);
+    assert!(expected_at.message.contains("where its indented block ends"), "{}", expected_at.message);
+    // The same text on one line has no indentation to read: the mission's
+    // `{` is the one reported, at the next item.
+    let flat = src.replace('\n', " ");
+    let (codes, t, p) = bad(&flat);
+    assert_eq!(codes, ["E0011"], "{}", render_errors(&flat, &p));
+    assert_eq!(t, "(mission a {(if {A()} {B(); C()})})\n(mission b {D()})\n(tasks)");
+    // Misindented but balanced text is no error.
+    ok("mission {\n    try {\n        A()\n} catch {\n    B()\n  }\n    }");
 }
 
 #[test]

@@ -11,9 +11,10 @@ mod planning;
 mod tasks;
 mod unused;
 
+use crate::codes;
 use crate::db::{Db, SourceFile};
 use crate::diagnostics::FileDiagnostic;
-use crate::queries::{file_items, item_start, parse_item, program, syntax_errors, ItemText};
+use crate::queries::{file_items, imports, item_start, parse_item, program, syntax_errors, ItemText};
 use crate::scope::{local_scope, DefId, Scope};
 use mcl_syntax::{Diagnostic, Severity, Shift, Span};
 
@@ -25,13 +26,29 @@ use mcl_syntax::{Diagnostic, Severity, Shift, Span};
 /// and are reused across edits that do not concern them.
 #[salsa::tracked(returns(ref))]
 pub fn check_file(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
-    let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
-    diags.extend(syntax_errors(db, file).iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
+    let mut checked = Vec::new();
     for c in file_items(db, file) {
         let local = check_item(db, ItemCheckKey::new(db, file, c.text));
-        local.place(db, file, c.start, &mut diags);
+        local.place(db, file, c.start, &mut checked);
     }
-    check_definitions(db, file).place(db, file, 0, &mut diags);
+    check_definitions(db, file).place(db, file, 0, &mut checked);
+    // What follows from an error already reported is not reported again:
+    // a name with a character the lexer refused, a name that a file that
+    // could not be imported may define.
+    let syntax = syntax_errors(db, file);
+    let lexical: Vec<Span> = syntax.iter().filter(|d| d.code == codes::UNKNOWN_CHAR).map(|d| d.span).collect();
+    let lost_import = import_failed(db, file);
+    checked.retain(|d| {
+        let s = d.diag.span;
+        // Lexical errors are in source order and do not overlap.
+        let last = lexical.partition_point(|l| l.start <= s.start);
+        let in_lexical = last > 0 && s.end <= lexical[last - 1].end;
+        let maybe_imported = lost_import && codes::UNDEFINED_NAMES.contains(&d.diag.code);
+        !(in_lexical || maybe_imported)
+    });
+    let mut diags: Vec<FileDiagnostic> = program(db, file).diagnostics.clone();
+    diags.extend(syntax.iter().map(|d| FileDiagnostic { file, diag: d.clone() }));
+    diags.extend(checked);
     diags.sort_by(|a, b| {
         (a.diag.span.start, a.diag.span.end, a.diag.code).cmp(&(b.diag.span.start, b.diag.span.end, b.diag.code))
     });
@@ -82,6 +99,12 @@ pub fn check_definitions(db: &dyn Db, root: SourceFile) -> LocalDiagnostics {
     missions::check_unnamed(&mut cx);
     unused::check_definitions(&mut cx);
     cx.finish()
+}
+
+/// Whether a file of the program rooted at `file` has an import that
+/// could not be read: the names it would define are then unknown.
+fn import_failed(db: &dyn Db, file: SourceFile) -> bool {
+    program(db, file).files.iter().any(|&f| imports(db, f).iter().any(|i| i.target.text(db).is_none()))
 }
 
 /// True when any diagnostic is an error.

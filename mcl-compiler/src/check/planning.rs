@@ -14,7 +14,7 @@ use crate::codes;
 use crate::scope::{self, DefKind};
 use mcl_syntax::ast::*;
 use mcl_syntax::{Diagnostic, Span};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 pub(crate) fn check(cx: &mut Cx<'_>) {
     for item in &cx.ast().items {
@@ -62,7 +62,68 @@ fn duplicate(cx: &mut Cx<'_>, what: &str, name: &Name, first: &Name) {
     );
 }
 
+/// A relation that an operator's precondition or the goal needs, but that
+/// no initial fact has and no operator adds, never holds; when it is spelt
+/// like one that does (two edits at most), it is a misspelling. Once per
+/// relation, where it is first needed; only in a block with an `initial`
+/// section (other blocks may hold it otherwise). Others may be perceived by
+/// the world modeler (`alarm` in examples/planning/cable): not reported.
+fn check_never_holds(cx: &mut Cx<'_>, b: &PlanningBlock) {
+    let facts = |pick: fn(&PlanDef) -> Vec<&PlanFact>| b.defs.iter().flat_map(pick).collect::<Vec<_>>();
+    let initial = facts(|d| match d {
+        PlanDef::Facts(x) if !x.goal => x.facts.iter().collect(),
+        _ => Vec::new(),
+    });
+    if !b.defs.iter().any(|d| matches!(d, PlanDef::Facts(x) if !x.goal)) {
+        return;
+    }
+    let added = facts(|d| match d {
+        PlanDef::Operator(o) => o
+            .parts
+            .iter()
+            .flat_map(|p| match &p.kind {
+                OpPartKind::Add(v) => v.iter().collect(),
+                _ => Vec::new(),
+            })
+            .collect(),
+        _ => Vec::new(),
+    });
+    let needed = facts(|d| match d {
+        PlanDef::Operator(o) => o
+            .parts
+            .iter()
+            .flat_map(|p| match &p.kind {
+                OpPartKind::Precond(v) => v.iter().collect(),
+                _ => Vec::new(),
+            })
+            .collect(),
+        PlanDef::Facts(x) if x.goal => x.facts.iter().collect(),
+        _ => Vec::new(),
+    });
+    let holds: HashSet<&str> = initial.iter().chain(&added).map(|f| f.relation.text.as_str()).collect();
+    let mut reported = HashSet::new();
+    for f in needed {
+        let r = f.relation.text.as_str();
+        if f.negated.is_some() || holds.contains(r) || !reported.insert(r) {
+            continue;
+        }
+        let near = holds.iter().filter(|h| strsim::levenshtein(r, h) <= 2);
+        let Some(best) = super::closest(r, near.copied()) else { continue };
+        cx.out.push(
+            Diagnostic::warning(
+                codes::PLAN_NEVER_HOLDS,
+                format!("relation `{r}` never holds: no initial fact has it and no operator adds it"),
+                f.relation.span,
+            )
+            .with_label(f.relation.span, "needed here")
+            .with_help(format!("did you mean `{best}`?"))
+            .with_note("unless the world modeler perceives it, what needs it never applies"),
+        );
+    }
+}
+
 fn check_planning(cx: &mut Cx<'_>, b: &PlanningBlock) {
+    check_never_holds(cx, b);
     let mut m =
         Model { types: HashMap::new(), entities: HashMap::new(), functions: HashMap::new(), relations: HashMap::new() };
     // Definitions first: a name may be used before it is defined.
