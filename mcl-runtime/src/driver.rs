@@ -29,6 +29,9 @@ pub trait Sink {
     fn wants_records(&self) -> bool {
         true
     }
+    /// The records that follow, until `replaying(false)`, rebuild a run
+    /// from its journal (a live log may leave them out).
+    fn replaying(&mut self, _on: bool) {}
 }
 
 /// A sink that drops everything (benchmarks).
@@ -114,13 +117,26 @@ pub struct Session<'a> {
     /// The link to the AAC is down (or not yet up): actions are queued, and
     /// their records say so (`queued`).
     pub link_down: bool,
+    /// [`Session::step`] leaves the journal's sync to the caller
+    /// ([`Session::sync`]), who adds entries of its own to the same sync
+    /// (a coordinated vehicle's messages).
+    pub defer_sync: bool,
     syncs: u64,
 }
 
 impl<'a> Session<'a> {
     /// A session without journal.
     pub fn new(player: Player, tracer: Tracer, sink: &'a mut (dyn Sink + Send)) -> Self {
-        Session { player, tracer, sink, journal: None, crash_after: None, link_down: false, syncs: 0 }
+        Session {
+            player,
+            tracer,
+            sink,
+            journal: None,
+            crash_after: None,
+            link_down: false,
+            defer_sync: false,
+            syncs: 0,
+        }
     }
 
     /// Records one output (used for replayed outputs too).
@@ -154,16 +170,37 @@ impl<'a> Session<'a> {
                     j.append(&Entry::Fire { t: *t, transition: ids[transition.index()].id.to_string() });
                 }
             }
-            j.sync()?;
-            self.syncs += 1;
-            if self.crash_after.is_some_and(|n| self.syncs >= n) {
-                std::process::abort();
-            }
+        }
+        if !self.defer_sync {
+            self.sync()?;
         }
         for o in &out {
             self.emit(o);
         }
         Ok(out)
+    }
+
+    /// Buffers a journal entry (written with the next sync).
+    pub fn journal_entry(&mut self, e: &Entry) {
+        if let Some(j) = &mut self.journal {
+            j.append(e);
+        }
+    }
+
+    /// Writes the buffered journal entries and waits until they are on
+    /// disk; then the test hook `crash_after` may abort the process. Does
+    /// nothing (and counts nothing) when nothing is buffered.
+    pub fn sync(&mut self) -> Result<(), String> {
+        let Some(j) = &mut self.journal else { return Ok(()) };
+        if j.is_empty() {
+            return Ok(());
+        }
+        j.sync()?;
+        self.syncs += 1;
+        if self.crash_after.is_some_and(|n| self.syncs >= n) {
+            std::process::abort();
+        }
+        Ok(())
     }
 
     /// Journals an acknowledgement (written with the next sync).
