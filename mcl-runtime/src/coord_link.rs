@@ -10,8 +10,8 @@
 //! ([`Incoming::Rejected`]) and never delivered: a forged line, a line
 //! captured on another connection, a handshake replayed.
 //!
-//! Sequence numbers count the messages of one sender to one receiver from
-//! 1. The receiver delivers them in order, exactly once: `seq` equal to the
+//! Sequence numbers count the messages of one sender to one receiver,
+//! from one. The receiver delivers them in order, exactly once: `seq` equal to the
 //! next expected one is delivered, a smaller one (a re-send) is dropped and
 //! acknowledged again once durable, a larger one (a gap) is dropped and
 //! comes back with the re-sends. The receiver acknowledges (cumulatively)
@@ -112,7 +112,7 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 fn unhex(s: &str) -> Option<Vec<u8>> {
-    if s.len() % 2 != 0 || !s.is_ascii() {
+    if (s.len() & 1) == 1 || !s.is_ascii() {
         return None;
     }
     (0..s.len()).step_by(2).map(|i| u8::from_str_radix(&s[i..i + 2], 16).ok()).collect()

@@ -1053,6 +1053,8 @@ pub async fn run_real_time_with_peers(
                         _ = tokio::time::sleep(Duration::from_millis(20)) => {}
                     }
                 }
+                // Let the last acknowledgements of this process leave.
+                tokio::time::sleep(Duration::from_millis(20)).await;
                 // The transport lives until every vehicle has ended: others may
                 // still send to this one.
                 let end = finish(&vs, 0);
