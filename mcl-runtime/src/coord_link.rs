@@ -37,6 +37,9 @@ use crate::protocol::{Line, LineReader, MAX_LINE};
 
 /// Version of the link protocol (`hello`'s `version`).
 pub const LINK_VERSION: u32 = 1;
+/// Refusals reported by one end; the next ones are refused silently (a
+/// peer that keeps knocking does not fill the trace).
+pub const MAX_REPORTED_REFUSALS: usize = 100;
 /// How long each side waits for the other's handshake line.
 pub const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(5);
 /// Unacknowledged messages are written again after this long.
@@ -222,6 +225,9 @@ struct Receiver {
     peers: HashMap<String, FromPeer>,
     tx: mpsc::UnboundedSender<Incoming>,
     conns: u64,
+    /// The missions allowed to send here (any when empty).
+    allowed: Vec<String>,
+    refusals: usize,
 }
 
 impl Receiver {
@@ -229,7 +235,13 @@ impl Receiver {
         self.peers.entry(from.to_string()).or_insert_with(|| FromPeer { next: 1, ..Default::default() })
     }
 
-    fn reject(&self, why: String) {
+    fn reject(&mut self, why: String) {
+        self.refusals += 1;
+        let why = match self.refusals {
+            n if n < MAX_REPORTED_REFUSALS => why,
+            MAX_REPORTED_REFUSALS => format!("{why} (further refusals are not reported)"),
+            _ => return,
+        };
         let _ = self.tx.send(Incoming::Rejected(why));
     }
 
@@ -307,6 +319,8 @@ impl TcpEnd {
             peers,
             tx: tx.clone(),
             conns: 0,
+            allowed: Vec::new(),
+            refusals: 0,
         }));
         let rejected = Arc::new(Mutex::new(Vec::new()));
         let r = recv.clone();
@@ -353,6 +367,12 @@ impl TcpEnd {
         };
         let task = tokio::spawn(link.run(rx));
         self.peers.insert(mission.to_string(), Peer { queue, unacked, task });
+    }
+
+    /// Only `missions` may send to this end (a hello from another name is
+    /// refused).
+    pub fn accept_from(&mut self, missions: &[String]) {
+        locked(&self.recv).allowed = missions.to_vec();
     }
 
     /// Lines refused so far, with why (also delivered by `recv` as
@@ -437,8 +457,19 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
                 let _ = wr.write_all(&Wire::Error { message: why.clone() }.line()).await;
                 return refuse(why);
             }
-            if to != me {
-                let why = format!("a hello for `{to}` reached `{me}`");
+            let allowed = {
+                let r = locked(&recv);
+                r.allowed.is_empty() || r.allowed.contains(&from)
+            };
+            if to != me || !allowed {
+                let why = if to != me {
+                    format!("a hello for `{to}` reached `{me}`")
+                } else {
+                    format!(
+                        "a hello from `{}`, which is no mission of this fleet",
+                        crate::protocol::truncate(&from, 60)
+                    )
+                };
                 let _ = wr.write_all(&Wire::Error { message: why.clone() }.line()).await;
                 return refuse(why);
             }
@@ -834,7 +865,14 @@ mod tests {
     async fn forged_replayed_and_unauthenticated_lines_are_refused() {
         let auth = Auth::secret(b"fleet");
         let mut b = TcpEnd::bind_with("b", "127.0.0.1:0", auth.clone(), &HashMap::new()).await.unwrap();
+        b.accept_from(&["a".to_string()]);
         let addr = b.local_addr();
+        // A hello from a name that is no mission of the fleet.
+        let stranger =
+            r#"{"type":"hello","version":1,"from":"zz","to":"b","nonce":"0123456789abcdef0123456789abcdef"}"#;
+        let back = raw(addr, &[stranger.to_string()]).await;
+        assert!(back.iter().any(|l| l.contains("no mission of this fleet")), "{back:?}");
+        refusal(&mut b, "no mission of this fleet").await;
         // A plain message without a handshake.
         let forged = r#"{"from":"a","to":"b","transition":"call1.release","seq":1,"t":0}"#.to_string();
         let back = raw(addr, std::slice::from_ref(&forged)).await;

@@ -721,6 +721,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             o.file.display()
         ));
     }
+    let all_names: Vec<String> = names.iter().filter(|n| o.vehicle.as_ref() != Some(*n)).cloned().collect();
     // One vehicle in this process, the others elsewhere.
     let mut peers: Vec<(String, std::net::SocketAddr)> = Vec::new();
     let mut vehicles = vehicles;
@@ -875,6 +876,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             let mut end = mcl_runtime::coord::TcpEnd::bind_with(me, &listen, auth.clone(), &received)
                 .await
                 .map_err(|e| format!("cannot listen on `{listen}` for the coordination of `{me}`: {e}"))?;
+            end.accept_from(&all_names);
             eprintln!("coordination: `{me}` listens on {}", end.local_addr());
             for (n, a) in &peers {
                 end.add_peer(n, *a);
