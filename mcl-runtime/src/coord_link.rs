@@ -139,6 +139,9 @@ pub enum Wire {
         from: String,
         /// The receiving mission.
         to: String,
+        /// The sender's run: the same across its crashes when it resumes
+        /// from its journal, new when it starts again.
+        run: String,
         /// The connector's nonce (32 hex digits).
         nonce: String,
     },
@@ -146,12 +149,12 @@ pub enum Wire {
     Challenge {
         /// The listener's nonce.
         nonce: String,
-        /// `mac("listener", from, to, connector nonce, listener nonce)`.
+        /// `mac("listener", from, to, run, connector nonce, listener nonce)`.
         proof: String,
     },
     /// Connector → listener: its proof.
     Auth {
-        /// `mac("connector", from, to, connector nonce, listener nonce)`.
+        /// `mac("connector", from, to, run, connector nonce, listener nonce)`.
         proof: String,
     },
     /// Connector → listener: a message.
@@ -215,6 +218,8 @@ struct FromPeer {
     next: u64,
     /// Every message up to this one is durable (acknowledged).
     durable: u64,
+    /// The sender's run whose messages these are.
+    run: Option<String>,
     /// The current connection from this sender: its id, session and acks.
     conn: Option<(u64, Session, mpsc::UnboundedSender<Vec<u8>>)>,
 }
@@ -274,6 +279,7 @@ pub struct TcpEnd {
     mission: String,
     addr: SocketAddr,
     auth: Auth,
+    run: String,
     peers: HashMap<String, Peer>,
     inbox: mpsc::UnboundedReceiver<Incoming>,
     inbox_tx: mpsc::UnboundedSender<Incoming>,
@@ -311,7 +317,7 @@ impl TcpEnd {
         let (tx, inbox) = mpsc::unbounded_channel();
         let mut peers = HashMap::new();
         for (from, &seq) in received {
-            peers.insert(from.clone(), FromPeer { next: seq + 1, durable: seq, conn: None });
+            peers.insert(from.clone(), FromPeer { next: seq + 1, durable: seq, run: None, conn: None });
         }
         let recv = Arc::new(Mutex::new(Receiver {
             mission: mission.to_string(),
@@ -334,6 +340,7 @@ impl TcpEnd {
             mission: mission.to_string(),
             addr,
             auth,
+            run: crate::tcp::new_id(),
             peers: HashMap::new(),
             inbox,
             inbox_tx: tx,
@@ -353,6 +360,14 @@ impl TcpEnd {
         self.addr
     }
 
+    /// The run this end's messages belong to (sent in every hello; by
+    /// default a new one): a vehicle that resumes from its journal gives
+    /// the journal's, so that its peers know it is the same run. Call it
+    /// before [`TcpEnd::add_peer`].
+    pub fn set_run(&mut self, run: &str) {
+        self.run = run.to_string();
+    }
+
     /// Messages for `mission` go to `addr`.
     pub fn add_peer(&mut self, mission: &str, addr: SocketAddr) {
         let (queue, rx) = mpsc::unbounded_channel();
@@ -360,6 +375,7 @@ impl TcpEnd {
         let link = SendLink {
             from: self.mission.clone(),
             to: mission.to_string(),
+            run: self.run.clone(),
             addr,
             auth: self.auth.clone(),
             report: self.inbox_tx.clone(),
@@ -450,8 +466,8 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
         locked(&recv).reject(format!("connection from {peer}: {why}"));
     };
     // Handshake.
-    let (from, cn) = match read_wire(&mut lines).await {
-        Ok(Wire::Hello { version, from, to, nonce }) => {
+    let (from, run, cn) = match read_wire(&mut lines).await {
+        Ok(Wire::Hello { version, from, to, run, nonce }) => {
             if version != LINK_VERSION {
                 let why = format!("link version {version}, this vehicle speaks version {LINK_VERSION}");
                 let _ = wr.write_all(&Wire::Error { message: why.clone() }.line()).await;
@@ -476,7 +492,7 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
             if nonce.len() != 32 || unhex(&nonce).is_none() {
                 return refuse("a hello whose nonce is not 32 hex digits".into());
             }
-            (from, nonce)
+            (from, run, nonce)
         }
         Ok(other) => {
             return refuse(format!("expected a hello, got {}", crate::protocol::truncate(&format!("{other:?}"), 120)))
@@ -484,12 +500,12 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
         Err(e) => return refuse(format!("no hello: {e}")),
     };
     let Ok(ln) = nonce() else { return refuse("no random numbers for a nonce".into()) };
-    let proof = auth.mac("listener", &[&from, &me, &cn, &ln]);
+    let proof = auth.mac("listener", &[&from, &me, &run, &cn, &ln]);
     if wr.write_all(&Wire::Challenge { nonce: ln.clone(), proof }.line()).await.is_err() {
         return;
     }
     match read_wire(&mut lines).await {
-        Ok(Wire::Auth { proof }) if auth.verify("connector", &[&from, &me, &cn, &ln], &proof) => {}
+        Ok(Wire::Auth { proof }) if auth.verify("connector", &[&from, &me, &run, &cn, &ln], &proof) => {}
         Ok(Wire::Auth { .. }) => {
             let why = format!("`{from}` did not prove the fleet secret (wrong --coord-token, or a replayed handshake)");
             let _ = wr.write_all(&Wire::Error { message: "authentication failed".into() }.line()).await;
@@ -499,6 +515,26 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
             return refuse(format!("expected auth, got {}", crate::protocol::truncate(&format!("{other:?}"), 120)))
         }
         Err(e) => return refuse(format!("no auth: {e}")),
+    }
+    // A sender that started again without its journal would number its
+    // messages from 1 again: they would be taken for re-sends and dropped.
+    let other_run = {
+        let mut r = locked(&recv);
+        let p = r.peer(&from);
+        match &p.run {
+            Some(known) if *known != run => Some(known.clone()),
+            _ => {
+                p.run = Some(run.clone());
+                None
+            }
+        }
+    };
+    if let Some(known) = other_run {
+        let why = format!(
+            "`{from}` started a new run ({run}) while this vehicle holds the messages of its run {known}: restart it with --resume JOURNAL (or restart every vehicle)"
+        );
+        let _ = wr.write_all(&Wire::Error { message: why.clone() }.line()).await;
+        return refuse(why);
     }
     let session = Session { from: from.clone(), to: me.clone(), cn, ln };
     // Acks go out through this connection's writer.
@@ -571,6 +607,7 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
 struct SendLink {
     from: String,
     to: String,
+    run: String,
     addr: SocketAddr,
     auth: Auth,
     report: mpsc::UnboundedSender<Incoming>,
@@ -594,12 +631,17 @@ impl SendLink {
         let (rd, mut wr) = stream.into_split();
         let mut lines = LineReader::new(BufReader::new(rd), MAX_LINE);
         let cn = nonce()?;
-        let hello =
-            Wire::Hello { version: LINK_VERSION, from: self.from.clone(), to: self.to.clone(), nonce: cn.clone() };
+        let hello = Wire::Hello {
+            version: LINK_VERSION,
+            from: self.from.clone(),
+            to: self.to.clone(),
+            run: self.run.clone(),
+            nonce: cn.clone(),
+        };
         wr.write_all(&hello.line()).await.map_err(|e| e.to_string())?;
         let ln = match read_wire(&mut lines).await? {
             Wire::Challenge { nonce, proof } => {
-                if !self.auth.verify("listener", &[&self.from, &self.to, &cn, &nonce], &proof) {
+                if !self.auth.verify("listener", &[&self.from, &self.to, &self.run, &cn, &nonce], &proof) {
                     return Err(format!(
                         "the listener at {} did not prove the fleet secret (wrong --coord-token?)",
                         self.addr
@@ -610,7 +652,7 @@ impl SendLink {
             Wire::Error { message } => return Err(format!("refused: {message}")),
             other => return Err(format!("unexpected {other:?}")),
         };
-        let proof = self.auth.mac("connector", &[&self.from, &self.to, &cn, &ln]);
+        let proof = self.auth.mac("connector", &[&self.from, &self.to, &self.run, &cn, &ln]);
         wr.write_all(&Wire::Auth { proof }.line()).await.map_err(|e| e.to_string())?;
         Ok(Conn { session: Session { from: self.from.clone(), to: self.to.clone(), cn, ln }, lines, wr })
     }
@@ -859,6 +901,27 @@ mod tests {
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
         assert_eq!(a.unacknowledged(), 0);
+
+        // a starts again without its journal (a new run, numbering from 1):
+        // refused, with why. Resuming (the same run) is accepted.
+        let mut again = TcpEnd::bind_with("a", "127.0.0.1:0", Auth::secret(b"fleet"), &HashMap::new()).await.unwrap();
+        again.add_peer("b", addr);
+        again.send(msg("a", "b", "t1", 1)).unwrap();
+        let why = refusal(&mut b, "started a new run").await;
+        assert!(why.contains("--resume"), "{why}");
+        refusal(&mut again, "started a new run").await;
+        drop(again);
+        let mut resumed = TcpEnd::bind_with("a", "127.0.0.1:0", Auth::secret(b"fleet"), &HashMap::new()).await.unwrap();
+        resumed.set_run(&a.run);
+        resumed.add_peer("b", addr);
+        resumed.send(msg("a", "b", "t1", 1)).unwrap();
+        for _ in 0..100 {
+            if resumed.unacknowledged() == 0 {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        assert_eq!(resumed.unacknowledged(), 0, "a duplicate is acknowledged again");
     }
 
     #[tokio::test]
@@ -869,7 +932,7 @@ mod tests {
         let addr = b.local_addr();
         // A hello from a name that is no mission of the fleet.
         let stranger =
-            r#"{"type":"hello","version":1,"from":"zz","to":"b","nonce":"0123456789abcdef0123456789abcdef"}"#;
+            r#"{"type":"hello","version":1,"from":"zz","to":"b","run":"r","nonce":"0123456789abcdef0123456789abcdef"}"#;
         let back = raw(addr, &[stranger.to_string()]).await;
         assert!(back.iter().any(|l| l.contains("no mission of this fleet")), "{back:?}");
         refusal(&mut b, "no mission of this fleet").await;
@@ -889,15 +952,15 @@ mod tests {
 
         // A genuine connection, by hand (the documented protocol).
         let cn = "0123456789abcdef0123456789abcdef";
-        let hello = format!(r#"{{"type":"hello","version":1,"from":"a","to":"b","nonce":"{cn}"}}"#);
+        let hello = format!(r#"{{"type":"hello","version":1,"from":"a","to":"b","run":"r1","nonce":"{cn}"}}"#);
         let s = TcpStream::connect(addr).await.unwrap();
         let (rd, mut wr) = s.into_split();
         let mut rd = BufReader::new(rd).lines();
         wr.write_all(format!("{hello}\n").as_bytes()).await.unwrap();
         let ch: Wire = serde_json::from_str(&rd.next_line().await.unwrap().unwrap()).unwrap();
         let Wire::Challenge { nonce: ln, proof } = ch else { panic!("{ch:?}") };
-        assert!(auth.verify("listener", &["a", "b", cn, &ln], &proof));
-        let auth_line = Wire::Auth { proof: auth.mac("connector", &["a", "b", cn, &ln]) };
+        assert!(auth.verify("listener", &["a", "b", "r1", cn, &ln], &proof));
+        let auth_line = Wire::Auth { proof: auth.mac("connector", &["a", "b", "r1", cn, &ln]) };
         let body = serde_json::to_string(&msg("a", "b", "call1.release", 1)).unwrap();
         let m = Wire::Msg { seq: 1, mac: auth.mac("msg", &[cn, &ln, "a", "b", "1", &body]), body };
         let (auth_line, m) = (auth_line.line(), m.line());
@@ -929,7 +992,7 @@ mod tests {
         else {
             panic!("no challenge")
         };
-        wr.write_all(&Wire::Auth { proof: auth.mac("connector", &["a", "b", cn2, &ln2]) }.line()).await.unwrap();
+        wr.write_all(&Wire::Auth { proof: auth.mac("connector", &["a", "b", "r1", cn2, &ln2]) }.line()).await.unwrap();
         wr.write_all(&m).await.unwrap();
         refusal(&mut b, "wrong MAC").await;
         assert!(b.rejected().len() >= 4, "{:?}", b.rejected());

@@ -630,20 +630,26 @@ fn coord_auth(o: &Options) -> Result<mcl_runtime::coord::Auth, u8> {
     })
 }
 
+/// What the header of a vehicle's journal records.
+struct Recorded {
+    scenario: Option<String>,
+    seed: u64,
+    mock_seed: u64,
+    symbols: BTreeMap<String, Value>,
+    /// The run of the vehicle's coordination messages.
+    run: String,
+}
+
 /// The journal of `--vehicle NAME` (`--journal` creates it, `--resume`
 /// continues it), and, when resuming, the seed, mock seed and symbols it
 /// recorded (checked against the options given).
-#[allow(clippy::too_many_arguments)]
 #[allow(clippy::type_complexity)]
 fn vehicle_journal(
     o: &Options,
     resume: &Option<Vec<Entry>>,
     mission: &str,
     net: &Net,
-    scenario: Option<&String>,
-    seed: u64,
-    mock_seed: u64,
-    symbols: &BTreeMap<String, Value>,
+    rec: Recorded,
 ) -> Result<(Option<JournalWriter>, Option<(u64, u64, BTreeMap<String, Value>)>), u8> {
     let fingerprint = journal::fingerprint(net);
     if let (Some(entries), Some(path)) = (resume, &o.resume) {
@@ -666,12 +672,12 @@ fn vehicle_journal(
     let header = Entry::Header {
         version: journal::VERSION,
         mission: mission.to_string(),
-        seed,
+        seed: rec.seed,
         fingerprint,
-        symbols: symbols.clone(),
-        scenario: Some(scenario.cloned().unwrap_or_default()),
-        mock_seed: Some(mock_seed),
-        run: None,
+        symbols: rec.symbols,
+        scenario: Some(rec.scenario.unwrap_or_default()),
+        mock_seed: Some(rec.mock_seed),
+        run: Some(rec.run),
         unix_start: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_secs_f64())
@@ -707,6 +713,11 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             Err(e) => return usage(&e),
         },
         None => None,
+    };
+    // The run of this vehicle's messages: its journal's when resuming.
+    let run_id = match resume_entries.as_deref().map(|e| &e[0]) {
+        Some(Entry::Header { run: Some(r), .. }) => r.clone(),
+        _ => mcl_runtime::tcp::new_id(),
     };
     let db = Database::new();
     let file = db.file(&o.file);
@@ -838,16 +849,14 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         symbols.extend(sets.iter().cloned());
         let net = Arc::new(v.net);
         if o.vehicle.is_some() {
-            match vehicle_journal(
-                o,
-                &resume_entries,
-                &v.mission,
-                &net,
-                text.as_ref().map(|t| &t.0),
+            let recorded = Recorded {
+                scenario: text.as_ref().map(|t| t.0.clone()),
                 seed,
                 mock_seed,
-                &symbols,
-            ) {
+                symbols: symbols.clone(),
+                run: run_id.clone(),
+            };
+            match vehicle_journal(o, &resume_entries, &v.mission, &net, recorded) {
                 Ok((w, restored)) => {
                     journal_writer = w;
                     if let Some((s, ms, syms)) = restored {
@@ -877,6 +886,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
                 .await
                 .map_err(|e| format!("cannot listen on `{listen}` for the coordination of `{me}`: {e}"))?;
             end.accept_from(&all_names);
+            end.set_run(&run_id);
             eprintln!("coordination: `{me}` listens on {}", end.local_addr());
             for (n, a) in &peers {
                 end.add_peer(n, *a);
