@@ -229,7 +229,8 @@ pub fn program(db: &dyn Db, root: SourceFile) -> Program {
     let mut diagnostics = Vec::new();
     for imp in imports(db, root) {
         if imp.target.text(db).is_none() {
-            diagnostics.push(FileDiagnostic { file: root, diag: unreadable_import(db, imp).with_note(UNCHECKED_NAMES) });
+            diagnostics
+                .push(FileDiagnostic { file: root, diag: unreadable_import(db, imp).with_note(UNCHECKED_NAMES) });
             continue;
         }
         if imp.target == root {

@@ -18,21 +18,19 @@
 //! * [`CoordTransport::recv`] waits for the next message for this mission.
 //!
 //! Two implementations: [`in_process`] (tokio channels) and [`TcpEnd`]
-//! (one JSON object per line over TCP, [`CoordMessage`]'s serde form).
+//! (authenticated JSON lines over TCP, acknowledged end to end:
+//! [`crate::coord_link`]).
 
 use std::collections::HashMap;
 use std::future::Future;
-use std::net::SocketAddr;
 use std::pin::Pin;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
-use tokio::io::{AsyncWriteExt, BufReader};
-use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::mpsc;
 
-use crate::protocol::{Line, LineReader, MAX_LINE};
+pub use crate::coord_link::{tcp_mesh, Auth, TcpEnd};
 
 /// Net property of a vehicle net: `[{"transition": id, "to": mission}, …]`,
 /// the firings it must send.
@@ -51,8 +49,8 @@ pub struct CoordMessage {
     pub to: String,
     /// Id of the transition that fired in `from`'s net.
     pub transition: String,
-    /// Numbered from 1 by the sender, over all its messages (receivers drop
-    /// a message whose `seq` from that sender they have seen).
+    /// Numbered from 1 by the sender, per receiver (the link `from` →
+    /// `to`); receivers take each number once, in order.
     pub seq: u64,
     /// Mission time of the firing at the sender (seconds).
     pub t: f64,
@@ -66,8 +64,28 @@ impl CoordMessage {
     }
 }
 
+/// What [`CoordTransport::recv`] gives.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Incoming {
+    /// A message for this mission, in order, once.
+    Message(CoordMessage),
+    /// A line or a connection refused (forged, replayed, malformed, a
+    /// failed handshake), with why: never delivered, to be logged.
+    Rejected(String),
+}
+
+impl Incoming {
+    /// The message, if it is one.
+    pub fn message(self) -> Option<CoordMessage> {
+        match self {
+            Incoming::Message(m) => Some(m),
+            Incoming::Rejected(_) => None,
+        }
+    }
+}
+
 /// A future returned by [`CoordTransport::recv`].
-pub type RecvFuture<'a> = Pin<Box<dyn Future<Output = Option<CoordMessage>> + Send + 'a>>;
+pub type RecvFuture<'a> = Pin<Box<dyn Future<Output = Option<Incoming>> + Send + 'a>>;
 
 /// One vehicle's end of a coordination transport. See the [module
 /// documentation](self).
@@ -77,23 +95,16 @@ pub trait CoordTransport: Send {
     /// Queues `msg` for `msg.to`. Never blocks. Errors when `msg.to` is
     /// unknown or the transport is closed.
     fn send(&mut self, msg: CoordMessage) -> Result<(), String>;
-    /// The next message for this mission, waiting for it; `None` once the
-    /// transport is closed. Cancel-safe (usable in `tokio::select!`).
+    /// The next message for this mission (or refusal), waiting for it;
+    /// `None` once the transport is closed. Cancel-safe (usable in
+    /// `tokio::select!`).
     fn recv(&mut self) -> RecvFuture<'_>;
-}
-
-/// Drops messages already seen (same sender, `seq` not above the last).
-#[derive(Debug, Default)]
-struct Dedupe(HashMap<String, u64>);
-
-impl Dedupe {
-    fn fresh(&mut self, m: &CoordMessage) -> bool {
-        let last = self.0.entry(m.from.clone()).or_insert(0);
-        if m.seq <= *last {
-            return false;
-        }
-        *last = m.seq;
-        true
+    /// The receiver has made `msg` durable (journaled): the transport may
+    /// acknowledge it to its sender, which stops re-sending it.
+    fn delivered(&mut self, _msg: &CoordMessage) {}
+    /// Messages sent but not yet acknowledged by their receivers.
+    fn unacknowledged(&self) -> usize {
+        0
     }
 }
 
@@ -133,7 +144,7 @@ impl CoordTransport for InProcessEnd {
     }
 
     fn recv(&mut self) -> RecvFuture<'_> {
-        Box::pin(self.inbox.recv())
+        Box::pin(async move { self.inbox.recv().await.map(Incoming::Message) })
     }
 }
 
@@ -188,159 +199,8 @@ impl CoordTransport for DelayedEnd {
     }
 
     fn recv(&mut self) -> RecvFuture<'_> {
-        Box::pin(self.inbox.recv())
+        Box::pin(async move { self.inbox.recv().await.map(Incoming::Message) })
     }
-}
-
-// ---------------------------------------------------------------------------
-// TCP
-// ---------------------------------------------------------------------------
-
-/// A TCP end: listens for messages for its mission, and sends to its peers'
-/// addresses, one JSON [`CoordMessage`] per line (at most
-/// [`MAX_LINE`] bytes). A connection to a peer is opened at the first
-/// message and re-opened (every 100 ms) when it fails; the message being
-/// written is then written again (the receiver drops duplicates by `seq`).
-/// Lines that do not parse, or are for another mission, are dropped and
-/// counted in [`TcpEnd::rejected`]. Every task runs in the current tokio
-/// runtime and ends when the end is dropped.
-pub struct TcpEnd {
-    mission: String,
-    addr: SocketAddr,
-    peers: HashMap<String, mpsc::UnboundedSender<CoordMessage>>,
-    inbox: mpsc::UnboundedReceiver<CoordMessage>,
-    rejected: Arc<Mutex<Vec<String>>>,
-    accept: tokio::task::JoinHandle<()>,
-}
-
-impl TcpEnd {
-    /// Listens on `listen` (`127.0.0.1:0` picks a free loopback port).
-    pub async fn bind(mission: &str, listen: &str) -> std::io::Result<TcpEnd> {
-        let listener = TcpListener::bind(listen).await?;
-        let addr = listener.local_addr()?;
-        let (tx, inbox) = mpsc::unbounded_channel();
-        let rejected = Arc::new(Mutex::new(Vec::new()));
-        let seen = Arc::new(Mutex::new(Dedupe::default()));
-        let (me, rej) = (mission.to_string(), rejected.clone());
-        let accept = tokio::spawn(async move {
-            while let Ok((stream, _)) = listener.accept().await {
-                let (tx, me, rej, seen) = (tx.clone(), me.clone(), rej.clone(), seen.clone());
-                tokio::spawn(async move {
-                    let mut lines = LineReader::new(BufReader::new(stream), MAX_LINE);
-                    loop {
-                        let reason = match lines.next_line().await {
-                            Ok(Line::Text(bytes)) => match serde_json::from_slice::<CoordMessage>(&bytes) {
-                                Ok(m) if m.to == me => {
-                                    let fresh = seen.lock().map(|mut s| s.fresh(&m)).unwrap_or(true);
-                                    if fresh && tx.send(m).is_err() {
-                                        return;
-                                    }
-                                    continue;
-                                }
-                                Ok(m) => format!("a message for `{}` reached `{me}`", m.to),
-                                Err(e) => format!("not a coordination message: {e}"),
-                            },
-                            Ok(Line::TooLong(n)) => format!("a line of {n} bytes (more than {MAX_LINE})"),
-                            Ok(Line::Eof) | Err(_) => return,
-                        };
-                        if let Ok(mut r) = rej.lock() {
-                            r.push(reason);
-                        }
-                    }
-                });
-            }
-        });
-        Ok(TcpEnd { mission: mission.to_string(), addr, peers: HashMap::new(), inbox, rejected, accept })
-    }
-
-    /// The mission this end receives for.
-    pub fn mission_name(&self) -> &str {
-        &self.mission
-    }
-
-    /// The address this end listens on (give it to the peers).
-    pub fn local_addr(&self) -> SocketAddr {
-        self.addr
-    }
-
-    /// Messages for `mission` go to `addr`.
-    pub fn add_peer(&mut self, mission: &str, addr: SocketAddr) {
-        let (tx, mut rx) = mpsc::unbounded_channel::<CoordMessage>();
-        tokio::spawn(async move {
-            let mut conn: Option<TcpStream> = None;
-            while let Some(m) = rx.recv().await {
-                let mut line = match serde_json::to_vec(&m) {
-                    Ok(l) => l,
-                    Err(_) => continue,
-                };
-                line.push(b'\n');
-                loop {
-                    if conn.is_none() {
-                        match TcpStream::connect(addr).await {
-                            Ok(s) => {
-                                let _ = s.set_nodelay(true);
-                                conn = Some(s);
-                            }
-                            Err(_) => {
-                                tokio::time::sleep(Duration::from_millis(100)).await;
-                                continue;
-                            }
-                        }
-                    }
-                    let Some(s) = conn.as_mut() else { continue };
-                    match s.write_all(&line).await {
-                        Ok(()) => break,
-                        Err(_) => conn = None,
-                    }
-                }
-            }
-        });
-        self.peers.insert(mission.to_string(), tx);
-    }
-
-    /// Lines dropped so far, with why.
-    pub fn rejected(&self) -> Vec<String> {
-        self.rejected.lock().map(|r| r.clone()).unwrap_or_default()
-    }
-}
-
-impl Drop for TcpEnd {
-    fn drop(&mut self) {
-        self.accept.abort();
-    }
-}
-
-impl CoordTransport for TcpEnd {
-    fn mission(&self) -> &str {
-        &self.mission
-    }
-
-    fn send(&mut self, msg: CoordMessage) -> Result<(), String> {
-        let to = self.peers.get(&msg.to).ok_or_else(|| format!("no address for mission `{}`", msg.to))?;
-        to.send(msg).map_err(|m| format!("the connection to `{}` is closed", m.0.to))
-    }
-
-    fn recv(&mut self) -> RecvFuture<'_> {
-        Box::pin(self.inbox.recv())
-    }
-}
-
-/// One TCP end per mission, all listening on `host` (port chosen by the
-/// system) and knowing each other: the loopback set-up of `mcl run`.
-pub async fn tcp_mesh(missions: &[String], host: &str) -> std::io::Result<Vec<TcpEnd>> {
-    let mut ends = Vec::new();
-    for m in missions {
-        ends.push(TcpEnd::bind(m, &format!("{host}:0")).await?);
-    }
-    let addrs: Vec<(String, SocketAddr)> = ends.iter().map(|e| (e.mission.clone(), e.addr)).collect();
-    for e in &mut ends {
-        for (m, a) in &addrs {
-            if *m != e.mission {
-                e.add_peer(m, *a);
-            }
-        }
-    }
-    Ok(ends)
 }
 
 /// Net property of a vehicle net: the mutexes between vehicles whose tokens
@@ -497,45 +357,9 @@ mod tests {
         b.send(msg("b", "a", "x", 1)).unwrap();
         assert!(a.send(msg("a", "zz", "t", 4)).unwrap_err().contains("zz"));
         for i in 1..=3 {
-            assert_eq!(b.recv().await.unwrap().transition, format!("t{i}"));
+            assert_eq!(b.recv().await.and_then(Incoming::message).unwrap().transition, format!("t{i}"));
         }
-        assert_eq!(a.recv().await.unwrap().event(), "b/x");
-    }
-
-    #[tokio::test]
-    async fn tcp_delivers_in_order_drops_duplicates_and_garbage() {
-        let names: Vec<String> = vec!["auv".into(), "asc".into()];
-        let mut ends = tcp_mesh(&names, "127.0.0.1").await.unwrap();
-        let mut asc = ends.pop().unwrap();
-        let mut auv = ends.pop().unwrap();
-        assert!(auv.local_addr().ip().is_loopback());
-        for i in 1..=20 {
-            auv.send(msg("auv", "asc", &format!("call{i}.ok"), i)).unwrap();
-        }
-        auv.send(msg("auv", "asc", "again", 20)).unwrap(); // a duplicate seq
-        auv.send(msg("auv", "asc", "last", 21)).unwrap();
-        asc.send(msg("asc", "auv", "call3.ok", 1)).unwrap();
-        for i in 1..=20 {
-            let m = asc.recv().await.unwrap();
-            assert_eq!((m.transition.as_str(), m.seq), (format!("call{i}.ok").as_str(), i));
-        }
-        assert_eq!(asc.recv().await.unwrap().transition, "last");
-        let m = auv.recv().await.unwrap();
-        assert_eq!(m, msg("asc", "auv", "call3.ok", 1));
-        assert!(auv.send(msg("auv", "nobody", "t", 22)).is_err());
-
-        // Malformed lines and misrouted messages are dropped and reported.
-        let mut raw = TcpStream::connect(asc.local_addr()).await.unwrap();
-        raw.write_all(b"{not json\n").await.unwrap();
-        raw.write_all(br#"{"from":"auv","to":"other","transition":"t","seq":99,"t":0}"#).await.unwrap();
-        raw.write_all(b"\n").await.unwrap();
-        raw.write_all(br#"{"from":"x","to":"asc","transition":"ok","seq":1,"t":0}"#).await.unwrap();
-        raw.write_all(b"\n").await.unwrap();
-        assert_eq!(asc.recv().await.unwrap().event(), "x/ok");
-        let rejected = asc.rejected();
-        assert_eq!(rejected.len(), 2, "{rejected:?}");
-        assert!(rejected[0].contains("not a coordination message"));
-        assert!(rejected[1].contains("for `other`"));
+        assert_eq!(a.recv().await.and_then(Incoming::message).unwrap().event(), "b/x");
     }
 
     #[tokio::test]
@@ -548,7 +372,7 @@ mod tests {
         }
         assert!(a.send(msg("a", "zz", "t", 4)).unwrap_err().contains("zz"));
         for i in 1..=3 {
-            assert_eq!(b.recv().await.unwrap().transition, format!("t{i}"));
+            assert_eq!(b.recv().await.and_then(Incoming::message).unwrap().transition, format!("t{i}"));
         }
         assert_eq!(b.mission(), "b");
     }

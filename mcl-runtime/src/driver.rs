@@ -29,6 +29,9 @@ pub trait Sink {
     fn wants_records(&self) -> bool {
         true
     }
+    /// The records that follow, until `replaying(false)`, rebuild a run
+    /// from its journal (a live log may leave them out).
+    fn replaying(&mut self, _on: bool) {}
 }
 
 /// A sink that drops everything (benchmarks).
@@ -117,6 +120,10 @@ pub struct Session<'a> {
     /// The AAC session the run is in (from the journal when resuming) and
     /// the events handled in it, told to the link once journaled.
     pub delivered: Delivered,
+    /// [`Session::step`] leaves the journal's sync to the caller
+    /// ([`Session::sync`]), who adds entries of its own to the same sync
+    /// (a coordinated vehicle's messages).
+    pub defer_sync: bool,
     syncs: u64,
 }
 
@@ -131,6 +138,7 @@ impl<'a> Session<'a> {
             crash_after: None,
             link_down: false,
             delivered: Delivered::default(),
+            defer_sync: false,
             syncs: 0,
         }
     }
@@ -173,11 +181,9 @@ impl<'a> Session<'a> {
                     j.append(&Entry::Fire { t: *t, transition: ids[transition.index()].id.to_string() });
                 }
             }
-            j.sync()?;
-            self.syncs += 1;
-            if self.crash_after.is_some_and(|n| self.syncs >= n) {
-                std::process::abort();
-            }
+        }
+        if !self.defer_sync {
+            self.sync()?;
         }
         if let (Some(n), (Some(session), _)) = (n, self.delivered.get()) {
             self.delivered.set(&session, n);
@@ -209,6 +215,29 @@ impl<'a> Session<'a> {
             return Ok(Vec::new());
         }
         self.step(Input::Restart(now.max(self.player.now())))
+    }
+
+    /// Buffers a journal entry (written with the next sync).
+    pub fn journal_entry(&mut self, e: &Entry) {
+        if let Some(j) = &mut self.journal {
+            j.append(e);
+        }
+    }
+
+    /// Writes the buffered journal entries and waits until they are on
+    /// disk; then the test hook `crash_after` may abort the process. Does
+    /// nothing (and counts nothing) when nothing is buffered.
+    pub fn sync(&mut self) -> Result<(), String> {
+        let Some(j) = &mut self.journal else { return Ok(()) };
+        if j.is_empty() {
+            return Ok(());
+        }
+        j.sync()?;
+        self.syncs += 1;
+        if self.crash_after.is_some_and(|n| self.syncs >= n) {
+            std::process::abort();
+        }
+        Ok(())
     }
 
     /// Journals an acknowledgement (written with the next sync).

@@ -141,6 +141,50 @@ pub enum Entry {
         /// Its sequence number.
         seq: u64,
     },
+    /// Coordination messages delivered together ([`Player::on_events`]).
+    Events {
+        /// Mission time.
+        t: f64,
+        /// Their events (`from/transition`), in the order of the inbox.
+        events: Vec<String>,
+    },
+    /// A coordination message was sent (informative: resuming derives the
+    /// messages from the firings, `coord_ended` and `coord_served`).
+    CoordSend {
+        /// Mission time.
+        t: f64,
+        /// Receiving mission.
+        to: String,
+        /// Transition fired.
+        transition: String,
+        /// Its sequence number on the link to `to`.
+        seq: u64,
+    },
+    /// A coordination message was received (synced before it is
+    /// acknowledged).
+    CoordReceive {
+        /// Mission time.
+        t: f64,
+        /// Sending mission.
+        from: String,
+        /// Transition it fired.
+        transition: String,
+        /// Its sequence number on the link from `from`.
+        seq: u64,
+        /// Mission time of the firing at the sender.
+        sent_t: f64,
+    },
+    /// Once the mission had ended, its supervisor places served the
+    /// messages of the inbox (a holder lends its mutex).
+    CoordServed {
+        /// Mission time.
+        t: f64,
+    },
+    /// The vehicle told its peers that its mission ended.
+    CoordEnded {
+        /// Mission time.
+        t: f64,
+    },
 }
 
 /// An input of the player.
@@ -158,6 +202,8 @@ pub enum Input {
     /// The vehicle lost its memory: re-establish what runs
     /// ([`Player::reestablish`]).
     Restart(f64),
+    /// Coordination messages (their events) delivered together.
+    Events(f64, Vec<String>),
 }
 
 impl Input {
@@ -175,6 +221,7 @@ impl Input {
             Input::Perception(t, name, v) => Entry::Perception { t: *t, name: name.clone(), value: v.clone(), n },
             Input::Timer(t) => Entry::Timer { t: *t },
             Input::Restart(t) => Entry::Restart { t: *t },
+            Input::Events(t, events) => Entry::Events { t: *t, events: events.clone() },
         }
     }
 
@@ -186,6 +233,7 @@ impl Input {
             Entry::Perception { t, name, value, .. } => Input::Perception(*t, name.clone(), value.clone()),
             Entry::Timer { t } => Input::Timer(*t),
             Entry::Restart { t } => Input::Restart(*t),
+            Entry::Events { t, events } => Input::Events(*t, events.clone()),
             _ => return None,
         })
     }
@@ -198,6 +246,7 @@ impl Input {
             Input::Perception(t, n, v) => p.on_perception(*t, n, v.clone()),
             Input::Timer(t) => p.on_timer(*t),
             Input::Restart(t) => p.reestablish(*t),
+            Input::Events(t, events) => p.on_events(*t, events.clone()).0,
         }
     }
 
@@ -218,6 +267,7 @@ impl Input {
             | Input::Perception(t, _, _)
             | Input::Timer(t)
             | Input::Restart(t) => *t,
+            Input::Events(t, _) => *t,
         }
     }
 }
@@ -274,6 +324,11 @@ impl JournalWriter {
         if serde_json::to_writer(&mut self.buf, e).is_ok() {
             self.buf.push(b'\n');
         }
+    }
+
+    /// Nothing is buffered.
+    pub fn is_empty(&self) -> bool {
+        self.buf.is_empty()
     }
 
     /// Writes the buffered entries and waits until they are on disk.
@@ -350,68 +405,135 @@ pub fn replay(
     entries: &[Entry],
     mut each: impl FnMut(&Input, &[Output]),
 ) -> Result<Replayed, String> {
-    let mut r = Replayed::default();
-    let mut i = 0;
-    while i < entries.len() {
-        let e = &entries[i];
-        i += 1;
-        match e {
-            Entry::Header { version, .. } if *version >= 2 => r.resume_point = Some((None, 0)),
-            Entry::Ack { seq } => {
-                r.acked.insert(*seq);
-                continue;
-            }
-            Entry::Session { id } => {
-                if let Some(p) = &mut r.resume_point {
-                    *p = (Some(id.clone()), 0);
-                }
-                continue;
-            }
-            Entry::Event { n: Some(n), .. } | Entry::Perception { n: Some(n), .. } => {
-                if let Some(p) = &mut r.resume_point {
-                    p.1 = p.1.max(*n);
-                }
-            }
-            Entry::Restart { .. } => r.dropped_upto = player.last_seq(),
-            _ => {}
+    let mut r = Replay::new(entries);
+    while let Some(step) = r.next(player) {
+        if let Step::Input(input, out) = step? {
+            each(&input, &out);
         }
-        let Some(input) = Input::of_entry(e) else { continue };
-        let mut expected: Vec<&str> = Vec::new();
-        while let Some(Entry::Fire { transition, .. }) = entries.get(i) {
-            expected.push(transition);
-            i += 1;
-        }
-        let out = input.apply(player);
-        let ids = player.net().transitions();
-        let fired: Vec<&str> = out
-            .iter()
-            .filter_map(|o| match o {
-                Output::Fired { transition, .. } => Some(ids[transition.index()].id.as_str()),
-                _ => None,
-            })
-            .collect();
-        let last = !entries[i..].iter().any(|e| Input::of_entry(e).is_some());
-        let agrees = fired == expected || (last && fired.starts_with(&expected));
-        if !agrees {
-            let k = fired.iter().zip(&expected).take_while(|(a, b)| a == b).count();
-            return Err(format!(
-                "the journal does not match this mission: after input {} ({:?}) the journal fired `{}` where the player fires `{}` (another net, seed or symbol table?)",
-                r.inputs + 1,
-                input,
-                expected.get(k).copied().unwrap_or("nothing"),
-                fired.get(k).copied().unwrap_or("nothing"),
-            ));
-        }
-        for o in &out {
-            if let Output::Send { action, .. } = o {
-                r.actions.push(action.clone());
-            }
-        }
-        r.last_time = r.last_time.max(input.time());
-        r.inputs += 1;
-        each(&input, &out);
     }
-    Ok(r)
+    Ok(r.done())
+}
+
+/// One step of a [`Replay`].
+#[derive(Debug)]
+pub enum Step<'a> {
+    /// An input, applied, with the outputs it produced.
+    Input(Input, Vec<Output>),
+    /// An entry that is neither an input, a firing nor an acknowledgement
+    /// (coordination messages), for the caller to apply.
+    Other(&'a Entry),
+}
+
+/// A replay one entry at a time: [`replay`] for callers with state of their
+/// own to rebuild in the journal's order (a coordinated vehicle's inbox and
+/// messages).
+pub struct Replay<'a> {
+    entries: &'a [Entry],
+    i: usize,
+    r: Replayed,
+}
+
+impl<'a> Replay<'a> {
+    /// A replay of `entries` (header included).
+    pub fn new(entries: &'a [Entry]) -> Self {
+        Replay { entries, i: 0, r: Replayed::default() }
+    }
+
+    /// The next step: an input is applied to `player` and its firings
+    /// checked against the journal. None at the end.
+    pub fn next(&mut self, player: &mut Player) -> Option<Result<Step<'a>, String>> {
+        let entries = self.entries;
+        loop {
+            let e = entries.get(self.i)?;
+            self.i += 1;
+            match e {
+                Entry::Ack { seq } => {
+                    self.r.acked.insert(*seq);
+                    continue;
+                }
+                Entry::Header { version, .. } => {
+                    if *version >= 2 {
+                        self.r.resume_point = Some((None, 0));
+                    }
+                    continue;
+                }
+                Entry::Fire { .. } => continue,
+                Entry::Session { id } => {
+                    if let Some(p) = &mut self.r.resume_point {
+                        *p = (Some(id.clone()), 0);
+                    }
+                    continue;
+                }
+                Entry::Event { n: Some(n), .. } | Entry::Perception { n: Some(n), .. } => {
+                    if let Some(p) = &mut self.r.resume_point {
+                        p.1 = p.1.max(*n);
+                    }
+                }
+                Entry::Restart { .. } => self.r.dropped_upto = player.last_seq(),
+                _ => {}
+            }
+            let Some(input) = Input::of_entry(e) else { return Some(Ok(Step::Other(e))) };
+            let mut expected: Vec<&str> = Vec::new();
+            while let Some(Entry::Fire { transition, .. }) = entries.get(self.i) {
+                expected.push(transition);
+                self.i += 1;
+            }
+            let out = input.apply(player);
+            let ids = player.net().transitions();
+            let fired: Vec<&str> = out
+                .iter()
+                .filter_map(|o| match o {
+                    Output::Fired { transition, .. } => Some(ids[transition.index()].id.as_str()),
+                    _ => None,
+                })
+                .collect();
+            let last = !entries[self.i..].iter().any(|e| Input::of_entry(e).is_some());
+            let agrees = fired == expected || (last && fired.starts_with(&expected));
+            if !agrees {
+                let k = fired.iter().zip(&expected).take_while(|(a, b)| a == b).count();
+                return Some(Err(format!(
+                    "the journal does not match this mission: after input {} ({:?}) the journal fired `{}` where the player fires `{}` (another net, seed or symbol table?)",
+                    self.r.inputs + 1,
+                    input,
+                    expected.get(k).copied().unwrap_or("nothing"),
+                    fired.get(k).copied().unwrap_or("nothing"),
+                )));
+            }
+            for o in &out {
+                if let Output::Send { action, .. } = o {
+                    self.r.actions.push(action.clone());
+                }
+            }
+            self.r.last_time = self.r.last_time.max(input.time());
+            self.r.inputs += 1;
+            return Some(Ok(Step::Input(input, out)));
+        }
+    }
+
+    /// What the replay restored.
+    pub fn done(self) -> Replayed {
+        self.r
+    }
+}
+
+/// The time of the last input of a journal (0 without any): where the
+/// mission clock of a resumed run starts.
+pub fn last_time(entries: &[Entry]) -> f64 {
+    entries.iter().filter_map(Input::of_entry).map(|i| i.time()).fold(0.0, f64::max)
+}
+
+/// Per sending mission, the last sequence number of the coordination
+/// messages a journal received (they arrive in order: every smaller one was
+/// received too).
+pub fn received_seqs(entries: &[Entry]) -> BTreeMap<String, u64> {
+    let mut out = BTreeMap::new();
+    for e in entries {
+        if let Entry::CoordReceive { from, seq, .. } = e {
+            let last = out.entry(from.clone()).or_insert(0);
+            *last = (*last).max(*seq);
+        }
+    }
+    out
 }
 
 #[cfg(test)]

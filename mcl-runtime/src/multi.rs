@@ -39,9 +39,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use crate::clock::Clock;
-use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, MutexMessages, TokenMutex};
+use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, Incoming, MutexMessages, TokenMutex};
 use crate::driver::{feed_mock, perception_or_event, End, Limits, SameInstant, Session, Sink};
-use crate::journal::Input;
+use crate::journal::{Entry, Input, JournalWriter, Replay, Step};
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player, PlayerOptions};
 use crate::trace::{Record, Tracer};
@@ -49,6 +49,11 @@ use mcl_net::Net;
 
 /// How long virtual time waits for a message to cross the transport.
 pub const DELIVERY_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// How long a vehicle whose run is over still waits for its peers to
+/// acknowledge the messages it sent them (a peer that restarts meanwhile
+/// gets them).
+pub const FLUSH_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// A sink shared by the sessions of several vehicles.
 pub type SharedSink = Arc<Mutex<dyn Sink + Send>>;
@@ -64,6 +69,11 @@ impl Sink for SharedHandle {
     fn wants_records(&self) -> bool {
         self.0.lock().map(|s| s.wants_records()).unwrap_or(false)
     }
+    fn replaying(&mut self, on: bool) {
+        if let Ok(mut s) = self.0.lock() {
+            s.replaying(on);
+        }
+    }
 }
 
 /// One vehicle of a coordinated run.
@@ -76,6 +86,9 @@ pub struct Vehicle {
     transport: Box<dyn CoordTransport>,
     sends: HashMap<String, Vec<String>>,
     tokens: Vec<TokenMutex>,
+    journal: Option<JournalWriter>,
+    resume: Option<Vec<Entry>>,
+    crash_after: Option<u64>,
 }
 
 impl Vehicle {
@@ -94,7 +107,35 @@ impl Vehicle {
         let tokens = token_table(&net)?;
         mock.initial();
         let player = Player::new(net, opts.clone());
-        Ok(Vehicle { name: name.to_string(), player, opts, tracer, mock, transport, sends, tokens })
+        Ok(Vehicle {
+            name: name.to_string(),
+            player,
+            opts,
+            tracer,
+            mock,
+            transport,
+            sends,
+            tokens,
+            journal: None,
+            resume: None,
+            crash_after: None,
+        })
+    }
+
+    /// Journals the vehicle's inputs, firings and messages in `journal`
+    /// (real time only), after replaying `resume` (the entries of the same
+    /// journal, read before it was opened to append) when given;
+    /// `crash_after` is the test hook of [`Session::crash_after`].
+    pub fn with_journal(
+        mut self,
+        journal: JournalWriter,
+        resume: Option<Vec<Entry>>,
+        crash_after: Option<u64>,
+    ) -> Self {
+        self.journal = Some(journal);
+        self.resume = resume;
+        self.crash_after = crash_after;
+        self
     }
 
     /// The mission name.
@@ -143,7 +184,8 @@ struct Live<'a> {
     transport: Box<dyn CoordTransport>,
     sends: HashMap<String, Vec<String>>,
     inbox: VecDeque<CoordMessage>,
-    seq: u64,
+    /// The last sequence number sent to each mission.
+    seq: HashMap<String, u64>,
     end: Option<End>,
     /// Mutexes held by other vehicles, with the requests not yet granted.
     tokens: Vec<(TokenMutex, u32)>,
@@ -151,26 +193,61 @@ struct Live<'a> {
     /// Once the mission has ended: the marking, whose supervisor places
     /// still serve the other vehicles (a holder still lends its mutex).
     after_end: Option<Vec<u32>>,
+    /// Rebuilding the state from the journal: messages are kept in
+    /// `resend` instead of being sent, nothing is journaled.
+    replaying: bool,
+    resend: Vec<CoordMessage>,
+    /// [`ENDED`] was sent to the peers.
+    ended_sent: bool,
+    /// [`ENDED`] messages received.
+    peers_ended: usize,
 }
 
 impl Live<'_> {
-    /// Feeds the actions of `outs` to the mock and sends the messages its
-    /// firings require, then asks for or gives back the tokens of mutexes
-    /// held by other vehicles ([`Live::arbitrate`]); returns the messages
-    /// (already sent).
+    /// The consequences of `outs` (the outputs of the last input): asks for
+    /// or gives back the tokens of mutexes held by other vehicles
+    /// ([`Live::arbitrate`], new inputs), journals the messages that the
+    /// firings require and syncs the journal, then feeds the actions to the
+    /// mock and sends the messages. Returns the messages.
     fn after(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
-        let mut sent = self.send_for(outs)?;
+        let mut sent = self.messages_for(outs)?;
+        let mut all = outs.to_vec();
         let now = self.s.player.now();
         for event in self.arbitrate(&mut sent)? {
             let outs = self.s.step(Input::Event(now, event, None))?;
-            sent.extend(self.send_for(&outs)?);
+            sent.extend(self.messages_for(&outs)?);
+            all.extend(outs);
         }
+        self.commit(&all, sent)
+    }
+
+    /// Syncs the journal, then lets the actions of `outs` and the messages
+    /// `sent` leave (kept for later while replaying).
+    fn commit(&mut self, outs: &[Output], mut sent: Vec<CoordMessage>) -> Result<Vec<CoordMessage>, String> {
+        self.s.sync()?;
+        let now = self.s.player.now();
+        feed_mock(&mut self.s, &mut self.mock, now, outs);
+        for m in &sent {
+            if self.replaying {
+                self.resend.push(m.clone());
+            } else {
+                self.transport.send(m.clone())?;
+            }
+        }
+        sent.retain(|m| m.transition != ENDED);
         Ok(sent)
     }
 
-    fn send_one(&mut self, to: String, transition: String, t: f64) -> Result<CoordMessage, String> {
-        self.seq += 1;
-        let m = CoordMessage { from: self.name.clone(), to, transition, seq: self.seq, t };
+    /// The next message to `to` (its sequence number on that link),
+    /// recorded (`coord_send`, but for [`ENDED`]) and journaled.
+    fn message(&mut self, to: String, transition: String, t: f64) -> CoordMessage {
+        let seq = self.seq.entry(to.clone()).or_insert(0);
+        *seq += 1;
+        let m = CoordMessage { from: self.name.clone(), to, transition, seq: *seq, t };
+        self.s.journal_entry(&Entry::CoordSend { t, to: m.to.clone(), transition: m.transition.clone(), seq: m.seq });
+        if m.transition == ENDED {
+            return m;
+        }
         if m.transition.starts_with("coord.request.") {
             self.mutex.requests += 1;
         } else if m.transition.starts_with("coord.lend.") {
@@ -185,28 +262,41 @@ impl Live<'_> {
         r.transition = Some(m.transition.clone());
         r.seq = Some(m.seq);
         self.s.emit_record(r);
-        self.transport.send(m.clone())?;
-        Ok(m)
+        m
     }
 
-    fn send_for(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
-        let now = self.s.player.now();
-        feed_mock(&mut self.s, &mut self.mock, now, outs);
+    /// The messages that the firings of `outs` require (and the requests
+    /// for tokens they answer).
+    fn messages_for(&mut self, outs: &[Output]) -> Result<Vec<CoordMessage>, String> {
         let mut sent = Vec::new();
         for o in outs {
             let Output::Fired { t, transition, .. } = o else { continue };
+            let id = self.s.player.net().transitions()[transition.index()].id.to_string();
             for (k, asked) in &mut self.tokens {
                 if k.grant == *transition {
                     *asked = asked.saturating_sub(1);
+                } else if k.request == id {
+                    *asked += 1;
                 }
             }
-            let id = self.s.player.net().transitions()[transition.index()].id.to_string();
             let Some(to) = self.sends.get(&id) else { continue };
             for to in to.clone() {
-                sent.push(self.send_one(to, id.clone(), *t)?);
+                sent.push(self.message(to, id.clone(), *t));
             }
         }
         Ok(sent)
+    }
+
+    /// Tells every peer that the mission has ended ([`ENDED`]), once.
+    fn send_ended(&mut self, peers: &[String], t: f64) -> Result<(), String> {
+        if self.ended_sent || peers.is_empty() {
+            return Ok(());
+        }
+        self.ended_sent = true;
+        self.s.journal_entry(&Entry::CoordEnded { t });
+        let sent = peers.iter().map(|p| self.message(p.clone(), ENDED.into(), t)).collect();
+        self.commit(&[], sent)?;
+        Ok(())
     }
 
     /// The single-holder mutex protocol, on this vehicle's side: for each
@@ -235,9 +325,13 @@ impl Live<'_> {
             self.after_end = Some(tokens);
             for (to, ret, n) in back {
                 for _ in 0..n {
-                    sent.push(self.send_one(to.clone(), ret.clone(), t)?);
+                    sent.push(self.message(to.clone(), ret.clone(), t));
                 }
             }
+            return Ok(Vec::new());
+        }
+        if self.replaying {
+            // The requests and returns are inputs of the journal.
             return Ok(Vec::new());
         }
         let net = self.s.player.net().clone();
@@ -257,10 +351,10 @@ impl Live<'_> {
             }
             let have = m.get(k.place);
             if have + *asked < need {
+                // `asked` counts them when they fire (`messages_for`).
                 for _ in 0..need - have - *asked {
                     events.push(k.request.clone());
                 }
-                *asked = need - have;
             } else if have > need {
                 for _ in 0..have - need {
                     events.push(k.ret.clone());
@@ -325,15 +419,133 @@ impl Live<'_> {
         Some(outs)
     }
 
-    /// Records `m`, taken from the transport at time `t`, and keeps it.
-    fn received(&mut self, m: CoordMessage, t: f64) {
-        let mut r = Record::new(t.max(self.s.player.now()), "coord_receive");
+    /// Takes `m`, from the transport at time `t`: journals it (synced)
+    /// and acknowledges it, records it and keeps it in the inbox; an
+    /// [`ENDED`] message is counted instead (not recorded). True for
+    /// [`ENDED`].
+    fn received(&mut self, m: CoordMessage, t: f64) -> Result<bool, String> {
+        let t = t.max(self.s.player.now());
+        if !self.replaying {
+            self.s.journal_entry(&Entry::CoordReceive {
+                t,
+                from: m.from.clone(),
+                transition: m.transition.clone(),
+                seq: m.seq,
+                sent_t: m.t,
+            });
+            self.s.sync()?;
+            self.transport.delivered(&m);
+        }
+        if m.transition == ENDED {
+            self.peers_ended += 1;
+            return Ok(true);
+        }
+        let mut r = Record::new(t, "coord_receive");
         r.from = Some(m.from.clone());
         r.transition = Some(m.transition.clone());
         r.seq = Some(m.seq);
         r.event = Some(m.event());
         self.s.emit_record(r);
         self.inbox.push_back(m);
+        Ok(false)
+    }
+
+    /// Records a line or connection that the transport refused.
+    fn rejected(&mut self, why: String, t: f64) {
+        let mut r = Record::new(t.max(self.s.player.now()), "coord_reject");
+        r.message = Some(why);
+        self.s.emit_record(r);
+    }
+
+    /// Rebuilds the vehicle from its journal: the player (inputs), the
+    /// mock (the actions), the inbox (messages received, minus those
+    /// delivered), the numbering of the messages sent and the messages
+    /// themselves (derived from the firings, as when they were first sent:
+    /// they are all sent again, and the receivers drop those they have),
+    /// the peers that have ended. Records go to the trace as they did.
+    fn replay(&mut self, entries: &[Entry], peers: &[String]) -> Result<Vec<CoordMessage>, String> {
+        self.replaying = true;
+        self.s.sink.replaying(true);
+        let journal = self.s.journal.take();
+        let r = self.replay_entries(entries, peers);
+        self.s.journal = journal;
+        self.s.sink.replaying(false);
+        self.replaying = false;
+        let inputs = r?;
+        let resend = std::mem::take(&mut self.resend);
+        let t = self.s.player.now();
+        let mut r = Record::new(t, "link");
+        r.message = Some(format!(
+            "resumed from the journal: {inputs} inputs replayed, {} transitions fired, {} messages sent again, {} waiting",
+            self.s.player.fired_count(),
+            resend.len(),
+            self.inbox.len()
+        ));
+        self.s.emit_record(r);
+        for m in &resend {
+            self.transport.send(m.clone())?;
+        }
+        Ok(resend.into_iter().filter(|m| m.transition != ENDED).collect())
+    }
+
+    fn replay_entries(&mut self, entries: &[Entry], peers: &[String]) -> Result<usize, String> {
+        let mut replay = Replay::new(entries);
+        let mut inputs = 0;
+        while let Some(step) = replay.next(&mut self.s.player) {
+            match step? {
+                Step::Input(input, outs) => {
+                    inputs += 1;
+                    if let Some(m) = input.message() {
+                        self.mock.take_delivered(&m);
+                    }
+                    if matches!(input, Input::Events(..)) {
+                        self.taken(&outs);
+                    }
+                    for o in &outs {
+                        self.s.emit(o);
+                    }
+                    self.replay_after(&outs)?;
+                }
+                Step::Other(Entry::CoordReceive { t, from, transition, seq, sent_t }) => {
+                    let m = CoordMessage {
+                        from: from.clone(),
+                        to: self.name.clone(),
+                        transition: transition.clone(),
+                        seq: *seq,
+                        t: *sent_t,
+                    };
+                    self.received(m, *t)?;
+                }
+                Step::Other(Entry::CoordServed { t }) => {
+                    if let Some(outs) = self.serve_ended(*t) {
+                        self.replay_after(&outs)?;
+                    }
+                }
+                Step::Other(Entry::CoordEnded { t }) => self.send_ended(peers, *t)?,
+                Step::Other(_) => {}
+            }
+        }
+        Ok(inputs)
+    }
+
+    /// [`Live::after`] while replaying: the requests and returns of the
+    /// mutex protocol are inputs of the journal, replayed in their turn.
+    fn replay_after(&mut self, outs: &[Output]) -> Result<(), String> {
+        let mut sent = self.messages_for(outs)?;
+        self.arbitrate(&mut sent)?;
+        self.commit(outs, sent)?;
+        Ok(())
+    }
+
+    /// Removes from the inbox the messages whose events `outs` took.
+    fn taken(&mut self, outs: &[Output]) {
+        for o in outs {
+            if let Output::Event { event, .. } = o {
+                if let Some(k) = self.inbox.iter().position(|m| m.event() == *event) {
+                    self.inbox.remove(k);
+                }
+            }
+        }
     }
 
     /// Starts the player at `t`. Messages received before are delivered
@@ -394,33 +606,26 @@ impl Live<'_> {
 
     /// Delivers at time `t`, all at once ([`Player::on_events`]), the
     /// messages of the inbox whose receive transitions can fire; the others
-    /// stay. None when none can.
-    fn deliver(&mut self, t: f64) -> Option<Vec<Output>> {
+    /// stay (journaled as one input, [`Input::Events`]). None when none can.
+    fn deliver(&mut self, t: f64) -> Result<Option<Vec<Output>>, String> {
         if !self.s.player.is_started() || self.inbox.is_empty() {
-            return None;
+            return Ok(None);
         }
         if self.s.player.outcome().is_some() {
-            return self.serve_ended(t.max(self.s.player.now()));
+            let t = t.max(self.s.player.now());
+            let Some(outs) = self.serve_ended(t) else { return Ok(None) };
+            self.s.journal_entry(&Entry::CoordServed { t });
+            return Ok(Some(outs));
         }
         let awaited = self.s.player.awaited_events();
         if !self.inbox.iter().any(|m| awaited.binary_search(&m.event()).is_ok()) {
-            return None;
+            return Ok(None);
         }
         let events: Vec<String> = self.inbox.iter().map(CoordMessage::event).collect();
-        let (outs, mut left) = self.s.player.on_events(t.max(self.s.player.now()), events);
-        // Keep the messages not taken (the first ones of each event left).
-        let mut kept = VecDeque::new();
-        for m in std::mem::take(&mut self.inbox) {
-            if let Some(k) = left.iter().position(|e| *e == m.event()) {
-                left.remove(k);
-                kept.push_back(m);
-            }
-        }
-        self.inbox = kept;
-        for o in &outs {
-            self.s.emit(o);
-        }
-        Some(outs)
+        // Journaled with the messages it sends (`after`).
+        let outs = self.s.step(Input::Events(t.max(self.s.player.now()), events))?;
+        self.taken(&outs);
+        Ok(Some(outs))
     }
 
     fn idle(&self) -> bool {
@@ -455,17 +660,27 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
         .zip(handles.iter_mut())
         .map(|(v, h)| Live {
             name: v.name,
-            s: Session::new(v.player, v.tracer, h),
+            s: {
+                let mut s = Session::new(v.player, v.tracer, h);
+                s.journal = v.journal;
+                s.crash_after = v.crash_after;
+                s.defer_sync = true;
+                s
+            },
             opts: v.opts,
             mock: v.mock,
             transport: v.transport,
             sends: v.sends,
             inbox: VecDeque::new(),
-            seq: 0,
+            seq: HashMap::new(),
             end: None,
             tokens: v.tokens.into_iter().map(|k| (k, 0)).collect(),
             mutex: MutexMessages::default(),
             after_end: None,
+            replaying: false,
+            resend: Vec::new(),
+            ended_sent: false,
+            peers_ended: 0,
         })
         .collect()
 }
@@ -526,19 +741,30 @@ pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limit
             for m in msgs {
                 let j =
                     *index.get(&m.to).ok_or_else(|| format!("`{}` sends to an unknown mission `{}`", m.from, m.to))?;
-                let got = tokio::time::timeout(DELIVERY_TIMEOUT, vs[j].transport.recv())
-                    .await
-                    .map_err(|_| {
-                        format!("a message from `{}` did not reach `{}` within {DELIVERY_TIMEOUT:?}", m.from, m.to)
-                    })?
-                    .ok_or_else(|| format!("the transport of `{}` closed", m.to))?;
-                vs[j].received(got, now.max(m.t));
+                loop {
+                    let got = tokio::time::timeout(DELIVERY_TIMEOUT, vs[j].transport.recv())
+                        .await
+                        .map_err(|_| {
+                            format!("a message from `{}` did not reach `{}` within {DELIVERY_TIMEOUT:?}", m.from, m.to)
+                        })?
+                        .ok_or_else(|| format!("the transport of `{}` closed", m.to))?;
+                    match got {
+                        Incoming::Message(got) => {
+                            vs[j].received(got, now.max(m.t))?;
+                            break;
+                        }
+                        Incoming::Rejected(why) => vs[j].rejected(why, now),
+                    }
+                }
             }
             if work.is_empty() {
                 // One vehicle takes its messages; what it does in reaction
                 // reaches the others before the next one does.
-                if let Some((j, outs)) = vs.iter_mut().enumerate().find_map(|(j, v)| v.deliver(now).map(|o| (j, o))) {
-                    work.push_back((j, outs));
+                for (j, v) in vs.iter_mut().enumerate() {
+                    if let Some(outs) = v.deliver(now)? {
+                        work.push_back((j, outs));
+                        break;
+                    }
                 }
             }
         }
@@ -694,17 +920,28 @@ pub async fn run_real_time_with_peers(
         let (sink, global, mut stop, index) = (sink.clone(), global.clone(), stop_rx.clone(), index.clone());
         let peers = peers.clone();
         let on_error = global.clone();
+        let mut v = v;
+        let resume = v.resume.take();
         tasks.push(tokio::spawn(async move {
             let r = async move {
                 let mut handle = [SharedHandle(sink)];
                 let mut vs = live(vec![v], &mut handle);
                 let v = &mut vs[0];
-                let mut outs = v.start(clock.now())?;
+                let mut outs = Vec::new();
+                if let Some(entries) = resume {
+                    let resent = v.replay(&entries, &peers)?;
+                    let mut g = lock(&global)?;
+                    g.peers_ended += v.peers_ended;
+                    count_sent(&mut g, &index, &resent);
+                }
+                if !v.s.player.is_started() {
+                    outs = v.start(clock.now())?;
+                }
                 let result: Result<End, String> = loop {
                     let msgs = v.after(&outs)?;
                     count_sent(&mut *lock(&global)?, &index, &msgs);
                     outs = Vec::new();
-                    if let Some(o) = v.deliver(clock.now()) {
+                    if let Some(o) = v.deliver(clock.now())? {
                         outs = o;
                         continue;
                     }
@@ -722,19 +959,18 @@ pub async fn run_real_time_with_peers(
                     };
                     tokio::select! {
                         m = v.transport.recv() => match m {
-                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
-                                lock(&global)?.peers_ended += 1;
-                            }
-                            Some(m) => {
-                                {
-                                    let mut g = lock(&global)?;
-                                    if index.contains_key(&m.from) {
-                                        g.received[i] += 1;
-                                    }
-                                    g.set_idle(i, false);
+                            Some(Incoming::Message(m)) => {
+                                let local = index.contains_key(&m.from);
+                                let ended = v.received(m, clock.now())?;
+                                let mut g = lock(&global)?;
+                                if ended && !local {
+                                    g.peers_ended += 1;
+                                } else if local {
+                                    g.received[i] += 1;
                                 }
-                                v.received(m, clock.now());
+                                g.set_idle(i, false);
                             }
+                            Some(Incoming::Rejected(why)) => v.rejected(why, clock.now()),
                             None => break Err(format!("the coordination transport of `{}` closed", v.name)),
                         },
                         _ = sleep => {
@@ -763,23 +999,13 @@ pub async fn run_real_time_with_peers(
                 v.end = Some(result?);
                 {
                     // Messages kept in the inbox: a holder still lends its mutex.
-                    let msgs = match v.deliver(clock.now()) {
+                    let msgs = match v.deliver(clock.now())? {
                         Some(o) => v.after(&o)?,
                         None => Vec::new(),
                     };
                     // Tell the vehicles of other processes.
-                    for p in peers.iter() {
-                        v.seq += 1;
-                        let t = v.s.player.now();
-                        let m = CoordMessage {
-                            from: v.name.clone(),
-                            to: p.clone(),
-                            transition: ENDED.into(),
-                            seq: v.seq,
-                            t,
-                        };
-                        v.transport.send(m)?;
-                    }
+                    let t = v.s.player.now();
+                    v.send_ended(&peers, t)?;
                     let mut g = lock(&global)?;
                     count_sent(&mut g, &index, &msgs);
                     g.set_idle(i, true);
@@ -789,31 +1015,46 @@ pub async fn run_real_time_with_peers(
                 loop {
                     tokio::select! {
                         m = v.transport.recv() => match m {
-                            Some(m) if m.transition == ENDED && !index.contains_key(&m.from) => {
-                                let mut g = lock(&global)?;
-                                g.peers_ended += 1;
-                                g.set_idle(i, true);
-                            }
-                            Some(m) => {
+                            Some(Incoming::Message(m)) => {
                                 let local = index.contains_key(&m.from);
-                                v.received(m, clock.now());
+                                let ended = v.received(m, clock.now())?;
                                 // A holder still lends its mutex.
-                                let msgs = match v.deliver(clock.now()) {
+                                let msgs = match v.deliver(clock.now())? {
                                     Some(o) => v.after(&o)?,
                                     None => Vec::new(),
                                 };
                                 let mut g = lock(&global)?;
                                 count_sent(&mut g, &index, &msgs);
-                                if local {
+                                if ended && !local {
+                                    g.peers_ended += 1;
+                                } else if local {
                                     g.received[i] += 1;
                                 }
                                 g.set_idle(i, true);
                             }
+                            Some(Incoming::Rejected(why)) => v.rejected(why, clock.now()),
                             None => break,
                         },
                         _ = stop.wait_for(|&s| s) => break,
                     }
                 }
+                // Before leaving, let the peers acknowledge what was sent to
+                // them (a peer that restarts needs it), for a while.
+                let give_up = tokio::time::Instant::now() + FLUSH_TIMEOUT;
+                while v.transport.unacknowledged() > 0 && tokio::time::Instant::now() < give_up {
+                    tokio::select! {
+                        m = v.transport.recv() => match m {
+                            Some(Incoming::Message(m)) => {
+                                v.received(m, clock.now())?;
+                            }
+                            Some(Incoming::Rejected(why)) => v.rejected(why, clock.now()),
+                            None => break,
+                        },
+                        _ = tokio::time::sleep(Duration::from_millis(20)) => {}
+                    }
+                }
+                // Let the last acknowledgements of this process leave.
+                tokio::time::sleep(Duration::from_millis(20)).await;
                 // The transport lives until every vehicle has ended: others may
                 // still send to this one.
                 let end = finish(&vs, 0);

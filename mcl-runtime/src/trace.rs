@@ -363,6 +363,7 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
             r.value.as_ref().map(|v| v.to_string()).unwrap_or_default()
         ),
         "warning" => format!("warning  {}", r.message.as_deref().unwrap_or("")),
+        "coord_reject" => format!("REFUSED  coordination: {}", r.message.as_deref().unwrap_or("")),
         "outcome" => format!(
             "MISSION {}{}",
             r.result.as_deref().unwrap_or("?").to_uppercase(),

@@ -93,6 +93,17 @@ pub struct Options {
     /// With --vehicle: where another vehicle of the file listens (repeatable).
     #[arg(long, value_name = "NAME=HOST:PORT")]
     pub coord_peer: Vec<String>,
+    /// With --vehicle: the fleet secret that authenticates every coordination link (the same
+    /// for every vehicle; prefer --coord-token-file, which other users cannot read in `ps`).
+    #[arg(long, value_name = "SECRET")]
+    pub coord_token: Option<String>,
+    /// With --vehicle: read the fleet secret from FILE (surrounding whitespace ignored).
+    #[arg(long, value_name = "FILE")]
+    pub coord_token_file: Option<PathBuf>,
+    /// With --vehicle: allow --coord-listen on a non-loopback address without a fleet secret
+    /// (anyone who reaches the port can then forge coordination messages).
+    #[arg(long)]
+    pub coord_insecure: bool,
     /// No live log.
     #[arg(short, long)]
     pub quiet: bool,
@@ -216,11 +227,18 @@ impl Sink for RunSink {
                 let _ = writeln!(out, "{line}");
                 let _ = out.flush();
             }
-        } else if !self.live && r.kind == "link" {
+        } else if !self.live && !self.quiet_replay && r.kind == "link" {
             // Even a quiet run says when it cannot reach the vehicle.
             eprintln!("link: {}", r.message.as_deref().unwrap_or(""));
+        } else if !self.live && r.kind == "coord_reject" {
+            // ... and when it refuses a coordination message.
+            eprintln!("warning: coordination: refused {}", r.message.as_deref().unwrap_or(""));
         }
         self.records.push(r.clone());
+    }
+
+    fn replaying(&mut self, on: bool) {
+        self.quiet_replay = on;
     }
 }
 
@@ -291,9 +309,16 @@ pub fn run(o: Options) -> u8 {
     let several = missions.len() > 1;
     let names: Vec<String> = missions.iter().map(|m| m.name.clone()).collect();
     let is_mcl = !o.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml"));
-    if o.vehicle.is_some() || o.coord_listen.is_some() || !o.coord_peer.is_empty() {
+    let coord_flags = o.coord_listen.is_some()
+        || !o.coord_peer.is_empty()
+        || o.coord_token.is_some()
+        || o.coord_token_file.is_some()
+        || o.coord_insecure;
+    if o.vehicle.is_some() || coord_flags {
         if o.vehicle.is_none() {
-            return usage("--coord-listen and --coord-peer go with --vehicle NAME");
+            return usage(
+                "--coord-listen, --coord-peer, --coord-token, --coord-token-file and --coord-insecure go with --vehicle NAME",
+            );
         }
         if !(several && o.mission.is_none() && o.mock && is_mcl) {
             return usage(
@@ -588,6 +613,95 @@ pub fn run(o: Options) -> u8 {
     end.exit_code()
 }
 
+/// The fleet secret of `--vehicle`'s coordination links (`--coord-token`,
+/// `--coord-token-file`), none otherwise. Refuses (exit status 2) a listener
+/// on a non-loopback address without a secret unless `--coord-insecure`.
+fn coord_auth(o: &Options) -> Result<mcl_runtime::coord::Auth, u8> {
+    let secret = match (&o.coord_token, &o.coord_token_file) {
+        (Some(_), Some(_)) => return Err(usage("give one of --coord-token and --coord-token-file")),
+        (Some(t), None) => Some(t.clone()),
+        (None, Some(p)) => match mcl_net::input::read_source(p) {
+            Ok(t) => Some(t.trim().to_string()),
+            Err(e) => return Err(usage(&format!("--coord-token-file: {e}"))),
+        },
+        (None, None) => None,
+    };
+    if secret.as_deref().is_some_and(str::is_empty) {
+        return Err(usage("the fleet secret (--coord-token, --coord-token-file) is empty"));
+    }
+    if let (None, Some(listen)) = (&secret, &o.coord_listen) {
+        use std::net::ToSocketAddrs;
+        let addrs: Vec<std::net::SocketAddr> = listen.to_socket_addrs().map(|a| a.collect()).unwrap_or_default();
+        let loopback = !addrs.is_empty() && addrs.iter().all(|a| a.ip().is_loopback());
+        if !loopback && !o.coord_insecure {
+            return Err(usage(&format!(
+                "--coord-listen {listen} is not a loopback address: anyone who reaches it could forge coordination messages; give the fleet secret with --coord-token-file FILE (or --coord-token), or --coord-insecure to accept the risk"
+            )));
+        }
+    }
+    Ok(match secret {
+        Some(s) => mcl_runtime::coord::Auth::secret(s.as_bytes()),
+        None => mcl_runtime::coord::Auth::none(),
+    })
+}
+
+/// What the header of a vehicle's journal records.
+struct Recorded {
+    scenario: Option<String>,
+    seed: u64,
+    mock_seed: u64,
+    symbols: BTreeMap<String, Value>,
+    /// The run of the vehicle's coordination messages.
+    run: String,
+}
+
+/// The journal of `--vehicle NAME` (`--journal` creates it, `--resume`
+/// continues it), and, when resuming, the seed, mock seed and symbols it
+/// recorded (checked against the options given).
+#[allow(clippy::type_complexity)]
+fn vehicle_journal(
+    o: &Options,
+    resume: &Option<Vec<Entry>>,
+    mission: &str,
+    net: &Net,
+    rec: Recorded,
+) -> Result<(Option<JournalWriter>, Option<(u64, u64, BTreeMap<String, Value>)>), u8> {
+    let fingerprint = journal::fingerprint(net);
+    if let (Some(entries), Some(path)) = (resume, &o.resume) {
+        let Entry::Header { mission: m, seed: s, fingerprint: f, symbols: syms, mock_seed: ms, .. } = &entries[0]
+        else {
+            unreachable!("read_journal checks the header")
+        };
+        if *f != fingerprint || m != mission {
+            return Err(usage(&format!(
+                "the journal was written by another vehicle or another version of it (journal: `{m}` {f}; now: `{mission}` {fingerprint})"
+            )));
+        }
+        if o.seed.is_some_and(|x| x != *s) {
+            return Err(usage(&format!("--seed {} differs from the journal's seed {s}", o.seed.unwrap_or_default())));
+        }
+        let w = JournalWriter::append_to(path).map_err(|e| usage(&e))?;
+        return Ok((Some(w), Some((*s, ms.unwrap_or(*s), syms.clone()))));
+    }
+    let Some(path) = &o.journal else { return Ok((None, None)) };
+    let header = Entry::Header {
+        version: journal::VERSION,
+        mission: mission.to_string(),
+        seed: rec.seed,
+        fingerprint,
+        symbols: rec.symbols,
+        scenario: Some(rec.scenario.unwrap_or_default()),
+        mock_seed: Some(rec.mock_seed),
+        run: Some(rec.run),
+        unix_start: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0),
+    };
+    let w = JournalWriter::create(path, &header).map_err(|e| usage(&e))?;
+    Ok((Some(w), None))
+}
+
 /// Records of a coordinated run: kept for the end of the run and the chronogram.
 fn count(records: &[Record], mission: &str, kind: &str) -> usize {
     records.iter().filter(|r| r.kind == kind && r.mission.as_deref() == Some(mission)).count()
@@ -599,9 +713,27 @@ fn count(records: &[Record], mission: &str, kind: &str) -> usize {
 /// (`mcl_runtime::multi`). The scenario applies to every vehicle, its
 /// `[missions.NAME]` tables to one.
 pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
-    if o.journal.is_some() || o.resume.is_some() {
-        return usage("--journal and --resume record one mission: pick one with --mission NAME");
+    if (o.journal.is_some() || o.resume.is_some()) && o.vehicle.is_none() {
+        return usage(
+            "--journal and --resume record one vehicle: run each with --vehicle NAME (its own process), or pick one mission with --mission NAME",
+        );
     }
+    let auth = match coord_auth(o) {
+        Ok(a) => a,
+        Err(code) => return code,
+    };
+    let resume_entries = match &o.resume {
+        Some(p) => match journal::read_journal(p) {
+            Ok(e) => Some(e),
+            Err(e) => return usage(&e),
+        },
+        None => None,
+    };
+    // The run of this vehicle's messages: its journal's when resuming.
+    let run_id = match resume_entries.as_deref().map(|e| &e[0]) {
+        Some(Entry::Header { run: Some(r), .. }) => r.clone(),
+        _ => mcl_runtime::tcp::new_id(),
+    };
     let db = Database::new();
     let file = db.file(&o.file);
     let vehicles = match super::compile::vehicle_nets(&db, file, 2) {
@@ -615,6 +747,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             o.file.display()
         ));
     }
+    let all_names: Vec<String> = names.iter().filter(|n| o.vehicle.as_ref() != Some(*n)).cloned().collect();
+    // The names of every vehicle of the file: one scenario serves them all
+    // (also when this process runs only one of them).
+    let known = ProgramNames::of(vehicles.iter().map(|v| &v.net));
     // One vehicle in this process, the others elsewhere.
     let mut peers: Vec<(String, std::net::SocketAddr)> = Vec::new();
     let mut vehicles = vehicles;
@@ -650,13 +786,19 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         vehicles = vec![v];
         names = vec![me.clone()];
     }
-    // Scenarios.
-    let text = match &o.scenario {
-        Some(p) => match mcl_net::input::read_source(p) {
+    // Scenarios (a resumed vehicle's is in its journal).
+    let text = match (&resume_entries, &o.scenario) {
+        (Some(entries), _) => match &entries[0] {
+            Entry::Header { scenario: Some(t), .. } if !t.is_empty() => {
+                Some((t.clone(), "scenario recorded in the journal".to_string()))
+            }
+            _ => None,
+        },
+        (None, Some(p)) => match mcl_net::input::read_source(p) {
             Ok(t) => Some((t, p.display().to_string())),
             Err(e) => return usage(&format!("scenario: {e}")),
         },
-        None => None,
+        (None, None) => None,
     };
     let mut scenarios = Vec::new();
     for n in &names {
@@ -678,8 +820,6 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             }
         }
     }
-    // The names of every vehicle: one scenario serves them all.
-    let known = ProgramNames::of(vehicles.iter().map(|v| &v.net));
     let mut errors = std::collections::BTreeSet::new();
     for s in &scenarios {
         errors.extend(s.check_against(&known));
@@ -705,14 +845,34 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     }));
     let mut sources = SourceMap::new();
     let mut parts = Vec::new();
+    let mut journal_writer = None;
     for (v, scenario) in vehicles.into_iter().zip(scenarios) {
-        let seed = o.seed.or(scenario.seed).unwrap_or(0);
+        let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
+        let mut mock_seed = scenario.seed.unwrap_or(seed);
         let mut symbols: BTreeMap<String, Value> = scenario.symbols.clone();
         symbols.extend(sets.iter().cloned());
         let net = Arc::new(v.net);
+        if o.vehicle.is_some() {
+            let recorded = Recorded {
+                scenario: text.as_ref().map(|t| t.0.clone()),
+                seed,
+                mock_seed,
+                symbols: symbols.clone(),
+                run: run_id.clone(),
+            };
+            match vehicle_journal(o, &resume_entries, &v.mission, &net, recorded) {
+                Ok((w, restored)) => {
+                    journal_writer = w;
+                    if let Some((s, ms, syms)) = restored {
+                        (seed, mock_seed, symbols) = (s, ms, syms);
+                    }
+                }
+                Err(code) => return code,
+            }
+        }
         let opts = PlayerOptions { seed, symbols, ..Default::default() };
         let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut sources);
-        let mock = MockVehicle::from_net(&net, scenario.clone(), scenario.seed.unwrap_or(seed));
+        let mock = MockVehicle::from_net(&net, scenario.clone(), mock_seed);
         parts.push((v.mission, net, opts, tracer, mock));
     }
     let rt = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
@@ -724,9 +884,13 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
         let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = if let Some(me) = &o.vehicle {
             let listen = o.coord_listen.clone().unwrap_or_else(|| format!("{}:0", o.coord_host));
-            let mut end = mcl_runtime::coord::TcpEnd::bind(me, &listen)
+            let received: std::collections::HashMap<String, u64> =
+                resume_entries.as_deref().map(journal::received_seqs).unwrap_or_default().into_iter().collect();
+            let mut end = mcl_runtime::coord::TcpEnd::bind_with(me, &listen, auth.clone(), &received)
                 .await
                 .map_err(|e| format!("cannot listen on `{listen}` for the coordination of `{me}`: {e}"))?;
+            end.accept_from(&all_names);
+            end.set_run(&run_id);
             eprintln!("coordination: `{me}` listens on {}", end.local_addr());
             for (n, a) in &peers {
                 end.add_peer(n, *a);
@@ -753,13 +917,19 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         };
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(transports) {
-            vs.push(mcl_runtime::multi::Vehicle::new(&name, net, opts, tracer, mock, tr)?);
+            let v = mcl_runtime::multi::Vehicle::new(&name, net, opts, tracer, mock, tr)?;
+            vs.push(match journal_writer.take() {
+                Some(w) => v.with_journal(w, resume_entries.clone(), o.crash_after),
+                None => v,
+            });
         }
         if o.virtual_time {
             mcl_runtime::multi::run_virtual(vs, shared, limits).await
         } else {
             let peers: Vec<String> = peers.iter().map(|(n, _)| n.clone()).collect();
-            mcl_runtime::multi::run_real_time_with_peers(vs, shared, Clock::new(o.speed, 0.0), limits, &peers).await
+            // A resumed vehicle's clock goes on from its last journaled input.
+            let offset = resume_entries.as_deref().map(journal::last_time).unwrap_or(0.0);
+            mcl_runtime::multi::run_real_time_with_peers(vs, shared, Clock::new(o.speed, offset), limits, &peers).await
         }
     });
     let mut sink = match sink.lock() {
