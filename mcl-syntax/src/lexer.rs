@@ -107,7 +107,8 @@ impl Kw {
         }
     }
 
-    pub fn from_str(s: &str) -> Option<Kw> {
+    /// The keyword written `s`, if it is one.
+    pub fn from_word(s: &str) -> Option<Kw> {
         Kw::ALL.iter().copied().find(|k| k.as_str() == s)
     }
 
@@ -485,7 +486,7 @@ fn lex_one<'src>(src: &'src str, mut i: usize, out: &mut Lexed<'src>, word_follo
             if let Some(ch) = foreign {
                 out.errors.push(foreign_letter(text, Span::new(start, i), ch));
             }
-            let tok = match Kw::from_str(text) {
+            let tok = match Kw::from_word(text) {
                 Some(k) => Token::Kw(k),
                 None => Token::Ident(text),
             };

@@ -717,7 +717,7 @@ fn balance_pass<'s>(
                     }
                     (Some(0), Token::Colon) => header = Some(1),
                     (Some(h), Token::Ident(_)) if h <= 1 && !is_call(tokens, i) => header = Some(2),
-                    (Some(h), Token::Kw(_)) if h == 1 => header = Some(2),
+                    (Some(1), Token::Kw(_)) => header = Some(2),
                     (Some(_), _) => {
                         missing_open = Some((out.len(), span));
                         header = None;
