@@ -411,7 +411,9 @@ pub struct Net {
     /// Delta, consumers and producers: built on first use (a compiled
     /// mission is often written out or checked without them).
     adjacency: Derived,
-    by_id: IdIndex,
+    /// Node ids by text: built on first lookup (writing PNML needs none,
+    /// and a million-call mission's table is hundreds of megabytes).
+    by_id: LazyIndex,
     by_event: HashMap<String, Vec<TransitionId>>,
 }
 
@@ -488,7 +490,11 @@ impl Net {
 
     /// Looks a node up by its id.
     pub fn node(&self, id: &str) -> Option<NodeId> {
-        self.by_id.find(id, |code| self.code_id(code))
+        let ix = self.by_id.0.get_or_init(|| {
+            // Ids are unique (checked by `NetBuilder::build`): the index builds.
+            IdIndex::build(self.places.len(), self.transitions.len(), |code| self.code_id(code)).unwrap_or_default()
+        });
+        ix.find(id, |code| self.code_id(code))
     }
 
     /// The id of the node with index code `code` (places first, then transitions).
@@ -783,16 +789,19 @@ impl NetBuilder {
                 _ => {}
             }
         }
+        // Unique ids: checked with the index, which is then dropped (before
+        // the pre/post sets are made, so that the two are never in memory
+        // together) and built again on the first lookup ([`Net::node`]).
         let id_of = |c: u32| node_id(&self.places, &self.transitions, c);
-        let by_id = match IdIndex::build(np, nt, id_of) {
-            Some(ix) => ix,
+        match IdIndex::build(np, nt, id_of) {
+            Some(ix) => drop(ix),
             None => {
                 // The first id, in node order, that an earlier node has.
                 let mut seen = rustc_hash::FxHashSet::default();
                 let dup = (0..(np + nt) as u32).map(id_of).find(|id| !seen.insert(*id)).unwrap_or_default();
                 return Err(NetError::DuplicateId(dup.to_string()));
             }
-        };
+        }
 
         // Validate the arcs, in order.
         let ids = |p: PlaceId, t: TransitionId| {
@@ -885,7 +894,7 @@ impl NetBuilder {
             pre,
             post,
             adjacency: Derived::default(),
-            by_id,
+            by_id: LazyIndex::default(),
             by_event,
         })
     }
@@ -905,6 +914,16 @@ struct Derived(OnceLock<Adjacency>);
 
 impl PartialEq for Derived {
     fn eq(&self, _: &Derived) -> bool {
+        true
+    }
+}
+
+/// [`IdIndex`] once built; a function of the net, so any two are equal.
+#[derive(Clone, Debug, Default)]
+struct LazyIndex(OnceLock<IdIndex>);
+
+impl PartialEq for LazyIndex {
+    fn eq(&self, _: &LazyIndex) -> bool {
         true
     }
 }
@@ -1114,23 +1133,24 @@ impl IdIndex {
         if pbits == 0 {
             return (0..n as u32).all(|c| ix.insert(Self::hash(id_of(c)), c, &id_of)).then_some(ix);
         }
-        let hashes: Vec<u64> = (0..n as u32).map(|c| Self::hash(id_of(c))).collect();
+        // Each id is hashed twice (to count, then to place) rather than
+        // keeping a vector of hashes: less memory at the peak of a build.
         let part = |h: u64| (h >> (64 - pbits)) as usize;
         let mut offsets = vec![0u32; (1 << pbits) + 1];
-        for &h in &hashes {
-            offsets[part(h) + 1] += 1;
+        for c in 0..n as u32 {
+            offsets[part(Self::hash(id_of(c))) + 1] += 1;
         }
         for i in 1..offsets.len() {
             offsets[i] += offsets[i - 1];
         }
         // (hash, code) by partition, so that the inserts read them in order.
         let mut order = vec![(0u64, 0u32); n];
-        for (c, &h) in hashes.iter().enumerate() {
+        for c in 0..n as u32 {
+            let h = Self::hash(id_of(c));
             let slot = &mut offsets[part(h)];
-            order[*slot as usize] = (h, c as u32);
+            order[*slot as usize] = (h, c);
             *slot += 1;
         }
-        drop(hashes);
         order.iter().all(|&(h, c)| ix.insert(h, c, &id_of)).then_some(ix)
     }
 
