@@ -47,5 +47,5 @@ pub use model::{
     ActionRef, Arc, CallBinding, Delay, Marking, Name, Net, NetBuilder, NetError, NodeId, Place, PlaceId, Provenance,
     SharedText, SourceSpan, TaskEvents, Transition, TransitionId, TransitionKind,
 };
-pub use pnml::{read_pnml, read_pnml_nets, write_pnml, PnmlError};
+pub use pnml::{read_pnml, read_pnml_nets, write_pnml, write_pnml_to, PnmlError};
 pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};

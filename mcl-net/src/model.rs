@@ -411,7 +411,9 @@ pub struct Net {
     /// Delta, consumers and producers: built on first use (a compiled
     /// mission is often written out or checked without them).
     adjacency: Derived,
-    by_id: IdIndex,
+    /// Node ids by text: built on first lookup (writing PNML needs none,
+    /// and a million-call mission's table is hundreds of megabytes).
+    by_id: LazyIndex,
     by_event: HashMap<String, Vec<TransitionId>>,
 }
 
@@ -488,7 +490,11 @@ impl Net {
 
     /// Looks a node up by its id.
     pub fn node(&self, id: &str) -> Option<NodeId> {
-        self.by_id.find(id, |code| self.code_id(code))
+        let ix = self.by_id.0.get_or_init(|| {
+            // Ids are unique (checked by `NetBuilder::build`): the index builds.
+            IdIndex::build(self.places.len(), self.transitions.len(), |code| self.code_id(code)).unwrap_or_default()
+        });
+        ix.find(id, |code| self.code_id(code))
     }
 
     /// The id of the node with index code `code` (places first, then transitions).
@@ -783,16 +789,15 @@ impl NetBuilder {
                 _ => {}
             }
         }
+        // Unique ids, checked without the index (built on the first
+        // lookup, [`Net::node`]: writing PNML needs none).
         let id_of = |c: u32| node_id(&self.places, &self.transitions, c);
-        let by_id = match IdIndex::build(np, nt, id_of) {
-            Some(ix) => ix,
-            None => {
-                // The first id, in node order, that an earlier node has.
-                let mut seen = rustc_hash::FxHashSet::default();
-                let dup = (0..(np + nt) as u32).map(id_of).find(|id| !seen.insert(*id)).unwrap_or_default();
-                return Err(NetError::DuplicateId(dup.to_string()));
-            }
-        };
+        if !IdIndex::unique(np + nt, id_of) {
+            // The first id, in node order, that an earlier node has.
+            let mut seen = rustc_hash::FxHashSet::default();
+            let dup = (0..(np + nt) as u32).map(id_of).find(|id| !seen.insert(*id)).unwrap_or_default();
+            return Err(NetError::DuplicateId(dup.to_string()));
+        }
 
         // Validate the arcs, in order.
         let ids = |p: PlaceId, t: TransitionId| {
@@ -885,7 +890,7 @@ impl NetBuilder {
             pre,
             post,
             adjacency: Derived::default(),
-            by_id,
+            by_id: LazyIndex::default(),
             by_event,
         })
     }
@@ -905,6 +910,16 @@ struct Derived(OnceLock<Adjacency>);
 
 impl PartialEq for Derived {
     fn eq(&self, _: &Derived) -> bool {
+        true
+    }
+}
+
+/// [`IdIndex`] once built; a function of the net, so any two are equal.
+#[derive(Clone, Debug, Default)]
+struct LazyIndex(OnceLock<IdIndex>);
+
+impl PartialEq for LazyIndex {
+    fn eq(&self, _: &LazyIndex) -> bool {
         true
     }
 }
@@ -1106,32 +1121,86 @@ impl IdIndex {
     /// miss per node once the table outgrows the cache.
     fn build<'a>(places: usize, transitions: usize, id_of: impl Fn(u32) -> &'a str) -> Option<Self> {
         let n = places + transitions;
-        let size = (2 * n).next_power_of_two().max(8);
+        let size = Self::size(n);
         let mut ix = IdIndex { slots: vec![(0, 0); size], places: places as u32 };
-        let bits = size.trailing_zeros();
-        // Partitions of at least 4096 slots (32 KiB), at most 1024 of them.
-        let pbits = bits.saturating_sub(12).min(10);
+        let pbits = Self::partition_bits(size);
         if pbits == 0 {
             return (0..n as u32).all(|c| ix.insert(Self::hash(id_of(c)), c, &id_of)).then_some(ix);
         }
-        let hashes: Vec<u64> = (0..n as u32).map(|c| Self::hash(id_of(c))).collect();
+        Self::by_partition(n, pbits, &id_of).iter().all(|&(h, c)| ix.insert(h, c, &id_of)).then_some(ix)
+    }
+
+    /// Table size for `n` nodes: load at most 1/2.
+    fn size(n: usize) -> usize {
+        (2 * n).next_power_of_two().max(8)
+    }
+
+    /// Partitions of at least 4096 slots (32 KiB), at most 1024 of them
+    /// (0: too small to partition).
+    fn partition_bits(size: usize) -> u32 {
+        size.trailing_zeros().saturating_sub(12).min(10)
+    }
+
+    /// True when the `n` ids `id_of(0..n)` are all different, without the
+    /// whole table: equal ids have equal hashes, so they fall in the same
+    /// partition, and each partition is checked with a small table of its
+    /// own (what stays is the list of hashes by partition, 16 bytes a node,
+    /// instead of the table's 16 to 32 and that list).
+    fn unique<'a>(n: usize, id_of: impl Fn(u32) -> &'a str) -> bool {
+        let pbits = Self::partition_bits(Self::size(n));
+        if pbits == 0 {
+            return Self::build(n, 0, id_of).is_some();
+        }
+        let part = |h: u64| h >> (64 - pbits);
+        let order = Self::by_partition(n, pbits, &id_of);
+        let mut table: Vec<(u32, u32)> = Vec::new();
+        for run in order.chunk_by(|a, b| part(a.0) == part(b.0)) {
+            let size = Self::size(run.len());
+            let mask = size - 1;
+            table.clear();
+            table.resize(size, (0, 0));
+            for &(h, c) in run {
+                // The partition is the hash's high bits: probe by the low ones.
+                let tag = (h >> 32) as u32;
+                let mut i = h as usize & mask;
+                loop {
+                    let (k, t) = table[i];
+                    if k == 0 {
+                        table[i] = (c + 1, tag);
+                        break;
+                    }
+                    if t == tag && id_of(k - 1) == id_of(c) {
+                        return false;
+                    }
+                    i = (i + 1) & mask;
+                }
+            }
+        }
+        true
+    }
+
+    /// (hash, code) of the `n` nodes grouped by partition (the hash's high
+    /// `pbits` bits), in node order within a partition.
+    fn by_partition<'a>(n: usize, pbits: u32, id_of: &impl Fn(u32) -> &'a str) -> Vec<(u64, u32)> {
+        // Each id is hashed twice (to count, then to place) rather than
+        // keeping a vector of hashes: less memory at the peak of a build.
         let part = |h: u64| (h >> (64 - pbits)) as usize;
         let mut offsets = vec![0u32; (1 << pbits) + 1];
-        for &h in &hashes {
-            offsets[part(h) + 1] += 1;
+        for c in 0..n as u32 {
+            offsets[part(Self::hash(id_of(c))) + 1] += 1;
         }
         for i in 1..offsets.len() {
             offsets[i] += offsets[i - 1];
         }
         // (hash, code) by partition, so that the inserts read them in order.
         let mut order = vec![(0u64, 0u32); n];
-        for (c, &h) in hashes.iter().enumerate() {
+        for c in 0..n as u32 {
+            let h = Self::hash(id_of(c));
             let slot = &mut offsets[part(h)];
-            order[*slot as usize] = (h, c as u32);
+            order[*slot as usize] = (h, c);
             *slot += 1;
         }
-        drop(hashes);
-        order.iter().all(|&(h, c)| ix.insert(h, c, &id_of)).then_some(ix)
+        order
     }
 
     #[inline]
@@ -1244,6 +1313,15 @@ mod tests {
         b.add_transition(Transition::new("p2999"));
         b.add_transition(Transition::new("p7"));
         assert_eq!(b.build(), Err(NetError::DuplicateId("p2999".into())));
+
+        // Many partitions (the check never builds the whole index).
+        let mut b = NetBuilder::new("n");
+        for i in 0..40_000 {
+            b.add_place(Place::new(format!("p{i}")));
+        }
+        assert!(b.clone().build().is_ok());
+        b.add_transition(Transition::new("p39999"));
+        assert_eq!(b.build(), Err(NetError::DuplicateId("p39999".into())));
     }
 
     #[test]

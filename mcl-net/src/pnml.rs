@@ -515,10 +515,8 @@ impl<'a> Ctx<'a> {
 // ---------------------------------------------------------------------------
 // Writing
 
-type W = Writer<Vec<u8>>;
-
-struct Out {
-    w: W,
+struct Out<W: std::io::Write> {
+    w: Writer<W>,
 }
 
 fn io_err(e: std::io::Error) -> PnmlError {
@@ -536,7 +534,7 @@ fn check_chars(what: &str, s: &str) -> Result<(), PnmlError> {
     }
 }
 
-impl Out {
+impl<W: std::io::Write> Out<W> {
     fn start(&mut self, name: &str, attrs: &[(&str, &str)]) -> Result<(), PnmlError> {
         let e = elem(name, attrs)?;
         self.w.write_event(Event::Start(e)).map_err(io_err)
@@ -623,10 +621,10 @@ fn elem<'a>(name: &'a str, attrs: &[(&str, &str)]) -> Result<BytesStart<'a>, Pnm
     Ok(e)
 }
 
-/// A node id not used by any place or transition of `net`, built from `base`.
-fn fresh_id(used: &HashSet<&str>, base: &str, n: usize) -> String {
+/// An id that `used` says is free, built from `base`.
+fn fresh_id(used: &impl Fn(&str) -> bool, base: &str, n: usize) -> String {
     let mut id = format!("{base}{n}");
-    while used.contains(id.as_str()) {
+    while used(id.as_str()) {
         id.push('_');
     }
     id
@@ -635,9 +633,23 @@ fn fresh_id(used: &HashSet<&str>, base: &str, n: usize) -> String {
 /// Writes `net` as a PNML 2009 document (2-space indentation).
 ///
 /// Fails only if a string of the net contains a character XML 1.0 cannot
-/// represent (such as U+0000).
+/// represent (such as U+0000). [`write_pnml_to`] writes the same bytes to
+/// a writer without holding the document in memory.
 pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
-    let mut out = Out { w: Writer::new_with_indent(Vec::new(), b' ', 2) };
+    let mut bytes = Vec::new();
+    write_pnml_to(net, &mut bytes)?;
+    String::from_utf8(bytes).map_err(|e| PnmlError::nowhere(format!("cannot write PNML: {e}")))
+}
+
+/// Writes `net` as a PNML 2009 document to `w`, as it goes (give it a
+/// buffered writer): a large net's document (gigabytes for a million
+/// calls) is never held in memory. The bytes are those of [`write_pnml`].
+///
+/// Fails if a string of the net contains a character XML 1.0 cannot
+/// represent (such as U+0000), or if writing fails; what was written
+/// before the error stays written.
+pub fn write_pnml_to<W: std::io::Write>(net: &Net, w: W) -> Result<(), PnmlError> {
+    let mut out = Out { w: Writer::new_with_indent(w, b' ', 2) };
     out.w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).map_err(io_err)?;
     out.start("pnml", &[("xmlns", PNML_NAMESPACE)])?;
     out.start("net", &[("id", &xml_id::encode(net.id())), ("type", PTNET_TYPE)])?;
@@ -700,9 +712,23 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
         }
         out.end("toolspecific")?;
     }
-    let mut used: HashSet<&str> = net.places().iter().map(|p| p.id.as_str()).collect();
-    used.extend(net.transitions().iter().map(|t| t.id.as_str()));
-    used.insert(net.id());
+    // Ids taken that a fresh id (`page0`, `a17`, `a17_`...) could meet:
+    // only those of that shape are kept, so a large net costs no set of
+    // every id (a compiled mission has none of that shape).
+    let fresh_shape = |id: &str| {
+        let rest = id.strip_prefix("page").or_else(|| id.strip_prefix('a')).unwrap_or("");
+        let digits = rest.trim_end_matches('_');
+        !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())
+    };
+    let taken: HashSet<&str> = net
+        .places()
+        .iter()
+        .map(|p| p.id.as_str())
+        .chain(net.transitions().iter().map(|t| t.id.as_str()))
+        .chain([net.id()])
+        .filter(|id| fresh_shape(id))
+        .collect();
+    let used = |id: &str| taken.contains(id);
     let page_id = fresh_id(&used, "page", 0);
     out.start("page", &[("id", &page_id)])?;
 
@@ -783,7 +809,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
         out.end("transition")?;
     }
 
-    used.insert(page_id.as_str());
+    let used = |id: &str| id == page_id || used(id);
     for (i, arc) in net.arcs().iter().enumerate() {
         let (src, dst, w) = match *arc {
             Arc::Input { place, transition, weight } => {
@@ -810,7 +836,7 @@ pub fn write_pnml(net: &Net) -> Result<String, PnmlError> {
     out.end("page")?;
     out.end("net")?;
     out.end("pnml")?;
-    let mut bytes = out.w.into_inner();
-    bytes.push(b'\n');
-    String::from_utf8(bytes).map_err(|e| PnmlError::nowhere(format!("cannot write PNML: {e}")))
+    let mut w = out.w.into_inner();
+    w.write_all(b"\n").map_err(io_err)?;
+    w.flush().map_err(io_err)
 }

@@ -247,3 +247,30 @@ fn provenance_is_written_once_per_record() {
     let e = read_pnml(&bad).unwrap_err().to_string();
     assert!(e.contains("place #30"), "{e}");
 }
+
+#[test]
+fn page_and_arc_ids_avoid_node_ids_of_their_shape() {
+    // Nodes named like the ids the writer makes up (`page0`, `a<i>`): the
+    // page and the arcs get other ids, and the net reads back the same.
+    let mut b = NetBuilder::new("a2");
+    let p = b.add_place(Place::new("page0").with_tokens(1));
+    let q = b.add_place(Place::new("a0"));
+    let t = b.add_transition(Transition::new("a1_"));
+    let u = b.add_transition(Transition::new("a1"));
+    b.add_input(p, t, 1).add_output(t, q, 1).add_input(q, u, 1).add_output(u, p, 1);
+    let net = b.build().unwrap();
+    let xml = write_pnml(&net).unwrap();
+    assert!(xml.contains("<page id=\"page0_\">"), "{xml}");
+    for id in ["a0_", "a1__", "a2_", "a3"] {
+        assert!(xml.contains(&format!("<arc id=\"{id}\"")), "{id}: {xml}");
+    }
+    assert_eq!(read_pnml(&xml).unwrap(), net);
+}
+
+#[test]
+fn streamed_pnml_is_the_same_text() {
+    let net = sample_net();
+    let mut bytes = Vec::new();
+    mcl_net::write_pnml_to(&net, &mut bytes).unwrap();
+    assert_eq!(String::from_utf8(bytes).unwrap(), write_pnml(&net).unwrap());
+}

@@ -7,6 +7,7 @@ use mcl_compiler::compile::{compile_file, dot::to_dot, CompileError};
 use mcl_compiler::diagnostics::render_human;
 use mcl_compiler::{check_file, Database, SourceFile};
 use mcl_coord::{AnalyzeOptions, VehicleNet, Verdict};
+use mcl_net::Net;
 use mcl_syntax::ast::Item;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -30,11 +31,31 @@ pub enum Dot {
     PerMission,
 }
 
-fn write(path: &Path, text: &str) -> Result<(), String> {
+fn create_parent(path: &Path) -> Result<(), String> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("cannot create `{}`: {e}", parent.display()))?;
     }
+    Ok(())
+}
+
+fn write(path: &Path, text: &str) -> Result<(), String> {
+    create_parent(path)?;
     std::fs::write(path, text).map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+}
+
+/// Writes the PNML of `net` to `path` as it is made, through a buffer: the
+/// document (gigabytes for a million calls) is never in memory whole. On
+/// error, a partly written regular file is removed.
+fn write_pnml_file(path: &Path, net: &Net) -> Result<(), String> {
+    create_parent(path)?;
+    let file = std::fs::File::create(path).map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    let result = mcl_net::write_pnml_to(net, std::io::BufWriter::with_capacity(1 << 16, file));
+    result.map_err(|e| {
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(path);
+        }
+        e.to_string()
+    })
 }
 
 /// A file name for a mission: its name, with characters outside
@@ -140,7 +161,7 @@ pub fn run(o: Options<'_>) -> u8 {
             for v in &vehicles {
                 let stem = file_stem(&v.mission);
                 let path = dir.join(format!("{stem}.pnml"));
-                write(&path, &mcl_net::write_pnml(&v.net).map_err(|e| e.to_string())?)?;
+                write_pnml_file(&path, &v.net)?;
                 eprintln!(
                     "wrote {} ({} places, {} transitions; {})",
                     path.display(),
@@ -164,15 +185,17 @@ pub fn run(o: Options<'_>) -> u8 {
             }
         };
     }
+    // The nets are all that is left to write: the database (syntax trees,
+    // check results) goes before the PNML is written.
+    drop(db);
     let result = (|| -> Result<(), String> {
         if let Some(dir) = o.out_dir {
             let mut written: Vec<PathBuf> = Vec::new();
             for m in &missions {
                 // Names are unique per file (`mcl_compiler::scope::mission_names`).
                 let stem = file_stem(&m.name);
-                let pnml = mcl_net::write_pnml(&m.net).map_err(|e| e.to_string())?;
                 let path = dir.join(format!("{stem}.pnml"));
-                write(&path, &pnml)?;
+                write_pnml_file(&path, &m.net)?;
                 written.push(path);
                 if o.dot == Dot::PerMission {
                     let path = dir.join(format!("{stem}.dot"));
@@ -195,10 +218,9 @@ pub fn run(o: Options<'_>) -> u8 {
             ));
         }
         let m = &missions[0];
-        let pnml = mcl_net::write_pnml(&m.net).map_err(|e| e.to_string())?;
         match o.output {
             Some(p) => {
-                write(p, &pnml)?;
+                write_pnml_file(p, &m.net)?;
                 eprintln!(
                     "wrote {} ({} places, {} transitions)",
                     p.display(),
@@ -206,7 +228,10 @@ pub fn run(o: Options<'_>) -> u8 {
                     m.net.transition_count()
                 );
             }
-            None if o.dot == Dot::No => print!("{pnml}"),
+            None if o.dot == Dot::No => {
+                let out = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+                mcl_net::write_pnml_to(&m.net, out).map_err(|e| e.to_string())?
+            }
             None => {}
         }
         if let Dot::File(d) = &o.dot {
