@@ -20,6 +20,7 @@
 //!
 //! `MCL_PROPERTY_CASES` (default 240) and `MCL_PROPERTY_SEED` change the run.
 
+use mcl_syntax::lexer::Kw;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -56,42 +57,14 @@ const CLASHING: &[&str] = &[
     "open", "stop", "kill", "done", "won_ok", "coord", "begin", "ok", "fail", "abort", "T0", "cs", "seq", "exe",
 ];
 
-/// Words that cannot be names (keywords, and the binding and parameter
-/// kinds `a:`, `e:`, `c:`, `v:`, where a one-letter name would read as one).
-const RESERVED: &[&str] = &[
-    "import",
-    "actions",
-    "events",
-    "pattern",
-    "patterns",
-    "tasks",
-    "mission",
-    "mcl_plan_op",
-    "constraints",
-    "places",
-    "transitions",
-    "arcs",
-    "while",
-    "if",
-    "then",
-    "else",
-    "do",
-    "parallel",
-    "and",
-    "or",
-    "try",
-    "catch",
-    "not",
-    "monitor",
-    "condition",
-    "while_condition",
-    "planning",
-    "pddl_map",
-    "mutex",
-    "order",
-    "sync",
-    "at",
-];
+/// Words that cannot be names besides the keywords ([`Kw::ALL`]): the
+/// constraint kinds, `at` of a mission's placement, and the one-letter
+/// binding and parameter kinds `a:`, `e:`, `c:`, `v:`.
+const RESERVED: &[&str] = &["mutex", "order", "sync", "at", "a", "e", "c", "v"];
+
+fn reserved(n: &str) -> bool {
+    RESERVED.contains(&n) || Kw::from_word(n).is_some()
+}
 
 /// A fresh identifier: a clashing name now and then, else random characters
 /// from the whole identifier alphabet.
@@ -115,7 +88,7 @@ fn name(r: &mut Rng, used: &mut Vec<String>, clash_ok: bool) -> String {
             }
             s
         };
-        if RESERVED.contains(&n.as_str()) || used.contains(&n) {
+        if reserved(&n) || used.contains(&n) {
             continue;
         }
         used.push(n.clone());

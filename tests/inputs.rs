@@ -147,6 +147,8 @@ fn files_over_the_size_limit_are_refused() {
     let r = mcl(&dir, &["analyze", "big.pnml"]);
     assert_eq!(r.code, 2);
     assert!(r.stderr.contains("larger than the limit"), "{}", r.stderr);
+    // 33 MB of test files: not left behind.
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
