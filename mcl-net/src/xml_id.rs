@@ -6,10 +6,11 @@
 //! writer encodes every other character as `_xHHHH_` (its code point in
 //! hexadecimal: four digits, or six beyond U+FFFF), as .NET's
 //! `XmlConvert.EncodeName` does, and the reader decodes them: ids are the
-//! same after a round trip. A literal `_` that would read as the start of
-//! such an escape is itself encoded (`_x005F_`). Ids that are already valid
-//! and hold no escape-like `_x` are written unchanged (all the compiler's
-//! own ids, and every MCL name made of letters, digits, `_` and `-`).
+//! same after a round trip. A literal `_` followed by `x` is itself encoded
+//! (`_x005F_`), so that every `_x` of the output starts an escape. Ids that
+//! are already valid and hold no `_x` are written unchanged (all the
+//! compiler's own ids, and every MCL name made of letters, digits, `_` and
+//! `-` without `_x`).
 
 use std::borrow::Cow;
 
@@ -34,14 +35,15 @@ fn valid_char(c: char, first: bool) -> bool {
 
 /// `id` as a valid XML NCName (unchanged when it already is one).
 pub fn encode(id: &str) -> Cow<'_, str> {
-    let needs = id.is_empty()
-        || id.char_indices().any(|(i, c)| !valid_char(c, i == 0) || (c == '_' && escape_len(&id[i..]).is_some()));
-    if !needs {
+    // A literal `_` is kept only when no `x` follows it, so that the output
+    // has no `_x` but the escapes' own.
+    let keep = |i: usize, c: char| valid_char(c, i == 0) && !(c == '_' && id[i + 1..].starts_with('x'));
+    if !id.is_empty() && id.char_indices().all(|(i, c)| keep(i, c)) {
         return Cow::Borrowed(id);
     }
     let mut out = String::with_capacity(id.len() + 8);
     for (i, c) in id.char_indices() {
-        if valid_char(c, i == 0) && !(c == '_' && escape_len(&id[i..]).is_some()) {
+        if keep(i, c) {
             out.push(c);
         } else if (c as u32) <= 0xFFFF {
             out.push_str(&format!("_x{:04X}_", c as u32));
@@ -86,7 +88,7 @@ mod tests {
 
     #[test]
     fn plain_ids_are_unchanged() {
-        for id in ["task.Goto.begin.1", "call12.start", "lock.Goto", "mission.ok", "way-point", "_x"] {
+        for id in ["task.Goto.begin.1", "call12.start", "lock.Goto", "mission.ok", "way-point", "_a"] {
             assert_eq!(encode(id), id);
             assert_eq!(decode(id), id);
         }
@@ -107,6 +109,10 @@ mod tests {
             "🦀",
             "_x12",
             "_xFFFF_",
+            "_x003C",
+            "_x003C&",
+            "&&x003C__&",
+            "net\té&&x003C__&",
         ] {
             let e = encode(id);
             assert!(is_ncname(&e), "{id:?} encoded as {e:?}");
@@ -116,7 +122,7 @@ mod tests {
 
     #[test]
     fn random_round_trip() {
-        let alphabet: Vec<char> = "aZ09_x-./$: é🦀F".chars().collect();
+        let alphabet: Vec<char> = "aZ09_x-./$: é🦀F&<".chars().collect();
         let mut seed = 0x2545F4914F6CDD1Du64;
         for _ in 0..5_000 {
             seed ^= seed << 13;
