@@ -332,9 +332,11 @@ fn proxy(to: u16) -> (u16, Arc<Mutex<Vec<String>>>) {
     let seen = Arc::new(Mutex::new(Vec::new()));
     let keep = seen.clone();
     std::thread::spawn(move || {
-        for client in l.incoming().take(20) {
+        for client in l.incoming().take(500) {
             let Ok(client) = client else { return };
-            let Ok(server) = TcpStream::connect(("127.0.0.1", to)) else { return };
+            // The other vehicle may not listen yet (a loaded machine starts
+            // it later): drop this connection, the client connects again.
+            let Ok(server) = TcpStream::connect(("127.0.0.1", to)) else { continue };
             let (mut c2, mut s2) = (client.try_clone().unwrap(), server.try_clone().unwrap());
             std::thread::spawn(move || {
                 let _ = std::io::copy(&mut s2, &mut c2);
