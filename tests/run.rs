@@ -534,6 +534,39 @@ fn live_log() {
     assert!(log.lines().last().unwrap().contains("MISSION OK"));
 }
 
+/// The outcome says how the mission got there when it left its nominal
+/// path: through a catch (the dam inspection whose wall inspection fails),
+/// or through a monitor's condition (the survey's alarm); a mission that
+/// completes its plan says nothing more.
+#[test]
+fn the_outcome_says_how_the_mission_ended() {
+    let (code, tr, out) = run_virtual(
+        "examples/dam-inspection.mcl",
+        &["--scenario", "examples/scenarios/dam-wall-failure.toml"],
+        "via-catch.jsonl",
+    );
+    assert_eq!(code, 0, "{}", stderr(&out));
+    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
+    assert_eq!(end["via"], "the catch at examples/dam-inspection.mcl:18", "{end}");
+    assert!(tr.iter().any(|r| r["kind"] == "fire" && r["ends"] == "catch"));
+    assert!(stderr(&out).contains("OK through the catch at examples/dam-inspection.mcl:18"), "{}", stderr(&out));
+
+    let (code, tr, out) = run_virtual(
+        "examples/survey.mcl",
+        &["--scenario", "examples/scenarios/survey-alarm.toml"],
+        "via-condition.jsonl",
+    );
+    assert_eq!(code, 0, "{}", stderr(&out));
+    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
+    assert_eq!(end["via"], "the condition of the monitor at examples/survey.mcl:13", "{end}");
+
+    let (code, tr, out) = run_virtual("examples/survey.mcl", &[], "via-none.jsonl");
+    assert_eq!(code, 0);
+    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
+    assert!(end.get("via").is_none(), "{end}");
+    assert!(!stderr(&out).contains("through"), "{}", stderr(&out));
+}
+
 /// A vehicle whose names follow no convention (`navReady`, `navLost`,
 /// `mowDone`): what an event ends comes from the compiled net — the trace's
 /// `ends`, the live log, the chronogram's colours — and a time-out shows in

@@ -23,6 +23,32 @@ pub struct TaskEvents {
     pub fail: Vec<String>,
 }
 
+/// A transition through which a mission leaves its nominal path: a
+/// `try`'s block failed and its `catch` starts, or a monitor's condition
+/// ended and its `do` block is about to run. The compiler lists them in the
+/// net property [`HANDLERS_PROPERTY`] (a JSON array of these); the tracer
+/// marks their firings and says how a mission ended.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub struct Handler {
+    /// The transition's id.
+    pub transition: String,
+    /// What it starts.
+    pub kind: HandlerKind,
+}
+
+/// What a [`Handler`] transition starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HandlerKind {
+    /// The `catch` block of a `try` whose block failed.
+    Catch,
+    /// The `do` block of a monitor's `condition` or `while_condition`.
+    Condition,
+}
+
+/// The net property that lists the [`Handler`] transitions.
+pub const HANDLERS_PROPERTY: &str = "handlers";
+
 use serde::Serialize;
 
 /// Index of a place in a [`Net`] (its position in [`Net::places`]).
@@ -431,6 +457,17 @@ impl Net {
     /// Free key/value annotations of the net (kept in order).
     pub fn properties(&self) -> &[(String, String)] {
         &self.properties
+    }
+
+    /// The transitions through which the mission leaves its nominal path
+    /// (property [`HANDLERS_PROPERTY`]; none when absent or malformed).
+    pub fn handlers(&self) -> Vec<Handler> {
+        self.properties
+            .iter()
+            .filter(|(k, _)| k == HANDLERS_PROPERTY)
+            .filter_map(|(_, v)| serde_json::from_str::<Vec<Handler>>(v).ok())
+            .flatten()
+            .collect()
     }
 
     /// The events that end each task in ok and in fail: the properties

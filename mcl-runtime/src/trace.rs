@@ -123,6 +123,12 @@ pub struct Record {
     /// time-out, shown in the live log without `-v`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ends: Option<String>,
+    /// On an `outcome`: how the mission got there when it left its nominal
+    /// path, the last handler it went through (`the catch at FILE:LINE`,
+    /// `the condition of the monitor at FILE:LINE`). Absent when it
+    /// completed its plan.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub via: Option<String>,
 }
 
 impl Record {
@@ -185,6 +191,11 @@ pub struct Tracer {
     timeouts: Vec<bool>,
     /// Per task: its ok and fail events (the net's `task_events`).
     outcomes: HashMap<String, mcl_net::TaskEvents>,
+    /// Handler transitions (the net's `handlers`): index, kind, and where
+    /// their structure is written.
+    handlers: HashMap<usize, (mcl_net::HandlerKind, Option<String>)>,
+    /// The last handler fired (for the outcome's `via`).
+    last_handler: std::cell::RefCell<Option<String>>,
     /// Per call site: (label, `file:line`).
     calls: HashMap<u32, (Option<String>, Option<String>)>,
 }
@@ -222,6 +233,16 @@ impl Tracer {
                 })
                 .collect(),
             outcomes: net.task_events().map(|(t, e)| (t.to_string(), e)).collect(),
+            handlers: net
+                .handlers()
+                .into_iter()
+                .filter_map(|h| {
+                    let t = net.transition_by_id(&h.transition)?;
+                    let src = net.transition(t)?.provenance.span.as_ref().map(|s| sources.locate(s));
+                    Some((t.index(), (h.kind, src)))
+                })
+                .collect(),
+            last_handler: Default::default(),
             calls,
         }
     }
@@ -274,6 +295,19 @@ impl Tracer {
                 if self.timeouts[transition.index()] {
                     r.ends = Some("timeout".into());
                 }
+                if let Some((kind, src)) = self.handlers.get(&transition.index()) {
+                    let (ends, what) = match kind {
+                        mcl_net::HandlerKind::Catch => ("catch", "the catch"),
+                        mcl_net::HandlerKind::Condition => ("condition", "the condition of the monitor"),
+                    };
+                    r.ends = Some(ends.into());
+                    r.src = src.clone();
+                    let via = match src {
+                        Some(s) => format!("{what} at {s}"),
+                        None => what.to_string(),
+                    };
+                    *self.last_handler.borrow_mut() = Some(via);
+                }
                 r.call_site = *call_site;
                 r.label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
                 r
@@ -323,6 +357,7 @@ impl Tracer {
                 let mut r = Record::new(*t, "outcome");
                 r.result = Some(outcome.as_str().to_string());
                 r.reason = reason.clone();
+                r.via = self.last_handler.borrow().clone();
                 r
             }
         };
@@ -365,9 +400,10 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
         "warning" => format!("warning  {}", r.message.as_deref().unwrap_or("")),
         "coord_reject" => format!("REFUSED  coordination: {}", r.message.as_deref().unwrap_or("")),
         "outcome" => format!(
-            "MISSION {}{}",
+            "MISSION {}{}{}",
             r.result.as_deref().unwrap_or("?").to_uppercase(),
-            r.reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default()
+            r.reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default(),
+            r.via.as_ref().map(|v| format!(" (through {v})")).unwrap_or_default()
         ),
         "coord_send" => format!(
             "send     {} -> {}  (#{})",
@@ -386,6 +422,10 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
             r.result.as_deref().unwrap_or("?").to_uppercase(),
             r.messages.unwrap_or_default()
         ),
+        "fire" if r.ends.as_deref() == Some("catch") => "CATCH    the try block failed: its catch starts".to_string(),
+        "fire" if r.ends.as_deref() == Some("condition") => {
+            "CONDITION of a monitor ended: its watched block stops, its do block runs".to_string()
+        }
         "fire" if r.ends.as_deref() == Some("timeout") => {
             format!("TIME-OUT {}", r.transition.as_deref().unwrap_or("?"))
         }

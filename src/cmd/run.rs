@@ -602,10 +602,13 @@ pub fn run(o: Options) -> u8 {
         return 2;
     }
     let count = |k: &str| sink.records.iter().filter(|r| r.kind == k).count();
+    // How it got there, when it left its nominal path (a catch, a monitor's condition).
+    let via = sink.records.iter().rev().find(|r| r.kind == "outcome").and_then(|r| r.via.clone());
     eprintln!(
-        "mission `{}`: {} at t={end_time:.3} s ({} actions, {} events, {} unexpected events, {fired} firings)",
+        "mission `{}`: {}{} at t={end_time:.3} s ({} actions, {} events, {} unexpected events, {fired} firings)",
         chosen.name,
         end.result().to_uppercase(),
+        via.map(|v| format!(" through {v}")).unwrap_or_default(),
         count("action"),
         count("event"),
         count("unexpected_event"),

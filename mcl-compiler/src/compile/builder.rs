@@ -42,6 +42,10 @@ pub struct Builder {
     /// The text of the ids cut from `text`, not complete yet.
     buf: String,
     text: SharedText,
+    /// Transitions through which the mission leaves its nominal path
+    /// (a catch starts, a monitor's condition ended), for
+    /// [`mcl_net::HANDLERS_PROPERTY`].
+    pub handlers: Vec<(TransitionId, mcl_net::HandlerKind)>,
 }
 
 impl Builder {
@@ -51,7 +55,13 @@ impl Builder {
 
     /// A builder that extends `net`.
     pub fn from_net(net: NetBuilder) -> Self {
-        Builder { net, provenance: Provenance::none(), buf: String::new(), text: SharedText::new() }
+        Builder {
+            net,
+            provenance: Provenance::none(),
+            buf: String::new(),
+            text: SharedText::new(),
+            handlers: Vec::new(),
+        }
     }
 
     /// The net, every node with its id.

@@ -124,7 +124,16 @@ pub fn compile_mission(
     if let Some(e) = cx.error {
         return Err(e);
     }
-    Ok(cx.b.finish().build()?)
+    let handlers = std::mem::take(&mut cx.b.handlers);
+    let mut net = cx.b.finish();
+    if !handlers.is_empty() {
+        let list: Vec<mcl_net::Handler> = handlers
+            .iter()
+            .filter_map(|&(t, kind)| Some(mcl_net::Handler { transition: net.transition_mut(t)?.id.to_string(), kind }))
+            .collect();
+        net.property(mcl_net::HANDLERS_PROPERTY, serde_json::to_string(&list).unwrap_or_default());
+    }
+    Ok(net.build()?)
 }
 
 /// The number of calls and of structure children in `block`, to size the net.

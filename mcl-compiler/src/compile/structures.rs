@@ -186,7 +186,8 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> (Vec<I
                 }
                 Structure::TryCatch => {
                     ti(b, &[S("try_ok")], &[runs[0], a.ok], &[ext.ok]);
-                    ti(b, &[S("try_fail")], &[runs[0], a.fail], &[bb.begin, runs[1]]);
+                    let t = ti(b, &[S("try_fail")], &[runs[0], a.fail], &[bb.begin, runs[1]]);
+                    b.handlers.push((t, mcl_net::HandlerKind::Catch));
                 }
                 _ => unreachable!("outer match"),
             }
@@ -280,9 +281,12 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> (Vec<I
             #[allow(clippy::needless_range_loop)] // j indexes trig, j + 1 runs, par and done
             for j in 0..k {
                 let i = j + 1;
-                ti(b, &[S("condition"), N(j), S("_ok")], &[open, runs[i], par[i].ok], &[trig[j], done[i]]);
+                let t_ok = ti(b, &[S("condition"), N(j), S("_ok")], &[open, runs[i], par[i].ok], &[trig[j], done[i]]);
                 // Seed 4.5.3: whenever the condition finalizes first (ok or fail), the do-block runs.
-                ti(b, &[S("condition"), N(j), S("_fail")], &[open, runs[i], par[i].fail], &[trig[j], done[i]]);
+                let t_fail =
+                    ti(b, &[S("condition"), N(j), S("_fail")], &[open, runs[i], par[i].fail], &[trig[j], done[i]]);
+                b.handlers.push((t_ok, mcl_net::HandlerKind::Condition));
+                b.handlers.push((t_fail, mcl_net::HandlerKind::Condition));
             }
             let modes: Vec<(_, String)> = [(a_ok, "monitored_ok".to_string()), (a_fail, "monitored_fail".to_string())]
                 .into_iter()
