@@ -251,6 +251,18 @@ enum Command {
         /// The folder to create (it may exist if it is empty).
         name: PathBuf,
     },
+    /// The vehicle file as a contract for its AAC: per primitive, the commands the player sends
+    /// (parameters in order) and the events the vehicle sends, with their roles (ends the task
+    /// ok, ends it in fail, neither) and whether a mission watches it as a monitor's condition.
+    ///
+    /// Exit status: 0 with the interface on standard output, 1 when the program has errors,
+    /// 2 when the file cannot be read.
+    Interface {
+        /// An .mcl file (a vehicle file, or a mission that imports one).
+        file: PathBuf,
+        #[arg(long, value_enum, default_value = "markdown")]
+        format: cmd::interface::InterfaceFormat,
+    },
     /// Explain a diagnostic code, with an example of the error and its fix.
     Explain {
         /// A code such as E0101; without one, lists every code.
@@ -276,6 +288,7 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
+        Command::Interface { file, format } => cmd::interface::run(&file, format),
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
         Command::New { name } => cmd::new::run(&name),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),

@@ -10,6 +10,7 @@ pub mod codes;
 pub mod compile;
 pub mod db;
 pub mod diagnostics;
+pub mod interface;
 pub mod queries;
 pub mod scope;
 

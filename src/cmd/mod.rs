@@ -6,6 +6,7 @@ pub mod chronogram;
 pub mod compile;
 pub mod explain;
 pub mod fmt;
+pub mod interface;
 pub mod lsp;
 pub mod mock_aac;
 pub mod new;

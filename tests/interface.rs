@@ -1,0 +1,93 @@
+//! `mcl interface` through the binary: the contract a vehicle's AAC is
+//! written against, taken from the program (never from names).
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn mcl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mcl")).args(args).current_dir(root()).output().expect("run mcl")
+}
+
+fn primitive<'a>(i: &'a Value, name: &str) -> &'a Value {
+    i["primitives"].as_array().unwrap().iter().find(|p| p["primitive"] == name).unwrap_or_else(|| panic!("{name}"))
+}
+
+#[test]
+fn a_vehicle_with_names_that_follow_no_convention() {
+    let dir = std::env::temp_dir().join(format!("mcl-interface-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("boat.mcl");
+    std::fs::write(
+        &file,
+        r#"
+actions {
+    goThere = NavPrimitive( c: start, v: target, v: speed );
+    halt = NavPrimitive( c: stop );
+    armSonar = SonarPrimitive( c: on );
+    disarmSonar = SonarPrimitive( c: off );
+}
+events { navReady; navLost; navProgress; obstacleSeen; sonarBroken; }
+pattern {
+    P_NAV {
+        places { begin.1; abort.1; ok.1; fail.1; w; }
+        transitions { Go; Arrived; Lost; Tick; Stop; }
+        arcs {
+            begin.1 -> Go; Go -> w; w -> Arrived; Arrived -> ok.1; w -> Lost; Lost -> fail.1;
+            w -> Tick; Tick -> w; w -> Stop; abort.1 -> Stop;
+        }
+    }
+}
+tasks {
+    Nav( target, speed ): P_NAV {
+        a: goThere -> Go; a: halt -> Arrived, Lost, Stop;
+        e: navReady -> Arrived; e: navLost -> Lost; e: navProgress -> Tick;
+    }
+    Sonar(): AchieveOneGoal {
+        a: armSonar -> T0; a: disarmSonar -> T1, T6, T7;
+        e: obstacleSeen -> T2; e: sonarBroken -> T3;
+    }
+}
+mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0], 1 ) } }
+"#,
+    )
+    .unwrap();
+    let out = mcl(&["interface", file.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let nav = primitive(&i, "NavPrimitive");
+    assert_eq!(nav["commands"][0]["command"], "start");
+    assert_eq!(nav["commands"][0]["params"], serde_json::json!(["target", "speed"]));
+    assert_eq!(nav["commands"][1]["command"], "stop");
+    let role = |p: &Value, e: &str| {
+        p["events"].as_array().unwrap().iter().find(|x| x["event"] == e).map(|x| x["role"].clone()).unwrap()
+    };
+    assert_eq!(role(nav, "navReady"), "ends_ok");
+    assert_eq!(role(nav, "navLost"), "ends_fail");
+    assert_eq!(role(nav, "navProgress"), "other");
+    assert_eq!(nav["monitor_condition"], false);
+    let sonar = primitive(&i, "SonarPrimitive");
+    assert_eq!(role(sonar, "obstacleSeen"), "ends_ok");
+    assert_eq!(sonar["monitor_condition"], true);
+
+    let md = mcl(&["interface", file.to_str().unwrap()]);
+    assert_eq!(md.status.code(), Some(0));
+    let md = String::from_utf8(md.stdout).unwrap();
+    assert!(md.contains("## `NavPrimitive`"), "{md}");
+    assert!(md.contains("| `start` | `goThere` | `target`, `speed` |"), "{md}");
+    assert!(md.contains("| `navReady` | ends the task ok | `Nav` |"), "{md}");
+    assert!(md.contains("Watched as a monitor's condition"), "{md}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn errors_and_unreadable_files() {
+    let out = mcl(&["interface", "tests/ui/e0101_did_you_mean.mcl"]);
+    assert_eq!(out.status.code(), Some(1));
+    let out = mcl(&["interface", "no/such/file.mcl"]);
+    assert_eq!(out.status.code(), Some(2));
+}
