@@ -63,6 +63,10 @@ enum Command {
         /// Write one `<mission>.pnml` per mission into this folder.
         #[arg(long)]
         out_dir: Option<PathBuf>,
+        /// What `--dot OUT.dot` draws: `net` (the whole net, clustered), `structure` (the
+        /// mission's control structures and calls), or `task:NAME` (one task's net).
+        #[arg(long, default_value = "net", value_name = "net|structure|task:NAME")]
+        view: cmd::compile::View,
     },
     /// Explore the state space of a PNML net (ours or any other tool's).
     ///
@@ -363,7 +367,7 @@ fn main() -> ExitCode {
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)
         }
-        Command::Compile { file, output, dot, out_dir } => {
+        Command::Compile { file, output, dot, out_dir, view } => {
             let dot = match (dot, &out_dir) {
                 (Some(None), None) => {
                     eprintln!("error: --dot needs a path (--dot OUT.dot) unless --out-dir is given");
@@ -380,11 +384,16 @@ fn main() -> ExitCode {
                 (Some(None), Some(_)) => cmd::compile::Dot::PerMission,
                 (None, _) => cmd::compile::Dot::No,
             };
+            if view != cmd::compile::View::Net && !matches!(dot, cmd::compile::Dot::File(_)) {
+                eprintln!("error: --view structure and --view task:NAME draw one picture: give --dot OUT.dot (without --out-dir)");
+                return ExitCode::from(2);
+            }
             cmd::compile::run(cmd::compile::Options {
                 file: &file,
                 output: output.as_deref(),
                 dot,
                 out_dir: out_dir.as_deref(),
+                view,
             })
         }
     };

@@ -77,3 +77,67 @@ fn analyze_json_max_tokens_is_the_largest_place_bound() {
     assert_eq!(v["max_tokens"].as_u64(), Some(largest));
     assert!(v.get("max_tokens_in_place").is_none());
 }
+
+/// `--view structure` draws the mission's control structures and calls (a
+/// picture a person can read whole: tens of nodes where the net has
+/// hundreds); `--view task:NAME` draws one task's net; both need `--dot`.
+#[test]
+fn dot_views_structure_and_task() {
+    let dir = tmp("views");
+    let dot = dir.join("structure.dot");
+    let pnml = dir.join("m.pnml");
+    let out = mcl(&[
+        "compile",
+        "examples/dam-inspection.mcl",
+        "-o",
+        pnml.to_str().unwrap(),
+        "--dot",
+        dot.to_str().unwrap(),
+        "--view",
+        "structure",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let d = std::fs::read_to_string(&dot).unwrap();
+    assert!(d.starts_with("digraph \"mission\" {"), "{d}");
+    for want in ["monitor\\nline 17", "try-catch\\nline 18", "parallel-and\\nline 21", "Goto(initial_pos)\\nline 20"] {
+        assert!(d.contains(want), "{want} in {d}");
+    }
+    assert!(d.contains("[label=\"catch\"]") && d.contains("[label=\"watched\"]"), "{d}");
+    let nodes = d.lines().filter(|l| l.contains("shape=")).count();
+    let net = dir.join("net.dot");
+    assert!(mcl(&[
+        "compile",
+        "examples/dam-inspection.mcl",
+        "-o",
+        pnml.to_str().unwrap(),
+        "--dot",
+        net.to_str().unwrap()
+    ])
+    .status
+    .success());
+    let net_nodes = std::fs::read_to_string(&net).unwrap().lines().filter(|l| l.contains("shape=")).count();
+    assert!(nodes * 10 < net_nodes, "{nodes} structure nodes vs {net_nodes} net nodes");
+
+    let task = dir.join("task.dot");
+    let out = mcl(&[
+        "compile",
+        "examples/dam-inspection.mcl",
+        "-o",
+        pnml.to_str().unwrap(),
+        "--dot",
+        task.to_str().unwrap(),
+        "--view",
+        "task:Goto",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let t = std::fs::read_to_string(&task).unwrap();
+    assert!(t.contains("TT0") && t.contains("?eventGotoOk"), "{t}");
+
+    // Unknown task, unknown view, a view without --dot: usage errors.
+    let bad = |args: &[&str]| mcl(args).status.code();
+    let p = pnml.to_str().unwrap();
+    let tk = task.to_str().unwrap();
+    assert_eq!(bad(&["compile", "examples/dam-inspection.mcl", "-o", p, "--dot", tk, "--view", "task:Nope"]), Some(2));
+    assert_eq!(bad(&["compile", "examples/dam-inspection.mcl", "-o", p, "--dot", tk, "--view", "tree"]), Some(2));
+    assert_eq!(bad(&["compile", "examples/dam-inspection.mcl", "-o", p, "--view", "structure"]), Some(2));
+}

@@ -18,6 +18,71 @@ pub struct Options<'a> {
     pub output: Option<&'a Path>,
     pub dot: Dot,
     pub out_dir: Option<&'a Path>,
+    pub view: View,
+}
+
+/// What `--dot OUT.dot` draws.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum View {
+    /// The whole net, clustered by structure, call and task.
+    Net,
+    /// The mission's control-structure tree with its calls.
+    Structure,
+    /// One task's net.
+    Task(String),
+}
+
+impl std::str::FromStr for View {
+    type Err = String;
+    fn from_str(s: &str) -> Result<View, String> {
+        match s {
+            "net" => Ok(View::Net),
+            "structure" => Ok(View::Structure),
+            _ => match s.strip_prefix("task:") {
+                Some(t) if !t.is_empty() => Ok(View::Task(t.to_string())),
+                _ => Err(format!("`{s}`: expected `net`, `structure` or `task:NAME`")),
+            },
+        }
+    }
+}
+
+/// The drawing of `--view structure` or `--view task:NAME` (None for the
+/// net, drawn from the compiled net itself).
+fn view_drawing(db: &Database, file: SourceFile, view: &View, mission: &str) -> Result<Option<String>, String> {
+    match view {
+        View::Net => Ok(None),
+        View::Structure => {
+            let parsed = mcl_compiler::parse(db, file);
+            let names = mcl_compiler::scope::mission_names(&parsed.file);
+            let m = parsed
+                .file
+                .items
+                .iter()
+                .filter_map(|i| match i {
+                    Item::Mission(m) => Some(m),
+                    _ => None,
+                })
+                .zip(&names)
+                .find(|(_, n)| *n == mission)
+                .map(|(m, _)| m)
+                .ok_or_else(|| format!("no mission `{mission}` in this file"))?;
+            let text: &str = file.text(db).as_deref().unwrap_or("");
+            let line =
+                |offset: usize| text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1;
+            Ok(Some(mcl_compiler::compile::tree_dot::structure_dot(m, mission, &line)))
+        }
+        View::Task(name) => {
+            let scope = mcl_compiler::scope::scope(db, file);
+            let mut b = mcl_compiler::compile::builder::Builder::new(name);
+            match mcl_compiler::compile::add_task_net(db, scope, &mut b, name, "") {
+                Ok(Some(_)) => {}
+                Ok(None) => return Err(format!("`--view task:{name}`: the program has no task `{name}`")),
+                Err(e) => return Err(e.to_string()),
+            }
+            let net = b.finish().build().map_err(|e| e.to_string())?;
+            Ok(Some(to_dot(&net)))
+        }
+    }
 }
 
 /// Which Graphviz drawings `mcl compile` writes.
@@ -185,6 +250,18 @@ pub fn run(o: Options<'_>) -> u8 {
             }
         };
     }
+    // A drawing of the program rather than of the net is made while the
+    // database is there.
+    let view_dot = match (&o.dot, missions.first()) {
+        (Dot::File(_), Some(m)) => match view_drawing(&db, file, &o.view, &m.name) {
+            Ok(d) => d,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
+            }
+        },
+        _ => None,
+    };
     // The nets are all that is left to write: the database (syntax trees,
     // check results) goes before the PNML is written.
     drop(db);
@@ -235,7 +312,10 @@ pub fn run(o: Options<'_>) -> u8 {
             None => {}
         }
         if let Dot::File(d) = &o.dot {
-            write(d, &to_dot(&m.net))?;
+            match &view_dot {
+                Some(text) => write(d, text)?,
+                None => write(d, &to_dot(&m.net))?,
+            }
             eprintln!("wrote {}", d.display());
         }
         Ok(())

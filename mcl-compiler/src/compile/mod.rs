@@ -15,6 +15,7 @@ pub mod builder;
 pub mod calls;
 pub mod dot;
 pub mod structures;
+pub mod tree_dot;
 pub mod verify;
 
 use crate::db::{Db, SourceFile};
