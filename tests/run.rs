@@ -550,6 +550,13 @@ fn the_outcome_says_how_the_mission_ended() {
     assert_eq!(end["via"], "the catch at examples/dam-inspection.mcl:18", "{end}");
     assert!(tr.iter().any(|r| r["kind"] == "fire" && r["ends"] == "catch"));
     assert!(stderr(&out).contains("OK through the catch at examples/dam-inspection.mcl:18"), "{}", stderr(&out));
+    // The chronogram's title says it too.
+    let svg = tmp("via-catch.svg");
+    let t = tmp("via-catch.jsonl");
+    let c = mcl(&["chronogram", t.to_str().unwrap(), "-o", svg.to_str().unwrap()]);
+    assert!(c.status.success(), "{}", stderr(&c));
+    let drawing = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawing.contains("OK through the catch at examples/dam-inspection.mcl:18 at 102 s"), "{drawing}");
 
     let (code, tr, out) = run_virtual(
         "examples/survey.mcl",

@@ -145,7 +145,9 @@ pub fn render(records: &[Record], opts: &Options) -> String {
     let mut open: HashMap<usize, usize> = HashMap::new(); // row -> index of its open bar
     let mut timers: HashMap<(Option<String>, String), f64> = HashMap::new();
     let mut unexpected: Vec<(f64, String, String)> = Vec::new();
-    let mut outcomes: Vec<(f64, Option<String>, String, Option<String>)> = Vec::new();
+    // (time, mission, result, reason, how it got there off its nominal path)
+    #[allow(clippy::type_complexity)]
+    let mut outcomes: Vec<(f64, Option<String>, String, Option<String>, Option<String>)> = Vec::new();
     // The row of each action, by (mission, seq).
     let mut seq_row: HashMap<(Option<String>, u64), usize> = HashMap::new();
     let missions: Vec<Option<String>> = {
@@ -315,7 +317,13 @@ pub fn render(records: &[Record], opts: &Options) -> String {
                 unexpected.push((r.t, ev, details));
             }
             "outcome" => {
-                outcomes.push((r.t, r.mission.clone(), r.result.clone().unwrap_or_default(), r.reason.clone()));
+                outcomes.push((
+                    r.t,
+                    r.mission.clone(),
+                    r.result.clone().unwrap_or_default(),
+                    r.reason.clone(),
+                    r.via.clone(),
+                ));
             }
             _ => {}
         }
@@ -364,9 +372,12 @@ pub fn render(records: &[Record], opts: &Options) -> String {
         let name = if name.is_empty() { "mission".to_string() } else { name };
         let res: Vec<String> = outcomes
             .iter()
-            .map(|(t, m, r, _)| match (several, m) {
-                (true, Some(m)) => format!("{m}: {} at {} s", r.to_uppercase(), fmt_time(*t)),
-                _ => format!("{} at {} s", r.to_uppercase(), fmt_time(*t)),
+            .map(|(t, m, r, _, via)| {
+                let via = via.as_ref().map(|v| format!(" through {v}")).unwrap_or_default();
+                match (several, m) {
+                    (true, Some(m)) => format!("{m}: {}{via} at {} s", r.to_uppercase(), fmt_time(*t)),
+                    _ => format!("{}{via} at {} s", r.to_uppercase(), fmt_time(*t)),
+                }
             })
             .collect();
         if res.is_empty() {
@@ -566,7 +577,7 @@ pub fn render(records: &[Record], opts: &Options) -> String {
     }
 
     // Outcomes.
-    for (k, (t, m, result, reason)) in outcomes.iter().enumerate() {
+    for (k, (t, m, result, reason, _)) in outcomes.iter().enumerate() {
         let xo = x(*t);
         let color = match result.as_str() {
             "ok" => "#1f9d3a",
