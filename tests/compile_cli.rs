@@ -84,54 +84,36 @@ fn analyze_json_max_tokens_is_the_largest_place_bound() {
 #[test]
 fn dot_views_structure_and_task() {
     let dir = tmp("views");
-    let dot = dir.join("structure.dot");
     let pnml = dir.join("m.pnml");
-    let out = mcl(&[
-        "compile",
-        "examples/dam-inspection.mcl",
-        "-o",
-        pnml.to_str().unwrap(),
-        "--dot",
-        dot.to_str().unwrap(),
-        "--view",
-        "structure",
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let d = std::fs::read_to_string(&dot).unwrap();
+    // The drawing of the dam inspection with `--view VIEW`.
+    let draw = |view: &str| {
+        let dot = dir.join(format!("{}.dot", view.replace(':', "-")));
+        let out = mcl(&[
+            "compile",
+            "examples/dam-inspection.mcl",
+            "-o",
+            pnml.to_str().unwrap(),
+            "--dot",
+            dot.to_str().unwrap(),
+            "--view",
+            view,
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read_to_string(&dot).unwrap()
+    };
+    let d = draw("structure");
     assert!(d.starts_with("digraph \"mission\" {"), "{d}");
     for want in ["monitor\\nline 17", "try-catch\\nline 18", "parallel-and\\nline 21", "Goto(initial_pos)\\nline 20"] {
         assert!(d.contains(want), "{want} in {d}");
     }
     assert!(d.contains("[label=\"catch\"]") && d.contains("[label=\"watched\"]"), "{d}");
     let nodes = d.lines().filter(|l| l.contains("shape=")).count();
-    let net = dir.join("net.dot");
-    assert!(mcl(&[
-        "compile",
-        "examples/dam-inspection.mcl",
-        "-o",
-        pnml.to_str().unwrap(),
-        "--dot",
-        net.to_str().unwrap()
-    ])
-    .status
-    .success());
-    let net_nodes = std::fs::read_to_string(&net).unwrap().lines().filter(|l| l.contains("shape=")).count();
+    let net_nodes = draw("net").lines().filter(|l| l.contains("shape=")).count();
     assert!(nodes * 10 < net_nodes, "{nodes} structure nodes vs {net_nodes} net nodes");
 
-    let task = dir.join("task.dot");
-    let out = mcl(&[
-        "compile",
-        "examples/dam-inspection.mcl",
-        "-o",
-        pnml.to_str().unwrap(),
-        "--dot",
-        task.to_str().unwrap(),
-        "--view",
-        "task:Goto",
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let t = std::fs::read_to_string(&task).unwrap();
+    let t = draw("task:Goto");
     assert!(t.contains("TT0") && t.contains("?eventGotoOk"), "{t}");
+    let task = dir.join("task.dot");
 
     // Unknown task, unknown view, a view without --dot: usage errors.
     let bad = |args: &[&str]| mcl(args).status.code();

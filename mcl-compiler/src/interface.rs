@@ -83,7 +83,7 @@ pub fn vehicle_interface(db: &dyn Db, root: SourceFile) -> VehicleInterface {
     let mut prims: BTreeMap<String, PrimitiveInterface> = BTreeMap::new();
     // Commands, in the order the actions are declared (by file, then text).
     let mut actions: Vec<_> = scope.names(DefKind::Action).filter_map(|n| scope.first(DefKind::Action, n)).collect();
-    actions.sort_by_key(|id| (id.file.path(db).to_path_buf(), scope::action(db, *id).map(|a| a.span.start)));
+    actions.sort_by_cached_key(|id| (id.file.path(db).to_path_buf(), scope::action(db, *id).map(|a| a.span.start)));
     for id in actions {
         let Some(a) = scope::action(db, id) else { continue };
         let p = prims.entry(a.primitive.text.clone()).or_default();
