@@ -20,6 +20,7 @@ use crate::link::{AacEnd, Action, Delivered, Inbound, Link};
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player};
 use crate::trace::{Record, Tracer};
+use crate::vehicle::{Pose, VirtualVehicle};
 
 /// Receives trace records as they are produced.
 pub trait Sink {
@@ -370,19 +371,39 @@ fn number(m: &Inbound) -> Option<u64> {
     }
 }
 
-pub(crate) fn feed_mock(s: &mut Session, mock: &mut MockVehicle, t: f64, out: &[Output]) {
+pub(crate) fn feed_mock(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), t: f64, out: &[Output]) {
     for a in actions(out) {
         mock.on_action(t, a);
     }
     for w in mock.take_warnings() {
         s.warn(t, w);
     }
+    drain_poses(s, mock);
+}
+
+/// Traces the poses `vehicle` reached since the last call.
+pub(crate) fn drain_poses(s: &mut Session, vehicle: &mut (impl VirtualVehicle + ?Sized)) {
+    for p in vehicle.take_poses() {
+        let r = pose_record(s.tracer.mission(), &p);
+        s.emit_record(r);
+    }
+}
+
+/// The `pose` trace record of `p`.
+pub fn pose_record(mission: Option<&str>, p: &Pose) -> Record {
+    let mut r = Record::new(p.t, "pose");
+    r.mission = mission.map(str::to_string);
+    r.x = Some(p.x);
+    r.y = Some(p.y);
+    r.z = Some(p.z);
+    r.yaw = Some(p.yaw);
+    r
 }
 
 /// Runs `s` against `mock` in virtual time until the mission ends, nothing
 /// more can happen, or the time limit passes. Starts the player if it has
 /// not started (a resumed player has). `mock.initial()` must have been called.
-pub fn run_virtual(s: &mut Session, mock: &mut MockVehicle, limits: Limits) -> Result<End, String> {
+pub fn run_virtual(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), limits: Limits) -> Result<End, String> {
     if !started(s) {
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, mock, 0.0, &actions);
@@ -425,7 +446,12 @@ pub fn run_virtual(s: &mut Session, mock: &mut MockVehicle, limits: Limits) -> R
         let actions = if tp.is_some_and(|a| a <= next) {
             s.step(Input::Timer(next))?
         } else {
-            let Some((t, m)) = mock.pop_due(next) else { continue };
+            // A simulated vehicle may only advance to `next` (a step with
+            // nothing to send but poses).
+            let Some((t, m)) = mock.pop_due(next) else {
+                drain_poses(s, mock);
+                continue;
+            };
             match perception_or_event(t, m) {
                 Some(input) => s.step(input)?,
                 None => continue,

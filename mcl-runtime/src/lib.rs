@@ -20,3 +20,4 @@ pub mod protocol;
 pub mod scenario;
 pub mod tcp;
 pub mod trace;
+pub mod vehicle;

@@ -373,6 +373,27 @@ impl MockVehicle {
     }
 }
 
+impl crate::vehicle::VirtualVehicle for MockVehicle {
+    fn initial(&mut self) -> Vec<(f64, Inbound)> {
+        MockVehicle::initial(self)
+    }
+    fn on_action(&mut self, now: f64, a: &Action) {
+        MockVehicle::on_action(self, now, a);
+    }
+    fn next_deadline(&self) -> Option<f64> {
+        MockVehicle::next_deadline(self)
+    }
+    fn pop_due(&mut self, now: f64) -> Option<(f64, Inbound)> {
+        MockVehicle::pop_due(self, now)
+    }
+    fn take_delivered(&mut self, msg: &Inbound) -> bool {
+        MockVehicle::take_delivered(self, msg)
+    }
+    fn take_warnings(&mut self) -> Vec<String> {
+        MockVehicle::take_warnings(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

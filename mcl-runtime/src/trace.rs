@@ -129,6 +129,18 @@ pub struct Record {
     /// completed its plan.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub via: Option<String>,
+    /// On a `pose`: east, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<f64>,
+    /// On a `pose`: north, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<f64>,
+    /// On a `pose`: depth, metres (≥ 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+    /// On a `pose`: heading, radians (0 towards +x, counter-clockwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub yaw: Option<f64>,
 }
 
 impl Record {
