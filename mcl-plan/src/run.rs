@@ -38,7 +38,7 @@ use mcl_runtime::link::{Action, Inbound};
 use mcl_runtime::mock::{tables_of, CallInfo, MockVehicle, TaskEvents};
 use mcl_runtime::player::{Outcome as PlayerOutcome, Output, Player, PlayerOptions};
 use mcl_runtime::scenario::Scenario;
-use mcl_runtime::trace::{live_line, round_time, SourceMap, Tracer};
+use mcl_runtime::trace::{live_line, round_time, RecordKind, SourceMap, Tracer};
 use mcl_syntax::ast::{Item, Value, ValueKind};
 use serde_json::{json, Value as Json};
 use std::collections::HashMap;
@@ -502,10 +502,10 @@ impl Run<'_> {
             let mut r = run.tracer.record(o);
             // An aborted mission is left with nothing to fire: that is the
             // executor's doing, not a stuck mission.
-            if let (Some(why), "outcome") = (self.aborting, r.kind.as_str()) {
-                if r.result.as_deref() == Some("stuck") {
-                    r.result = Some("aborted".into());
-                    r.reason = Some(why.into());
+            if let (Some(why), RecordKind::Outcome { result, reason, .. }) = (self.aborting, &mut r.kind) {
+                if result == "stuck" {
+                    *result = "aborted".into();
+                    *reason = Some(why.into());
                 }
             }
             records.push(r);
