@@ -15,8 +15,8 @@
 //! Hovering a mark shows its details with the source line of its call
 //! (`<title>`). Hand-written SVG, no dependencies.
 //!
-//! Three steps, one file each: [`collect`] turns records into rows of bars
-//! and marks, [`layout`] gives them coordinates, [`draw`] writes the SVG.
+//! Three steps, one file each: `collect.rs` turns records into rows of bars
+//! and marks, `layout.rs` gives them coordinates, `draw.rs` writes the SVG.
 
 mod collect;
 mod draw;
