@@ -152,81 +152,7 @@ enum Command {
     /// AAC in real time, and re-plans when the world differs (exit status 0 goal reached, 1 no
     /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit, 130/143 after
     /// SIGINT/SIGTERM with the trace flushed).
-    Plan {
-        /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
-        file: Option<PathBuf>,
-        /// PDDL domain file (default: domain.pddl beside FILE.mcl).
-        #[arg(long, value_name = "D.pddl")]
-        domain: Option<PathBuf>,
-        /// PDDL problem file (default: problem.pddl beside FILE.mcl).
-        #[arg(long, value_name = "P.pddl")]
-        problem: Option<PathBuf>,
-        /// The .mcl file of mission operators (instead of FILE).
-        #[arg(long, value_name = "FILE.mcl")]
-        operators: Option<PathBuf>,
-        /// Search algorithm.
-        #[arg(long, value_enum, default_value = "astar")]
-        search: cmd::plan::SearchChoice,
-        /// Heuristic of A*.
-        #[arg(long, value_enum, default_value = "hmax")]
-        heuristic: cmd::plan::HeuristicChoice,
-        /// Output format.
-        #[arg(long, value_enum, default_value = "ipc")]
-        format: cmd::plan::PlanFormat,
-        /// Validate this plan (IPC format) instead of planning.
-        #[arg(long, value_name = "PLAN")]
-        validate: Option<PathBuf>,
-        /// Give up after storing this many states.
-        #[arg(long, default_value_t = mcl_plan::search::DEFAULT_MAX_STATES)]
-        max_states: u64,
-        /// Print grounding and search statistics on standard error.
-        #[arg(long)]
-        stats: bool,
-        /// Execute the plan: run each step's MCL mission on the player, watch the world through
-        /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock or --aac).
-        #[arg(long)]
-        run: bool,
-        /// With --run: against the in-process mock vehicle (a dry run).
-        #[arg(long, requires = "run")]
-        mock: bool,
-        /// With --run: against the vehicle's AAC listening at HOST:PORT, in real time (e.g.
-        /// `mcl mock-aac --plan FILE.mcl`).
-        #[arg(long, value_name = "HOST:PORT", requires = "run", conflicts_with = "mock")]
-        aac: Option<String>,
-        /// With --aac: shared secret for the AAC.
-        #[arg(long, requires = "aac")]
-        token: Option<String>,
-        /// With --run: how the mock vehicle answers and which perceptions it sends (TOML, docs/scenarios.md).
-        #[arg(long, value_name = "S.toml", requires = "run")]
-        scenario: Option<PathBuf>,
-        /// With --run: fact-provider scripts (default: world.xml beside FILE.mcl).
-        #[arg(long, value_name = "W.xml", requires = "run")]
-        world: Option<PathBuf>,
-        /// With --run: virtual time (instantaneous and deterministic).
-        #[arg(long, requires = "run")]
-        virtual_time: bool,
-        /// With --run: mission time runs FACTOR times faster than real time.
-        #[arg(long, value_name = "FACTOR", default_value_t = 1.0, requires = "run")]
-        speed: f64,
-        /// With --run: write the trace (JSON lines: player records, plans, re-plans, steps, facts).
-        #[arg(long, value_name = "T.jsonl", requires = "run")]
-        trace: Option<PathBuf>,
-        /// With --run: seed of the players and of the mock vehicle (default: the scenario's, else 0).
-        #[arg(long, requires = "run")]
-        seed: Option<u64>,
-        /// With --run: mission of FILE.mcl (without parameters) the vehicle runs while re-planning.
-        #[arg(long, value_name = "MISSION", requires = "run")]
-        holding: Option<String>,
-        /// With --run: stop (exit status 3) when mission time passes SECONDS.
-        #[arg(long, value_name = "SECONDS", requires = "run")]
-        time_limit: Option<f64>,
-        /// With --run: give up after this many plans.
-        #[arg(long, value_name = "N", default_value_t = 100, requires = "run")]
-        max_plans: u32,
-        /// With --run: no live log.
-        #[arg(short, long)]
-        quiet: bool,
-    },
+    Plan(cmd::plan::Options),
     /// Run the language server (LSP over standard input and output), for editors.
     Lsp {
         /// Accepted for editors that pass it; standard input and output are the only transport.
@@ -296,58 +222,7 @@ fn main() -> ExitCode {
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
         Command::New { name } => cmd::new::run(&name),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),
-        Command::Plan {
-            file,
-            domain,
-            problem,
-            operators,
-            search,
-            heuristic,
-            format,
-            validate,
-            max_states,
-            stats,
-            run,
-            mock,
-            aac,
-            token,
-            scenario,
-            world,
-            virtual_time,
-            speed,
-            trace,
-            seed,
-            holding,
-            time_limit,
-            max_plans,
-            quiet,
-        } => cmd::plan::run(cmd::plan::Options {
-            file,
-            domain,
-            problem,
-            operators,
-            search,
-            heuristic,
-            format,
-            validate,
-            max_states,
-            stats,
-            execute: run.then_some(cmd::plan::Execute {
-                mock,
-                aac,
-                token,
-                scenario,
-                world,
-                virtual_time,
-                speed,
-                trace,
-                seed,
-                holding,
-                time_limit,
-                max_plans,
-                quiet,
-            }),
-        }),
+        Command::Plan(o) => cmd::plan::run(o),
         Command::Run(o) => cmd::run::run(o),
         Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {

@@ -8,6 +8,7 @@ use std::collections::BTreeSet;
 use std::time::Duration;
 
 use aac_common::*;
+use mcl_runtime::trace::{Record, RecordKind};
 
 const SCENARIO: &str = r#"
 # Short delays so that the mission lasts a couple of seconds.
@@ -98,13 +99,7 @@ fn mock_aac_killed_and_restarted_mid_mission() {
     assert!(err.contains(": OK at"), "{ctx}");
 
     // Actions the player sent, from its trace.
-    let sent: Vec<u64> = std::fs::read_to_string(&trace)
-        .unwrap()
-        .lines()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|r| r["kind"] == "action")
-        .map(|r| r["seq"].as_u64().unwrap())
-        .collect();
+    let sent: Vec<u64> = sent(&trace);
     let executed_second = second.executed();
     let restored = seqs(&log_second, "restored seq=");
     assert!(!executed_first.is_empty() && !executed_second.is_empty(), "{ctx}");
@@ -131,28 +126,26 @@ fn mock_aac_killed_and_restarted_mid_mission() {
 }
 
 /// Every action and event with the call it is credited to, and the outcome
-/// (no times), from a trace file.
-fn attribution(trace: &std::path::Path) -> (Vec<String>, Vec<serde_json::Value>) {
-    let records: Vec<serde_json::Value> =
-        std::fs::read_to_string(trace).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+/// (no times), the unexpected events and the number of stale ones, from a trace file.
+fn attribution(trace: &std::path::Path) -> (Vec<String>, Vec<Record>, usize) {
+    let records = records(trace);
     let calls = records
         .iter()
-        .filter_map(|r| match r["kind"].as_str().unwrap() {
-            "action" => Some(format!(
-                "action #{} {} {} task {} call {}",
-                r["seq"], r["action"], r["params"], r["task"], r["call_site"]
-            )),
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { seq, action, params, call, .. } => {
+                Some(format!("action #{seq} {action} {params:?} task {:?} call {:?}", call.task, call.call_site))
+            }
             // `activation`: the action whose primitive run raised the event.
-            "event" => Some(format!(
-                "event {} task {} call {} activation {}",
-                r["event"], r["task"], r["call_site"], r["activation"]
-            )),
-            "outcome" => Some(format!("outcome {}", r["result"])),
+            RecordKind::Event { event, call, activation, .. } => {
+                Some(format!("event {event} task {:?} call {:?} activation {activation:?}", call.task, call.call_site))
+            }
+            RecordKind::Outcome { result, .. } => Some(format!("outcome {result}")),
             _ => None,
         })
         .collect();
-    let odd = records.iter().filter(|r| r["kind"] == "unexpected_event").cloned().collect();
-    (calls, odd)
+    let odd = records.iter().filter(|r| matches!(r.kind, RecordKind::UnexpectedEvent { .. })).cloned().collect();
+    let stale = records.iter().filter(|r| matches!(r.kind, RecordKind::StaleEvent { .. })).count();
+    (calls, odd, stale)
 }
 
 /// Over TCP against `mcl mock-aac`, in real time, every single-mission
@@ -184,11 +177,11 @@ fn real_time_over_tcp_credits_each_event_to_its_call() {
         let (code, out, err) = run_bounded(cmd, Duration::from_secs(60));
         let ctx = format!("{name}\nstdout:\n{out}\nstderr:\n{err}\nAAC:\n{}", aac.log().join("\n"));
         assert_eq!(code, Some(0), "{ctx}");
-        let (v, _) = attribution(&virt);
-        let (r, odd) = attribution(&real);
+        let (v, _, _) = attribution(&virt);
+        let (r, odd, stale_here) = attribution(&real);
         assert_eq!(r, v, "{ctx}");
         assert!(odd.is_empty(), "{odd:?}\n{ctx}");
-        stale += std::fs::read_to_string(&real).unwrap().matches(r#""kind":"stale_event""#).count();
+        stale += stale_here;
     }
     // Not asserted (it depends on timing), but worth seeing when it happens.
     eprintln!("{stale} stale answers ignored over TCP");
@@ -247,7 +240,7 @@ fn player_killed_and_resumed_against_a_running_mock_aac() {
         let ctx = format!("{kill:?} state={state}\n{ctx}\nAAC:\n{}", aac.log().join("\n"));
         assert_eq!(code, Some(0), "{ctx}");
         assert_eq!(calls(&trace), reference, "{ctx}");
-        assert_eq!(of_kind(&trace, &["unexpected_event", "stale_event"]), Vec::<serde_json::Value>::new(), "{ctx}");
+        assert_eq!(odd_events(&trace), Vec::new(), "{ctx}");
         let mut executed = aac.executed();
         assert!(unique(&executed), "an action was executed twice\n{ctx}");
         executed.sort_unstable();
@@ -292,10 +285,7 @@ fn mock_aac_restarted_while_the_player_is_down() {
         let mut all = one.clone();
         all.extend(&two);
         assert!(unique(&all), "a sequence number was executed twice\n{ctx}");
-        let restarts = of_kind(&trace, &["warning"])
-            .iter()
-            .filter(|r| r["message"].as_str().is_some_and(|m| m.contains("lost its state")))
-            .count();
+        let restarts = warnings(&trace).iter().filter(|m| m.contains("lost its state")).count();
         if state {
             assert_eq!(calls(&trace), reference, "{ctx}");
             all.sort_unstable();

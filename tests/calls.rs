@@ -7,6 +7,7 @@
 //! * Stop before start: a call still waiting for its task when a
 //!   parallel-or or a monitor decides to abort it is never enabled.
 
+use mcl_runtime::trace::RecordKind;
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
@@ -40,29 +41,23 @@ fn run(name: &str, program: &str, scenario: &str, seed: u64) -> (Vec<String>, St
         .arg(&file)
         .output()
         .expect("run mcl");
-    let text = std::fs::read_to_string(&trace)
+    let records = mcl_runtime::trace::read_trace(&trace)
         .unwrap_or_else(|e| panic!("no trace ({e}): {}", String::from_utf8_lossy(&out.stderr)));
     let mut actions = Vec::new();
     let mut result = String::new();
-    for line in text.lines() {
-        let r: Value = serde_json::from_str(line).unwrap();
-        match r["kind"].as_str() {
-            Some("action") => {
-                let params: Vec<String> = r["params"]
-                    .as_object()
-                    .map(|o| o.iter().map(|(k, v)| format!("{k}={v}")).collect())
-                    .unwrap_or_default();
-                let label = r["label"].as_str().map(|l| format!(":{l}")).unwrap_or_default();
+    for r in records {
+        match r.kind {
+            RecordKind::Action { primitive, command, params, call, .. } => {
+                let params: Vec<String> = params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                let label = call.label.map(|l| format!(":{l}")).unwrap_or_default();
                 actions.push(format!(
-                    "{} {} {}({}) {}{label}",
-                    r["t"],
-                    r["primitive"].as_str().unwrap(),
-                    r["command"].as_str().unwrap(),
+                    "{} {primitive} {command}({}) {}{label}",
+                    Value::from(r.t),
                     params.join(","),
-                    r["task"].as_str().unwrap_or("?"),
+                    call.task.as_deref().unwrap_or("?"),
                 ));
             }
-            Some("outcome") => result = r["result"].as_str().unwrap_or("?").to_string(),
+            RecordKind::Outcome { result: res, .. } => result = res,
             _ => {}
         }
     }

@@ -3,6 +3,7 @@
 //! (issue 12, items 2 and 3; docs/coordination.md, *Crashes* and *The TCP
 //! link*). Every process is bounded in time: a test that hangs fails.
 
+use mcl_runtime::trace::{Record, RecordKind};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -20,6 +21,10 @@ fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcl-coord-fault-tests-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
+}
+
+fn trace(path: &Path) -> Vec<Record> {
+    mcl_runtime::trace::read_trace(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn lines(path: &Path) -> Vec<Value> {
@@ -79,7 +84,7 @@ fn vehicle(
     peer: (&str, u16),
     crash_after: Option<u64>,
     tag: &str,
-) -> (i32, Vec<Value>, Vec<Value>) {
+) -> (i32, Vec<Record>, Vec<Value>) {
     vehicle_of(&[AUV_ASC, "--scenario", SCENARIO], me, listen, peer, crash_after, tag)
 }
 
@@ -91,11 +96,11 @@ fn vehicle_of(
     peer: (&str, u16),
     crash_after: Option<u64>,
     tag: &str,
-) -> (i32, Vec<Value>, Vec<Value>) {
+) -> (i32, Vec<Record>, Vec<Value>) {
     let journal = tmp(&format!("{tag}-{me}.journal"));
     let mut crash = crash_after;
     for life in 0.. {
-        let trace = tmp(&format!("{tag}-{me}-{life}.jsonl"));
+        let trace_path = tmp(&format!("{tag}-{me}-{life}.jsonl"));
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_mcl"));
         cmd.args(["run", "--mock"])
             .args(file)
@@ -103,7 +108,7 @@ fn vehicle_of(
             .args(["--coord-listen", &format!("127.0.0.1:{listen}")])
             .args(["--coord-peer", &format!("{}=127.0.0.1:{}", peer.0, peer.1)])
             .args(["--coord-token", "fleet secret"])
-            .args(["--speed", "100", "--time-limit", "3000", "-q", "--trace", trace.to_str().unwrap()])
+            .args(["--speed", "100", "--time-limit", "3000", "-q", "--trace", trace_path.to_str().unwrap()])
             .args([if life == 0 { "--journal" } else { "--resume" }, journal.to_str().unwrap()]);
         if let Some(n) = crash.take() {
             cmd.args(["--crash-after", &n.to_string()]);
@@ -113,7 +118,7 @@ fn vehicle_of(
         match status.code() {
             Some(code) => {
                 assert!(life <= 1, "{me}: more lives than crashes");
-                return (code, lines(&trace), lines(&journal));
+                return (code, trace(&trace_path), lines(&journal));
             }
             None => assert!(crash_after.is_some() && life == 0, "{me} died unexpectedly: {err}"),
         }
@@ -123,7 +128,7 @@ fn vehicle_of(
 
 /// Both vehicles at once, `auv` crashing after `auv_crash` syncs and `asc`
 /// after `asc_crash` (each restarted at once).
-fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, Vec<Value>, Vec<Value>); 2] {
+fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, Vec<Record>, Vec<Value>); 2] {
     let (pa, pc) = (free_port(), free_port());
     let tag2 = tag.to_string();
     let asc = std::thread::spawn(move || vehicle("asc", pc, ("auv", pa), asc_crash, &tag2));
@@ -133,30 +138,61 @@ fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, 
 
 /// The fire records of the start (`callN.start`) and end (`callN.release`)
 /// of the calls labelled `label`, as indices in the trace.
-fn call(tr: &[Value], label: &str, what: &str) -> Vec<usize> {
+fn call(tr: &[Record], label: &str, what: &str) -> Vec<usize> {
     tr.iter()
         .enumerate()
-        .filter(|(_, r)| {
-            r["kind"] == "fire"
-                && r["label"] == label
-                && r["transition"].as_str().is_some_and(|t| t.starts_with("call") && t.ends_with(what))
+        .filter(|(_, r)| match &r.kind {
+            RecordKind::Fire { transition: t, call, .. } => {
+                call.label.as_deref() == Some(label) && t.starts_with("call") && t.ends_with(what)
+            }
+            _ => false,
         })
         .map(|(i, _)| i)
         .collect()
 }
 
+/// The transition of a `fire` record.
+fn fired(r: &Record) -> &str {
+    match &r.kind {
+        RecordKind::Fire { transition, .. } => transition,
+        k => panic!("not a firing: {k:?}"),
+    }
+}
+
+/// The `transition` of every `coord_send`.
+fn sends(tr: &[Record]) -> Vec<&str> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordSend { transition, .. } => Some(transition.as_str()),
+            _ => None,
+        })
+        .collect()
+}
+
+/// (`from`, `transition`) of every `coord_receive`.
+fn receives(tr: &[Record]) -> Vec<(&str, &str)> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordReceive { from, transition, .. } => Some((from.as_str(), transition.as_str())),
+            _ => None,
+        })
+        .collect()
+}
+
 /// The first `coord_receive` of `transition` from `from`.
-fn received(tr: &[Value], from: &str, transition: &str) -> Option<usize> {
-    tr.iter().position(|r| r["kind"] == "coord_receive" && r["from"] == from && r["transition"] == transition)
+fn received(tr: &[Record], from: &str, transition: &str) -> Option<usize> {
+    tr.iter().position(
+        |r| matches!(&r.kind, RecordKind::CoordReceive { from: f, transition: t, .. } if f == from && t == transition),
+    )
 }
 
 /// Enable and disable actions per primitive and call site, in order.
-fn actions(tr: &[Value]) -> BTreeMap<String, Vec<String>> {
+fn actions(tr: &[Record]) -> BTreeMap<String, Vec<String>> {
     let mut out: BTreeMap<String, Vec<String>> = BTreeMap::new();
-    for r in tr.iter().filter(|r| r["kind"] == "action") {
-        out.entry(format!("{}@{}", r["primitive"], r["call_site"]))
-            .or_default()
-            .push(r["command"].as_str().unwrap_or("?").to_string());
+    for r in tr {
+        if let RecordKind::Action { primitive, command, call, .. } = &r.kind {
+            out.entry(format!("{primitive}@{:?}", call.call_site)).or_default().push(command.clone());
+        }
     }
     out
 }
@@ -172,10 +208,10 @@ fn reference() -> BTreeMap<String, BTreeMap<String, usize>> {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let tr = lines(&tp);
+    let tr = trace(&tp);
     let mut by = BTreeMap::new();
     for m in ["auv", "asc"] {
-        let mine: Vec<Value> = tr.iter().filter(|r| r["mission"] == m).cloned().collect();
+        let mine: Vec<Record> = tr.iter().filter(|r| r.mission.as_deref() == Some(m)).cloned().collect();
         let counts =
             actions(&mine).into_iter().map(|(k, v)| (k, v.iter().filter(|c| *c == "enable").count())).collect();
         by.insert(m.to_string(), counts);
@@ -184,13 +220,18 @@ fn reference() -> BTreeMap<String, BTreeMap<String, usize>> {
 }
 
 /// Every check of a crashed and resumed AUV/ASC run.
-fn check(runs: &[(i32, Vec<Value>, Vec<Value>); 2], reference: &BTreeMap<String, BTreeMap<String, usize>>, tag: &str) {
+fn check(runs: &[(i32, Vec<Record>, Vec<Value>); 2], reference: &BTreeMap<String, BTreeMap<String, usize>>, tag: &str) {
     let [(ca, auv, ja), (cc, asc, jc)] = runs;
     assert_eq!((*ca, *cc), (0, 0), "{tag}: both end ok");
     for (m, tr) in [("auv", auv), ("asc", asc)] {
-        let o: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "outcome").collect();
-        assert_eq!(o.len(), 1, "{tag}: {m} ends once");
-        assert_eq!(o[0]["result"], "ok", "{tag}: {m}");
+        let o: Vec<&str> = tr
+            .iter()
+            .filter_map(|r| match &r.kind {
+                RecordKind::Outcome { result, .. } => Some(result.as_str()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(o, ["ok"], "{tag}: {m} ends once, ok");
         // No primitive enabled twice: enable and disable alternate, and
         // as many enables as without a crash.
         for (k, cmds) in actions(tr) {
@@ -205,7 +246,7 @@ fn check(runs: &[(i32, Vec<Value>, Vec<Value>); 2], reference: &BTreeMap<String,
     // and only then did auv's call start.
     let (asc_end, auv_start) = (call(asc, "deploy_auv", ".release"), call(auv, "deploy_auv", ".start"));
     assert_eq!((asc_end.len(), auv_start.len()), (1, 1), "{tag}");
-    let tr_end = asc[asc_end[0]]["transition"].as_str().unwrap();
+    let tr_end = fired(&asc[asc_end[0]]);
     let got = received(auv, "asc", tr_end).unwrap_or_else(|| panic!("{tag}: auv never heard of asc's {tr_end}"));
     assert!(got < auv_start[0], "{tag}: auv's deploy_auv started before asc's ended");
     // sync { auv:send_data, asc:send_data }: each starts once, after the
@@ -214,7 +255,7 @@ fn check(runs: &[(i32, Vec<Value>, Vec<Value>); 2], reference: &BTreeMap<String,
         let starts = call(tr_me, "send_data", ".start");
         assert_eq!(starts.len(), 1, "{tag}: {me}'s send_data starts once");
         assert!(
-            tr_me[..starts[0]].iter().any(|r| r["kind"] == "coord_receive" && r["from"] == other),
+            receives(&tr_me[..starts[0]]).iter().any(|(from, _)| *from == other),
             "{tag}: {me}'s send_data started without a message from {other}"
         );
     }
@@ -229,13 +270,8 @@ fn check(runs: &[(i32, Vec<Value>, Vec<Value>); 2], reference: &BTreeMap<String,
         assert_eq!(seqs, (1..=seqs.len() as u64).collect::<Vec<_>>(), "{tag}: {from} -> {to}");
         let tr_from = if from == "auv" { auv } else { asc };
         let tr_to = if to == "auv" { auv } else { asc };
-        let sent: Vec<&Value> =
-            tr_from.iter().filter(|r| r["kind"] == "coord_send").map(|r| &r["transition"]).collect();
-        let got: Vec<&Value> = tr_to
-            .iter()
-            .filter(|r| r["kind"] == "coord_receive" && r["from"] == from)
-            .map(|r| &r["transition"])
-            .collect();
+        let sent = sends(tr_from);
+        let got: Vec<&str> = receives(tr_to).into_iter().filter(|(f, _)| *f == from).map(|(_, t)| t).collect();
         assert_eq!(sent, got, "{tag}: {from} -> {to}");
     }
 }
@@ -262,8 +298,8 @@ fn vehicles_killed_and_resumed_keep_every_constraint() {
         for (k, crash) in [auv_crash, asc_crash].iter().enumerate() {
             if crash.is_some() {
                 assert!(
-                    runs[k].1.iter().any(|r| r["kind"] == "link"
-                        && r["message"].as_str().is_some_and(|m| m.starts_with("resumed from the journal"))),
+                    runs[k].1.iter().any(|r| matches!(&r.kind,
+                        RecordKind::Link { message } if message.starts_with("resumed from the journal"))),
                     "{tag}"
                 );
             }
@@ -306,7 +342,9 @@ fn a_lent_mutex_token_survives_a_crash_of_its_holder_or_its_borrower() {
         let lends: Vec<usize> = tra
             .iter()
             .enumerate()
-            .filter(|(_, r)| r["kind"] == "coord_send" && r["transition"] == "coord.lend.mutex1.b")
+            .filter(|(_, r)| {
+                matches!(&r.kind, RecordKind::CoordSend { transition, .. } if transition == "coord.lend.mutex1.b")
+            })
             .map(|(i, _)| i)
             .collect();
         assert_eq!(lends.len(), 1, "{tag}: lent once");
@@ -314,9 +352,9 @@ fn a_lent_mutex_token_survives_a_crash_of_its_holder_or_its_borrower() {
         let b_start = call(&trb, "survey", ".start");
         assert_eq!(b_start.len(), 1, "{tag}");
         assert!(received(&trb, "a", "coord.lend.mutex1.b").is_some_and(|g| g < b_start[0]), "{tag}");
-        let b_end = &trb[call(&trb, "survey", ".release")[0]]["transition"];
+        let b_end = fired(&trb[call(&trb, "survey", ".release")[0]]);
         let up = call(&tra, "up", ".start");
-        assert!(received(&tra, "b", b_end.as_str().unwrap()).is_some_and(|r| up.len() == 1 && r < up[0]), "{tag}");
+        assert!(received(&tra, "b", b_end).is_some_and(|r| up.len() == 1 && r < up[0]), "{tag}");
         for tr in [&tra, &trb] {
             for (k, cmds) in actions(tr) {
                 assert_eq!(cmds, ["enable", "disable"], "{tag}: {k}");
@@ -425,27 +463,26 @@ fn forged_and_replayed_coordination_is_refused_and_logged() {
     let (sb, eb, _) = wait(b, LIMIT, "b");
     assert_eq!(sa.code(), Some(0), "a: {ea}");
     assert_eq!(sb.code(), Some(0), "b: {eb}");
-    let (tra, trb) = (lines(&ta), lines(&tb));
-    let refused: Vec<&str> =
-        tra.iter().filter(|r| r["kind"] == "coord_reject").filter_map(|r| r["message"].as_str()).collect();
+    let (tra, trb) = (trace(&ta), trace(&tb));
+    let refused: Vec<&str> = tra
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordReject { message } => Some(message.as_str()),
+            _ => None,
+        })
+        .collect();
     assert!(refused.len() >= 4, "{refused:?}");
     assert!(refused.iter().any(|m| m.contains("no hello")), "{refused:?}");
     assert!(refused.iter().any(|m| m.contains("did not prove the fleet secret")), "{refused:?}");
     // Never applied: a received only what b sent, and went up after b's
     // survey ended.
-    let sent: Vec<&Value> = trb.iter().filter(|r| r["kind"] == "coord_send").map(|r| &r["transition"]).collect();
-    let got: Vec<&Value> = tra.iter().filter(|r| r["kind"] == "coord_receive").map(|r| &r["transition"]).collect();
-    assert_eq!(sent, got);
-    let b_end = trb.iter().position(|r| {
-        r["kind"] == "fire"
-            && r["label"] == "survey"
-            && r["transition"].as_str().is_some_and(|t| t.ends_with(".release"))
-    });
-    assert!(b_end.is_some());
+    let got: Vec<&str> = receives(&tra).into_iter().map(|(_, t)| t).collect();
+    assert_eq!(sends(&trb), got);
+    assert!(!call(&trb, "survey", ".release").is_empty());
     let up = call(&tra, "up", ".start");
-    let told = tra.iter().position(|r| {
-        r["kind"] == "coord_receive" && r["transition"].as_str().is_some_and(|t| t.ends_with(".release"))
-    });
+    let told = tra.iter().position(
+        |r| matches!(&r.kind, RecordKind::CoordReceive { transition, .. } if transition.ends_with(".release")),
+    );
     assert!(told.is_some_and(|t| up.len() == 1 && t < up[0]), "a went up before b's survey ended");
     // The live log says so too.
     assert!(log.contains("a: REFUSED  coordination: connection from 127.0.0.1:"), "{log}");

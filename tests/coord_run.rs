@@ -4,6 +4,7 @@
 //! missions at once, exchanging the coordination messages the synthesis
 //! requires. The trace is checked against every constraint.
 
+use mcl_runtime::trace::{Record, RecordKind};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -27,19 +28,52 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn trace(path: &Path) -> Vec<Value> {
-    std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("bad trace line {l}: {e}")))
+fn trace(path: &Path) -> Vec<Record> {
+    mcl_runtime::trace::read_trace(path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Whether `r` is about `mission`.
+fn of_mission(r: &Record, mission: &str) -> bool {
+    r.mission.as_deref() == Some(mission)
+}
+
+/// A coordination message sent: (its record, `transition`, `to`, `seq`).
+fn sends(tr: &[Record]) -> Vec<(&Record, &str, &str, u64)> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordSend { seq, transition, to } => Some((r, transition.as_str(), to.as_str(), *seq)),
+            _ => None,
+        })
         .collect()
+}
+
+/// A coordination message received: (its record, `from`, `transition`, `event`, `seq`).
+fn receives(tr: &[Record]) -> Vec<(&Record, &str, &str, &str, u64)> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordReceive { seq, event, transition, from } => {
+                Some((r, from.as_str(), transition.as_str(), event.as_str(), *seq))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// The last record: a coordinated run's summary (`value`, `result`, `messages`).
+fn summary(tr: &[Record]) -> (Option<&Value>, &str, u64) {
+    let last = tr.last().expect("a record");
+    assert_eq!(last.mission.as_deref(), Some("*"));
+    match &last.kind {
+        RecordKind::CoordSummary { value, result, messages } => (value.as_ref(), result.as_str(), *messages),
+        k => panic!("the last record is not the summary: {k:?}"),
+    }
 }
 
 const AUV_ASC: &str = "examples/auv-asc.mcl";
 const SCENARIO: &str = "examples/scenarios/auv-asc.toml";
 
 /// `mcl run --mock FILE --trace T extra...`: (exit status, trace, output).
-fn run(file: &str, extra: &[&str], name: &str) -> (i32, Vec<Value>, Output) {
+fn run(file: &str, extra: &[&str], name: &str) -> (i32, Vec<Record>, Output) {
     let tp = tmp(name);
     let mut args = vec!["run", "--mock", file, "--trace", tp.to_str().unwrap()];
     args.extend_from_slice(extra);
@@ -58,14 +92,14 @@ struct Call {
     ends: Vec<(usize, f64)>,
 }
 
-fn call(tr: &[Value], mission: &str, label: &str) -> Call {
+fn call(tr: &[Record], mission: &str, label: &str) -> Call {
     let mut c = Call::default();
     for (i, r) in tr.iter().enumerate() {
-        if r["kind"] != "fire" || r["mission"] != mission || r["label"] != label {
+        let RecordKind::Fire { transition: id, call, .. } = &r.kind else { continue };
+        if !of_mission(r, mission) || call.label.as_deref() != Some(label) {
             continue;
         }
-        let t = r["t"].as_f64().unwrap();
-        let id = r["transition"].as_str().unwrap();
+        let t = r.t;
         let Some((head, tail)) = id.split_once('.') else { continue };
         if head.strip_prefix("call").is_none_or(|n| n.parse::<u32>().is_err()) {
             continue;
@@ -81,7 +115,7 @@ fn call(tr: &[Value], mission: &str, label: &str) -> Call {
 }
 
 /// `order { a, b }`: the k-th start of b comes after the k-th end of a.
-fn check_order(tr: &[Value], a: (&str, &str), b: (&str, &str)) -> usize {
+fn check_order(tr: &[Record], a: (&str, &str), b: (&str, &str)) -> usize {
     let (ca, cb) = (call(tr, a.0, a.1), call(tr, b.0, b.1));
     for (k, &(line, t)) in cb.starts.iter().enumerate() {
         let Some(&(end_line, end_t)) = ca.ends.get(k) else {
@@ -92,29 +126,28 @@ fn check_order(tr: &[Value], a: (&str, &str), b: (&str, &str)) -> usize {
     cb.starts.len()
 }
 
-/// Records of `kind`.
-fn of<'a>(tr: &'a [Value], kind: &str) -> Vec<&'a Value> {
-    tr.iter().filter(|r| r["kind"] == kind).collect()
-}
-
 /// The checks of every coordinated AUV/ASC run, whatever the transport and
 /// the clock: each mission ends ok, every constraint of the file holds, and
 /// the messages sent are the messages received and the number reported.
-fn check_auv_asc(code: i32, tr: &[Value], out: &Output) {
+fn check_auv_asc(code: i32, tr: &[Record], out: &Output) {
     assert_eq!(code, 0, "{}", stderr(out));
     // Every record names its mission; the summary at the end names them all ("*").
-    let (summary, records) = tr.split_last().unwrap();
-    assert_eq!(summary["kind"], "coord_summary");
-    assert_eq!(summary["mission"], "*");
-    for r in records {
-        assert!(r["mission"] == "auv" || r["mission"] == "asc", "{r}");
+    let (_, result, messages) = summary(tr);
+    for r in &tr[..tr.len() - 1] {
+        assert!(of_mission(r, "auv") || of_mission(r, "asc"), "{r:?}");
     }
     for m in ["auv", "asc"] {
-        let o: Vec<_> = of(tr, "outcome").into_iter().filter(|r| r["mission"] == m).collect();
-        assert_eq!(o.len(), 1);
-        assert_eq!(o[0]["result"], "ok", "{m}");
+        let o: Vec<&str> = tr
+            .iter()
+            .filter(|r| of_mission(r, m))
+            .filter_map(|r| match &r.kind {
+                RecordKind::Outcome { result, .. } => Some(result.as_str()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(o, ["ok"], "{m}");
     }
-    assert_eq!(summary["result"], "ok");
+    assert_eq!(result, "ok");
 
     // order { asc:deploy_auv, auv:deploy_auv }: the AUV's Altitude starts
     // only after the ASC's Deploy ended.
@@ -134,24 +167,24 @@ fn check_auv_asc(code: i32, tr: &[Value], out: &Output) {
     let (lm, em) = if a.starts[0].0 > b.starts[0].0 { ("auv", "asc") } else { ("asc", "auv") };
     // The later start was enabled by a message from the earlier one's mission.
     assert!(
-        tr[..later.starts[0].0].iter().any(|r| r["kind"] == "coord_receive" && r["mission"] == lm && r["from"] == em),
+        receives(&tr[..later.starts[0].0]).iter().any(|(r, from, ..)| of_mission(r, lm) && *from == em),
         "{lm}'s send_data started without a message from {em}"
     );
 
     // Messages: each sent is received once, the count is reported.
-    let sent = of(tr, "coord_send");
-    let received = of(tr, "coord_receive");
+    let sent = sends(tr);
+    let received = receives(tr);
     assert!(!sent.is_empty());
-    let key = |r: &Value, from: &str| format!("{from}#{}", r["seq"]);
-    let mut s: Vec<String> = sent.iter().map(|r| key(r, r["mission"].as_str().unwrap())).collect();
-    let mut g: Vec<String> = received.iter().map(|r| key(r, r["from"].as_str().unwrap())).collect();
+    let mut s: Vec<String> =
+        sent.iter().map(|(r, _, _, seq)| format!("{}#{seq}", r.mission.as_deref().unwrap())).collect();
+    let mut g: Vec<String> = received.iter().map(|(_, from, _, _, seq)| format!("{from}#{seq}")).collect();
     s.sort();
     g.sort();
     assert_eq!(s, g);
-    for r in &received {
-        assert_eq!(r["event"], format!("{}/{}", r["from"].as_str().unwrap(), r["transition"].as_str().unwrap()));
+    for (_, from, transition, event, _) in &received {
+        assert_eq!(*event, format!("{from}/{transition}"));
     }
-    assert_eq!(summary["messages"].as_u64(), Some(sent.len() as u64));
+    assert_eq!(messages, sent.len() as u64);
     assert!(
         stderr(out).contains(&format!("coordination: 2 missions, {} messages sent", sent.len())),
         "{}",
@@ -178,13 +211,8 @@ fn auv_asc_dry_run_respects_every_constraint() {
             allowed.push(format!("{m} {} -> {}", s["transition"].as_str().unwrap(), s["to"].as_str().unwrap()));
         }
     }
-    for r in of(&tr, "coord_send") {
-        let k = format!(
-            "{} {} -> {}",
-            r["mission"].as_str().unwrap(),
-            r["transition"].as_str().unwrap(),
-            r["to"].as_str().unwrap()
-        );
+    for (r, transition, to, _) in sends(&tr) {
+        let k = format!("{} {transition} -> {to}", r.mission.as_deref().unwrap());
         assert!(allowed.contains(&k), "{k} is not in coord.send");
     }
     // The live log names the mission on every line.
@@ -224,8 +252,8 @@ fn one_mission_alone_and_usage() {
     // --mission runs one mission alone, uncoordinated, as before.
     let (code, tr, _) = run(AUV_ASC, &["--virtual-time", "--mission", "asc"], "asc-alone.jsonl");
     assert_eq!(code, 0);
-    assert!(tr.iter().all(|r| r["mission"] == "asc"));
-    assert!(of(&tr, "coord_send").is_empty());
+    assert!(tr.iter().all(|r| of_mission(r, "asc")));
+    assert!(sends(&tr).is_empty());
     // The journal records one mission.
     let j = tmp("j.jsonl");
     let out = mcl(&["run", "--mock", "--virtual-time", AUV_ASC, "--journal", j.to_str().unwrap()]);
@@ -258,7 +286,7 @@ fn mutex_file(name: &str, bound: u32, staggered: bool) -> PathBuf {
 }
 
 /// The running intervals (trace lines) of a call's activations.
-fn intervals(tr: &[Value], mission: &str, label: &str) -> Vec<(usize, usize)> {
+fn intervals(tr: &[Record], mission: &str, label: &str) -> Vec<(usize, usize)> {
     let c = call(tr, mission, label);
     assert_eq!(c.starts.len(), c.ends.len(), "{mission}:{label} ended as often as it started");
     c.starts.iter().zip(&c.ends).map(|(s, e)| (s.0, e.0)).collect()
@@ -293,9 +321,9 @@ fn mutexes_never_overlap() {
         if *file == *at_once {
             assert_eq!(check_order(&tr, ("c", "survey"), ("a", "up")), 1);
         }
-        let sent = of(&tr, "coord_send").len() as u64;
-        assert_eq!(tr.last().unwrap()["messages"].as_u64(), Some(sent));
-        assert_eq!(of(&tr, "coord_receive").len() as u64, sent);
+        let sent = sends(&tr).len() as u64;
+        assert_eq!(summary(&tr).2, sent);
+        assert_eq!(receives(&tr).len() as u64, sent);
         assert!(sent > 0);
     }
     // With a bound of 2, two of them run at once in virtual time.
@@ -447,8 +475,8 @@ fn deadlocking_constraints_are_refused() {
 
 /// Runs the vehicle nets `vnets` in real time (`speed` times faster) over an
 /// in-process transport that delays every message by `delay` of wall-clock
-/// time; returns the trace (records in the order they happened) as JSON.
-fn run_delayed(vnets: Vec<mcl_coord::VehicleNet>, delay_ms: u64, speed: f64) -> (Vec<Value>, u8) {
+/// time; returns the trace (records in the order they happened).
+fn run_delayed(vnets: Vec<mcl_coord::VehicleNet>, delay_ms: u64, speed: f64) -> (Vec<Record>, u8) {
     use mcl_runtime::multi::{run_real_time, SharedSink, Vehicle};
     let names: Vec<String> = vnets.iter().map(|v| v.mission.clone()).collect();
     let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
@@ -469,7 +497,7 @@ fn run_delayed(vnets: Vec<mcl_coord::VehicleNet>, delay_ms: u64, speed: f64) -> 
         run_real_time(vs, shared, mcl_runtime::clock::Clock::new(speed, 0.0), limits).await.unwrap()
     });
     let records = std::mem::take(&mut sink.lock().unwrap().0);
-    (records.iter().map(|r| serde_json::to_value(r).unwrap()).collect(), end.exit_code())
+    (records, end.exit_code())
 }
 
 /// The missions of a mutex file and the supervisors of its analysis.
@@ -483,7 +511,7 @@ fn coordinated(path: &Path) -> (Vec<mcl_coord::Mission>, Vec<mcl_coord::Supervis
 
 /// How many of `missions`' `label` calls are running at once, at most
 /// (trace order).
-fn most_at_once(tr: &[Value], missions: &[&str], label: &str) -> usize {
+fn most_at_once(tr: &[Record], missions: &[&str], label: &str) -> usize {
     let mut events: Vec<(usize, i32)> = Vec::new();
     for m in missions {
         for (s, e) in intervals(tr, m, label) {
@@ -529,14 +557,13 @@ fn a_mutex_between_vehicles_holds_when_messages_take_time() {
     assert_eq!(check_order(&tr, ("c", "survey"), ("a", "up")), 1);
     // b and c each asked a (the holder) once, were granted once and gave
     // the token back at the end of their call.
-    let summary = tr.last().unwrap();
-    assert_eq!(summary["kind"], "coord_summary");
-    let sent =
-        |t: &str| of(&tr, "coord_send").iter().filter(|r| r["transition"].as_str().unwrap().starts_with(t)).count();
+    let (value, _, _) = summary(&tr);
+    let sent = |t: &str| sends(&tr).iter().filter(|(_, transition, ..)| transition.starts_with(t)).count();
     assert_eq!((sent("coord.request."), sent("coord.lend.")), (2, 2));
-    assert_eq!(summary["value"]["requests"], 2);
-    assert_eq!(summary["value"]["grants"], 2);
-    assert_eq!(summary["value"]["returns"], 2);
+    let value = value.expect("the mutex protocol's counts");
+    assert_eq!(value["requests"], 2);
+    assert_eq!(value["grants"], 2);
+    assert_eq!(value["returns"], 2);
 }
 
 #[test]
@@ -566,7 +593,8 @@ fn a_withdrawn_sync_arrival_does_not_let_the_other_call_start() {
         // a withdrew its call (cancel) and told b, which dropped the credit.
         let fired = |m: &str, suffix: &str| {
             tr.iter().any(|r| {
-                r["kind"] == "fire" && r["mission"] == m && r["transition"].as_str().unwrap().ends_with(suffix)
+                matches!(&r.kind, RecordKind::Fire { transition, .. } if transition.ends_with(suffix))
+                    && of_mission(r, m)
             })
         };
         assert!(fired("a", ".cancel"), "{extra:?}");
@@ -615,11 +643,11 @@ fn each_vehicle_in_its_own_process_over_tcp() {
     assert_eq!(oa.status.code(), Some(0), "a: {}", stderr(&oa));
     assert_eq!(ob.status.code(), Some(0), "b: {}", stderr(&ob));
     let (tra, trb) = (trace(&ta), trace(&tb));
-    assert!(tra.iter().all(|r| r["mission"] == "a" || r["mission"] == "*"));
-    assert!(trb.iter().all(|r| r["mission"] == "b" || r["mission"] == "*"));
+    assert!(tra.iter().all(|r| of_mission(r, "a") || of_mission(r, "*")));
+    assert!(trb.iter().all(|r| of_mission(r, "b") || of_mission(r, "*")));
     // What one sends, the other receives; b asked a for the mutex.
-    let sends = |tr: &[Value]| of(tr, "coord_send").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
-    let receives = |tr: &[Value]| of(tr, "coord_receive").iter().map(|r| r["transition"].clone()).collect::<Vec<_>>();
+    let sends = |tr: &[Record]| sends(tr).into_iter().map(|(_, t, ..)| t.to_string()).collect::<Vec<_>>();
+    let receives = |tr: &[Record]| receives(tr).into_iter().map(|(_, _, t, ..)| t.to_string()).collect::<Vec<_>>();
     assert_eq!(sends(&tra), receives(&trb));
     assert_eq!(sends(&trb), receives(&tra));
     assert!(sends(&trb).iter().any(|t| t == "coord.request.mutex1"), "{:?}", sends(&trb));

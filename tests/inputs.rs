@@ -8,6 +8,7 @@
 
 #![cfg(unix)]
 
+use mcl_runtime::trace::{Record, RecordKind};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -204,19 +205,19 @@ fn an_exploding_pddl_action_stops_grounding_with_exit_2() {
 }
 
 /// The names of the actions and events of a trace, in order.
-fn steps(records: &[serde_json::Value]) -> Vec<String> {
+fn steps(records: &[Record]) -> Vec<String> {
     records
         .iter()
-        .filter_map(|r| match r["kind"].as_str() {
-            Some("action") => r["action"].as_str().map(str::to_string),
-            Some("event") => r["event"].as_str().map(|e| format!("!{e}")),
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { action, .. } => Some(action.clone()),
+            RecordKind::Event { event, .. } => Some(format!("!{event}")),
             _ => None,
         })
         .collect()
 }
 
-/// Every line of a trace, each a whole JSON object.
-fn whole_lines(path: &Path) -> Vec<serde_json::Value> {
+/// Every line of a trace, each a whole record.
+fn whole_lines(path: &Path) -> Vec<Record> {
     let text = std::fs::read_to_string(path).unwrap();
     assert!(text.is_empty() || text.ends_with('\n'), "the trace ends with a whole line");
     text.lines().map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("cut line {l:?}: {e}"))).collect()
@@ -280,7 +281,7 @@ fn sigterm_of_a_real_time_run_flushes_its_trace() {
         let got = steps(&records);
         assert!(got.len() >= 2 && got.len() < reference.len(), "{got:?}");
         assert_eq!(got[..], reference[..got.len()], "the records so far, in order");
-        assert!(!records.iter().any(|r| r["kind"] == "outcome"), "the run was interrupted");
+        assert!(!records.iter().any(|r| matches!(r.kind, RecordKind::Outcome { .. })), "the run was interrupted");
     }
 }
 

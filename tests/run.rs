@@ -2,7 +2,8 @@
 //! seed's missions against the mock vehicle, with the exact order of the
 //! actions and events in the trace.
 
-use serde_json::Value;
+use mcl_runtime::trace::{Call, Ends, Record, RecordKind};
+use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -21,41 +22,127 @@ fn mcl(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mcl")).args(args).current_dir(root()).output().expect("run mcl")
 }
 
-fn trace(path: &Path) -> Vec<Value> {
-    std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("bad trace line {l}: {e}")))
-        .collect()
+fn trace(path: &Path) -> Vec<Record> {
+    mcl_runtime::trace::read_trace(path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn fmt_t(t: f64) -> String {
     format!("{t}")
 }
 
+/// An `action` record.
+#[derive(Debug)]
+struct Act<'a> {
+    t: f64,
+    mission: Option<&'a str>,
+    seq: u64,
+    action: &'a str,
+    primitive: &'a str,
+    command: &'a str,
+    params: &'a Map<String, Value>,
+    call: &'a Call,
+    queued: bool,
+}
+
+/// The actions of a trace.
+fn acts(tr: &[Record]) -> Vec<Act<'_>> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { seq, action, primitive, command, params, call, queued } => Some(Act {
+                t: r.t,
+                mission: r.mission.as_deref(),
+                seq: *seq,
+                action,
+                primitive,
+                command,
+                params,
+                call,
+                queued: *queued,
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The action named `name` (the first).
+fn act<'a>(tr: &'a [Record], name: &str) -> Act<'a> {
+    acts(tr).into_iter().find(|a| a.action == name).unwrap_or_else(|| panic!("no action {name}"))
+}
+
+/// An `outcome` record.
+#[derive(Debug)]
+struct End<'a> {
+    t: f64,
+    mission: Option<&'a str>,
+    result: &'a str,
+    reason: Option<&'a str>,
+    via: Option<&'a str>,
+}
+
+/// The outcomes of a trace.
+fn ends(tr: &[Record]) -> Vec<End<'_>> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Outcome { result, reason, via } => Some(End {
+                t: r.t,
+                mission: r.mission.as_deref(),
+                result,
+                reason: reason.as_deref(),
+                via: via.as_deref(),
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The messages of the warnings of a trace.
+fn warnings(tr: &[Record]) -> Vec<&str> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Warning { message } => Some(message.as_str()),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The times at which `transition` fired.
+fn fired(tr: &[Record], transition: impl Fn(&str) -> bool) -> Vec<f64> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Fire { transition: t, .. } if transition(t) => Some(r.t),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The unexpected and stale events of a trace.
+fn odd_events(tr: &[Record]) -> Vec<&Record> {
+    tr.iter().filter(|r| matches!(r.kind, RecordKind::UnexpectedEvent { .. } | RecordKind::StaleEvent { .. })).collect()
+}
+
 /// Actions as "t action" and events as "t !event", in trace order.
-fn actions_and_events(tr: &[Value]) -> Vec<String> {
+fn actions_and_events(tr: &[Record]) -> Vec<String> {
     tr.iter()
         .filter_map(|r| {
-            let t = fmt_t(r["t"].as_f64().unwrap());
-            match r["kind"].as_str().unwrap() {
-                "action" => Some(format!("{t} {}", r["action"].as_str().unwrap())),
-                "event" => Some(format!("{t} !{}", r["event"].as_str().unwrap())),
+            let t = fmt_t(r.t);
+            match &r.kind {
+                RecordKind::Action { action, .. } => Some(format!("{t} {action}")),
+                RecordKind::Event { event, .. } => Some(format!("{t} !{event}")),
                 _ => None,
             }
         })
         .collect()
 }
 
-fn outcome(tr: &[Value]) -> String {
-    let o: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "outcome").collect();
+fn outcome(tr: &[Record]) -> String {
+    let o = ends(tr);
     assert_eq!(o.len(), 1, "one outcome record");
-    o[0]["result"].as_str().unwrap().to_string()
+    o[0].result.to_string()
 }
 
 /// Runs `mcl run --mock --virtual-time` with `extra` arguments and returns
 /// (exit status, trace).
-fn run_virtual(file: &str, extra: &[&str], trace_name: &str) -> (i32, Vec<Value>, Output) {
+fn run_virtual(file: &str, extra: &[&str], trace_name: &str) -> (i32, Vec<Record>, Output) {
     let tp = tmp(trace_name);
     let tps = tp.to_str().unwrap();
     let mut args = vec!["run", "--mock", "--virtual-time", "--quiet", file, "--trace", tps];
@@ -71,13 +158,14 @@ fn stderr(o: &Output) -> String {
 }
 
 /// Actions as "t action call_site" and events as "t !event call_site", in trace order.
-fn per_call(tr: &[Value]) -> Vec<String> {
+fn per_call(tr: &[Record]) -> Vec<String> {
     tr.iter()
         .filter_map(|r| {
-            let t = fmt_t(r["t"].as_f64().unwrap());
-            match r["kind"].as_str().unwrap() {
-                "action" => Some(format!("{t} {} @{}", r["action"].as_str().unwrap(), r["call_site"])),
-                "event" => Some(format!("{t} !{} @{}", r["event"].as_str().unwrap(), r["call_site"])),
+            let t = fmt_t(r.t);
+            let site = |c: &Call| c.call_site.map_or("null".to_string(), |n| n.to_string());
+            match &r.kind {
+                RecordKind::Action { action, call, .. } => Some(format!("{t} {action} @{}", site(call))),
+                RecordKind::Event { event, call, .. } => Some(format!("{t} !{event} @{}", site(call))),
                 _ => None,
             }
         })
@@ -125,18 +213,15 @@ fn survey_nominal_in_virtual_time() {
         ]
     );
     assert_eq!(outcome(&tr), "ok");
-    assert_eq!(tr.iter().find(|r| r["kind"] == "outcome").unwrap()["t"], 133.0);
+    assert_eq!(ends(&tr)[0].t, 133.0);
     // The scenario's symbols are sent instead of the symbols' names.
-    let alts: Vec<&Value> = tr.iter().filter(|r| r["action"] == "enableAltitude").collect();
-    assert_eq!(
-        (alts[0]["params"]["mode"].as_str(), alts[0]["params"]["altitude"].as_f64()),
-        (Some("achieve"), Some(2.5))
-    );
-    assert_eq!(alts[1]["params"]["mode"], "keep");
-    assert_eq!(tr.iter().find(|r| r["action"] == "enableTrajectory").unwrap()["params"]["velocity"], 0.5);
+    let alts: Vec<Act> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
+    assert_eq!((alts[0].params["mode"].as_str(), alts[0].params["altitude"].as_f64()), (Some("achieve"), Some(2.5)));
+    assert_eq!(alts[1].params["mode"], "keep");
+    assert_eq!(act(&tr, "enableTrajectory").params["velocity"], 0.5);
     // The time-outs (timeout = 200 s) never fire: no warning, no time-out.
-    assert!(tr.iter().all(|r| r["kind"] != "warning"), "{tr:?}");
-    assert!(!tr.iter().any(|r| r["kind"] == "fire" && r["transition"].as_str().unwrap().ends_with(".TO")));
+    assert!(warnings(&tr).is_empty(), "{tr:?}");
+    assert!(fired(&tr, |t| t.ends_with(".TO")).is_empty());
 }
 
 /// The survey with the mock's default answers (every task ok after 5 s).
@@ -172,23 +257,23 @@ fn survey_with_default_answers() {
     );
     assert_eq!(outcome(&tr), "ok");
     // Parameters are resolved from each call's arguments.
-    let alts: Vec<&Value> = tr.iter().filter(|r| r["action"] == "enableAltitude").collect();
-    assert_eq!(alts[0]["params"]["mode"], "achieve");
-    assert_eq!(alts[1]["params"]["mode"], "keep");
-    assert_eq!(alts[1]["params"]["altitude"], "altitude", "an unset symbol is sent as is");
-    let traj = tr.iter().find(|r| r["action"] == "enableTrajectory").unwrap();
-    assert_eq!(traj["params"]["path"][1], serde_json::json!([20, 0]));
-    assert_eq!(traj["task"], "Trajectory");
-    assert_eq!(traj["src"], "examples/survey.mcl:18");
+    let alts: Vec<Act> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
+    assert_eq!(alts[0].params["mode"], "achieve");
+    assert_eq!(alts[1].params["mode"], "keep");
+    assert_eq!(alts[1].params["altitude"], "altitude", "an unset symbol is sent as is");
+    let traj = act(&tr, "enableTrajectory");
+    assert_eq!(traj.params["path"][1], serde_json::json!([20, 0]));
+    assert_eq!(traj.call.task.as_deref(), Some("Trajectory"));
+    assert_eq!(traj.call.src.as_deref(), Some("examples/survey.mcl:18"));
     // Sequence numbers increase by one.
-    let seqs: Vec<u64> = tr.iter().filter(|r| r["kind"] == "action").map(|r| r["seq"].as_u64().unwrap()).collect();
+    let seqs: Vec<u64> = acts(&tr).iter().map(|a| a.seq).collect();
     assert_eq!(seqs, (1..=seqs.len() as u64).collect::<Vec<_>>());
     // The unresolved `timeout` is reported once, with the default used.
-    let warnings: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "warning").collect();
+    let warnings = warnings(&tr);
     assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(warnings[0]["message"].as_str().unwrap().contains("using 60 s"));
+    assert!(warnings[0].contains("using 60 s"));
     // An anonymous mission has no `mission` field.
-    assert!(tr.iter().all(|r| r.get("mission").is_none()));
+    assert!(tr.iter().all(|r| r.mission.is_none()));
 }
 
 /// Seed figure 8.6: the alarm (the monitor's condition) at t = 120 aborts
@@ -226,9 +311,9 @@ fn survey_alarm_disables_everything_before_emergency_surface() {
     // The property itself: at the moment EmergencySurface is enabled, no
     // other primitive is enabled.
     let mut enabled: Vec<String> = Vec::new();
-    for r in tr.iter().filter(|r| r["kind"] == "action") {
-        let p = r["primitive"].as_str().unwrap().to_string();
-        match r["command"].as_str().unwrap() {
+    for a in acts(&tr) {
+        let p = a.primitive.to_string();
+        match a.command {
             "enable" if p == "EmergencySurfacePrimitive" => {
                 assert!(enabled.is_empty(), "still enabled when EmergencySurface starts: {enabled:?}");
             }
@@ -237,10 +322,11 @@ fn survey_alarm_disables_everything_before_emergency_surface() {
             c => panic!("unexpected command {c}"),
         }
     }
-    let alarm = tr.iter().find(|r| r["kind"] == "event").filter(|_| true);
-    assert!(alarm.is_some());
-    let ev = tr.iter().find(|r| r["event"] == "eventAlarmOk").unwrap();
-    assert_eq!(ev["task"], "Alarm");
+    let alarm = tr.iter().find_map(|r| match &r.kind {
+        RecordKind::Event { event, call, .. } if event == "eventAlarmOk" => Some(call),
+        _ => None,
+    });
+    assert_eq!(alarm.and_then(|c| c.task.as_deref()), Some("Alarm"));
     assert_eq!(outcome(&tr), "ok");
 }
 
@@ -289,10 +375,9 @@ fn dam_inspection_failure_runs_the_catch_block() {
         ]
     );
     // The recovery Goto of the try block never ran.
-    assert_eq!(tr.iter().filter(|r| r["action"] == "enableGoto").count(), 1);
+    assert_eq!(acts(&tr).iter().filter(|a| a.action == "enableGoto").count(), 1);
     // The catch block's calls are the ones that ran Surface and StopVehicle.
-    let surface = tr.iter().find(|r| r["action"] == "enableSurface").unwrap();
-    assert_eq!(surface["src"], "examples/dam-inspection.mcl:41");
+    assert_eq!(act(&tr, "enableSurface").call.src.as_deref(), Some("examples/dam-inspection.mcl:41"));
     assert_eq!(outcome(&tr), "ok");
 }
 
@@ -345,23 +430,21 @@ fn timed_task_fails_by_time_out() {
     );
     let timers: Vec<(f64, f64)> = tr
         .iter()
-        .filter(|r| r["kind"] == "timer")
-        .map(|r| (r["t"].as_f64().unwrap(), r["deadline"].as_f64().unwrap()))
+        .filter_map(|r| match r.kind {
+            RecordKind::Timer { deadline, .. } => Some((r.t, deadline)),
+            _ => None,
+        })
         .collect();
     assert_eq!(timers, [(0.0, 10.0), (4.0, 11.0)], "the 1st timer uses 10, the 2nd the symbol limit = 7");
-    let to: Vec<f64> = tr
-        .iter()
-        .filter(|r| r["kind"] == "fire" && r["transition"] == "task.Scan.TO")
-        .map(|r| r["t"].as_f64().unwrap())
-        .collect();
+    let to = fired(&tr, |t| t == "task.Scan.TO");
     assert_eq!(to, [11.0], "only the second scan times out");
-    assert!(tr.iter().all(|r| r["kind"] != "warning"));
+    assert!(warnings(&tr).is_empty());
 
     // Without the symbol, the default delay (60 s) is used, with a warning.
     let (code, tr, _) = run_virtual("tests/run/timeout.mcl", &["--scenario", "tests/run/timeout.toml"], "t60.jsonl");
     assert_eq!(code, 0);
     assert!(actions_and_events(&tr).contains(&"64 disableScan".to_string()));
-    assert!(tr.iter().any(|r| r["kind"] == "warning" && r["message"].as_str().unwrap().contains("--set limit=")));
+    assert!(warnings(&tr).iter().any(|m| m.contains("--set limit=")));
 }
 
 #[test]
@@ -376,7 +459,7 @@ fn same_seed_same_trace() {
     assert_eq!(a, b, "same seed, same trace");
     // The scenario's perceptions are traced.
     let tr = trace(&tmp("d1.jsonl"));
-    assert!(tr.iter().any(|r| r["kind"] == "perception" && r["name"] == "battery"));
+    assert!(tr.iter().any(|r| matches!(&r.kind, RecordKind::Perception { name, .. } if name == "battery")));
     // Other seeds choose other interleavings of the concurrent branches.
     let mut orders = std::collections::BTreeSet::new();
     for seed in 0..6 {
@@ -399,8 +482,10 @@ fn unexpected_events_are_traced_and_not_fatal() {
     assert_eq!(code, 0, "{}", stderr(&out));
     let unexpected: Vec<(f64, &str)> = tr
         .iter()
-        .filter(|r| r["kind"] == "unexpected_event")
-        .map(|r| (r["t"].as_f64().unwrap(), r["event"].as_str().unwrap()))
+        .filter_map(|r| match &r.kind {
+            RecordKind::UnexpectedEvent { event, .. } => Some((r.t, event.as_str())),
+            _ => None,
+        })
         .collect();
     assert_eq!(unexpected, [(1.0, "eventSurfaceOk"), (2.0, "noSuchEvent")]);
     assert_eq!(outcome(&tr), "ok");
@@ -414,9 +499,9 @@ fn stuck_missions_exit_3() {
     std::fs::write(&sc, "[tasks.InitializeVehicle]\noutcome = \"never\"\n").unwrap();
     let (code, tr, _) = run_virtual("examples/survey.mcl", &["--scenario", sc.to_str().unwrap()], "never.jsonl");
     assert_eq!(code, 3);
-    let o = tr.iter().find(|r| r["kind"] == "outcome").unwrap();
-    assert_eq!(o["result"], "stuck");
-    let reason = o["reason"].as_str().unwrap();
+    let o = &ends(&tr)[0];
+    assert_eq!(o.result, "stuck");
+    let reason = o.reason.unwrap();
     assert!(reason.contains("eventInitializeVehicleOk"), "{reason}");
 
     // A net in which nothing can fire any more (the player's own verdict).
@@ -434,13 +519,13 @@ fn stuck_missions_exit_3() {
     let (code, tr, _) = run_virtual(pnml.to_str().unwrap(), &[], "deadend.jsonl");
     assert_eq!(code, 3);
     assert_eq!(outcome(&tr), "stuck");
-    assert_eq!(tr.iter().find(|r| r["kind"] == "outcome").unwrap()["mission"], "deadend");
+    assert_eq!(ends(&tr)[0].mission, Some("deadend"));
 
     // The time limit.
     let (code, tr, _) = run_virtual("examples/survey.mcl", &["--time-limit", "12"], "limit.jsonl");
     assert_eq!(code, 3);
-    let o = tr.iter().find(|r| r["kind"] == "outcome").unwrap();
-    assert_eq!((o["result"].as_str(), o["t"].as_f64()), (Some("time_limit"), Some(12.0)));
+    let o = &ends(&tr)[0];
+    assert_eq!((o.result, o.t), ("time_limit", 12.0));
 }
 
 #[test]
@@ -451,7 +536,7 @@ fn exit_status_1_when_the_mission_fails() {
     assert_eq!(code, 1);
     assert_eq!(outcome(&tr), "fail");
     // The catch block ran StopVehicle a second time, which failed too.
-    assert_eq!(tr.iter().filter(|r| r["action"] == "enableStopVehicle").count(), 2);
+    assert_eq!(acts(&tr).iter().filter(|a| a.action == "enableStopVehicle").count(), 2);
 }
 
 #[test]
@@ -502,13 +587,14 @@ fn several_missions_and_compiled_nets() {
     let (code, tr, out) = run_virtual("examples/auv-asc.mcl", &[], "auv.jsonl");
     assert_eq!(code, 0);
     assert!(stderr(&out).contains("coordination: 2 missions"));
-    assert!(tr.iter().any(|r| r["mission"] == "auv") && tr.iter().any(|r| r["mission"] == "asc"));
+    let of = |r: &Record, m: &str| r.mission.as_deref() == Some(m);
+    assert!(tr.iter().any(|r| of(r, "auv")) && tr.iter().any(|r| of(r, "asc")));
     let (code, tr, _) = run_virtual("examples/auv-asc.mcl", &["--mission", "auv"], "auv.jsonl");
     assert_eq!(code, 0);
-    assert!(tr.iter().all(|r| r["mission"] == "auv"));
+    assert!(tr.iter().all(|r| of(r, "auv")));
     let (code, tr, _) = run_virtual("examples/auv-asc.mcl", &["--mission", "asc"], "asc.jsonl");
     assert_eq!(code, 0);
-    assert!(tr.iter().all(|r| r["mission"] == "asc"));
+    assert!(tr.iter().all(|r| of(r, "asc")));
 
     // A compiled .pnml runs like its source.
     let pnml = tmp("survey.pnml");
@@ -546,9 +632,9 @@ fn the_outcome_says_how_the_mission_ended() {
         "via-catch.jsonl",
     );
     assert_eq!(code, 0, "{}", stderr(&out));
-    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
-    assert_eq!(end["via"], "the catch at examples/dam-inspection.mcl:18", "{end}");
-    assert!(tr.iter().any(|r| r["kind"] == "fire" && r["ends"] == "catch"));
+    let end = ends(&tr).pop().unwrap();
+    assert_eq!(end.via, Some("the catch at examples/dam-inspection.mcl:18"), "{end:?}");
+    assert!(tr.iter().any(|r| matches!(r.kind, RecordKind::Fire { ends: Some(Ends::Catch), .. })));
     assert!(stderr(&out).contains("OK through the catch at examples/dam-inspection.mcl:18"), "{}", stderr(&out));
     // The chronogram's title says it too.
     let svg = tmp("via-catch.svg");
@@ -564,13 +650,13 @@ fn the_outcome_says_how_the_mission_ended() {
         "via-condition.jsonl",
     );
     assert_eq!(code, 0, "{}", stderr(&out));
-    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
-    assert_eq!(end["via"], "the condition of the monitor at examples/survey.mcl:13", "{end}");
+    let end = ends(&tr).pop().unwrap();
+    assert_eq!(end.via, Some("the condition of the monitor at examples/survey.mcl:13"), "{end:?}");
 
     let (code, tr, out) = run_virtual("examples/survey.mcl", &[], "via-none.jsonl");
     assert_eq!(code, 0);
-    let end = tr.iter().rev().find(|r| r["kind"] == "outcome").unwrap();
-    assert!(end.get("via").is_none(), "{end}");
+    let end = ends(&tr).pop().unwrap();
+    assert!(end.via.is_none(), "{end:?}");
     assert!(!stderr(&out).contains("through"), "{}", stderr(&out));
 }
 
@@ -615,11 +701,16 @@ mission { Nav() ; try { Mow( 3 ) } catch { Mow( 100 ) } }
     let log = String::from_utf8_lossy(&out.stdout);
     assert!(log.lines().any(|l| l.contains("event    navReady  (ends ok)  task=Nav")), "{log}");
     assert!(log.lines().any(|l| l.contains("[     8.000] TIME-OUT task.Mow.TO  task=Mow")), "{log}");
-    let records: Vec<Value> =
-        std::fs::read_to_string(&trace).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    let events: Vec<&Value> = records.iter().filter(|r| r["kind"] == "event").collect();
-    assert!(!events.is_empty() && events.iter().all(|r| r["ends"] == "ok"), "{events:?}");
-    assert!(records.iter().any(|r| r["kind"] == "fire" && r["ends"] == "timeout"));
+    let records = self::trace(&trace);
+    let events: Vec<Option<Ends>> = records
+        .iter()
+        .filter_map(|r| match r.kind {
+            RecordKind::Event { ends, .. } => Some(ends),
+            _ => None,
+        })
+        .collect();
+    assert!(!events.is_empty() && events.iter().all(|e| *e == Some(Ends::Ok)), "{events:?}");
+    assert!(records.iter().any(|r| matches!(r.kind, RecordKind::Fire { ends: Some(Ends::Timeout), .. })));
     // Every bar of the chronogram ends ok (green) or timed out (orange);
     // none is left "aborted / running" (blue, then only in the legend).
     let drawing = std::fs::read_to_string(&svg).unwrap();
@@ -744,7 +835,7 @@ fn kill_9_in_real_time_and_resume() {
     // assert timings.
     assert_eq!(attribution(&tr), attribution(&reference));
     assert_eq!(outcome(&tr), "ok");
-    assert_eq!(of_kinds(&tr, &["unexpected_event", "stale_event"]), Vec::<&Value>::new());
+    assert_eq!(odd_events(&tr), Vec::<&Record>::new());
 }
 
 /// Every action (with its parameters and sequence number) and every event
@@ -752,22 +843,22 @@ fn kill_9_in_real_time_and_resume() {
 /// outcome, per mission, without times. Coordination messages delivered as
 /// events are left out (their place among a vehicle's records depends on
 /// when they arrive).
-fn attribution(tr: &[Value]) -> Vec<String> {
+fn attribution(tr: &[Record]) -> Vec<String> {
     let mut v: Vec<(String, String)> = tr
         .iter()
         .filter_map(|r| {
-            let m = r["mission"].as_str().unwrap_or("");
-            match r["kind"].as_str().unwrap() {
-                "action" => Some(format!(
-                    "{m} action #{} {} {} task {} call {} {}",
-                    r["seq"], r["action"], r["params"], r["task"], r["call_site"], r["label"]
+            let m = r.mission.as_deref().unwrap_or("");
+            match &r.kind {
+                RecordKind::Action { seq, action, params, call, .. } => Some(format!(
+                    "{m} action #{seq} {action} {params:?} task {:?} call {:?} {:?}",
+                    call.task, call.call_site, call.label
                 )),
                 // `activation`: the action whose primitive run raised the event.
-                "event" if !r["event"].as_str().unwrap().contains('/') => Some(format!(
-                    "{m} event {} task {} call {} {} activation {}",
-                    r["event"], r["task"], r["call_site"], r["label"], r["activation"]
+                RecordKind::Event { event, call, activation, .. } if !event.contains('/') => Some(format!(
+                    "{m} event {event} task {:?} call {:?} {:?} activation {activation:?}",
+                    call.task, call.call_site, call.label
                 )),
-                "outcome" => Some(format!("{m} outcome {}", r["result"])),
+                RecordKind::Outcome { result, .. } => Some(format!("{m} outcome {result}")),
                 _ => None,
             }
             .map(|line| (m.to_string(), line))
@@ -776,11 +867,6 @@ fn attribution(tr: &[Value]) -> Vec<String> {
     // Mission by mission: vehicles run concurrently.
     v.sort_by(|a, b| a.0.cmp(&b.0));
     v.into_iter().map(|(_, line)| line).collect()
-}
-
-/// The records of these kinds.
-fn of_kinds<'a>(tr: &'a [Value], kinds: &[&str]) -> Vec<&'a Value> {
-    tr.iter().filter(|r| kinds.contains(&r["kind"].as_str().unwrap())).collect()
 }
 
 /// Every bundled example (but the vehicle definitions, which have no
@@ -807,8 +893,8 @@ fn every_example_in_virtual_and_real_time() {
         assert_eq!(out.status.code(), Some(0), "{name} in real time: {}", stderr(&out));
         let r = trace(&tp);
         assert_eq!(attribution(&r), attribution(&v), "{name}: real time differs from virtual time");
-        assert_eq!(of_kinds(&r, &["unexpected_event", "stale_event"]), Vec::<&Value>::new(), "{name}");
-        assert_eq!(of_kinds(&v, &["unexpected_event", "stale_event"]), Vec::<&Value>::new(), "{name}");
+        assert_eq!(odd_events(&r), Vec::<&Record>::new(), "{name}");
+        assert_eq!(odd_events(&v), Vec::<&Record>::new(), "{name}");
     }
 }
 
@@ -833,9 +919,15 @@ fn extract_5_4_in_real_time_credits_each_call() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let tr = trace(&tp);
-    let events: Vec<String> = of_kinds(&tr, &["event"])
+    let events: Vec<String> = tr
         .iter()
-        .map(|r| format!("{} @{} #{}", r["event"].as_str().unwrap(), r["call_site"], r["activation"]))
+        .filter_map(|r| match &r.kind {
+            RecordKind::Event { event, call, activation, .. } => {
+                let n = |x: Option<u64>| x.map_or("null".to_string(), |n| n.to_string());
+                Some(format!("{event} @{} #{}", n(call.call_site.map(u64::from)), n(*activation)))
+            }
+            _ => None,
+        })
         .collect();
     assert_eq!(events, ["eventDepthOk @1 #1", "eventGotoOk @3 #3", "eventDepthOk @4 #7"]);
 }
@@ -863,7 +955,7 @@ fn real_time_matches_virtual_time() {
     let took = started.elapsed();
     assert!(took >= Duration::from_millis(1300), "133 s at speed 100 took {took:?}");
     let tr = trace(&tp);
-    let names = |tr: &[Value]| -> Vec<String> {
+    let names = |tr: &[Record]| -> Vec<String> {
         actions_and_events(tr).iter().map(|s| s.split_once(' ').unwrap().1.to_string()).collect()
     };
     assert_eq!(names(&tr), names(&reference));
@@ -894,11 +986,11 @@ fn negated_while_conditions_end_by_default() {
     // to its recovery way-point; both end ok.
     let (code, tr, out) = run_virtual("examples/appendix-c.mcl", &[], "appendix-c.jsonl");
     assert_eq!(code, 0, "{}", stderr(&out));
-    let after_loop = tr.iter().any(|r| r["kind"] == "action" && r["action"] == "enableGoto" && r["mission"] == "m1");
+    let after_loop = acts(&tr).iter().any(|a| a.action == "enableGoto" && a.mission == Some("m1"));
     assert!(after_loop, "the AUV left its survey loop");
-    let outcomes = of_kinds(&tr, &["outcome"]);
+    let outcomes = ends(&tr);
     for m in ["m1", "m2"] {
-        assert!(outcomes.iter().any(|o| o["result"] == "ok" && o["mission"] == m), "{outcomes:?}");
+        assert!(outcomes.iter().any(|o| o.result == "ok" && o.mission == Some(m)), "{outcomes:?}");
     }
 }
 
@@ -918,9 +1010,9 @@ outcome = \"ok\"
     .unwrap();
     let (code, tr, out) = run_virtual("tests/run/loop.mcl", &["--scenario", sc.to_str().unwrap()], "loop.jsonl");
     assert_eq!(code, 3, "{}", stderr(&out));
-    let o = of_kinds(&tr, &["outcome"]);
-    assert_eq!((o.len(), o[0]["result"].as_str(), o[0]["t"].as_f64()), (1, Some("time_limit"), Some(86_400.0)));
-    let reason = o[0]["reason"].as_str().unwrap();
+    let o = ends(&tr);
+    assert_eq!((o.len(), o[0].result, o[0].t), (1, "time_limit", 86_400.0));
+    let reason = o[0].reason.unwrap();
     assert!(reason.contains("default time limit") && reason.contains("--time-limit"), "{reason}");
     assert!(stderr(&out).contains("TIME_LIMIT at t=86400.000 s"), "{}", stderr(&out));
     // --time-limit overrides it; `inf` removes it (the loop then needs the
@@ -928,8 +1020,8 @@ outcome = \"ok\"
     let (code, tr, _) =
         run_virtual("tests/run/loop.mcl", &["--scenario", sc.to_str().unwrap(), "--time-limit", "2000"], "loop2.jsonl");
     assert_eq!(code, 3);
-    let o = of_kinds(&tr, &["outcome"]);
-    assert_eq!((o[0]["t"].as_f64(), o[0]["reason"].as_str()), (Some(2000.0), Some("the time limit of 2000 s passed")));
+    let o = ends(&tr);
+    assert_eq!((o[0].t, o[0].reason), (2000.0, Some("the time limit of 2000 s passed")));
 
     // Answers at once: mission time never advances.
     std::fs::write(
@@ -953,7 +1045,7 @@ outcome = \"ok\"
 fn time_limit_is_reported_at_the_limit() {
     let (code, tr, out) = run_virtual("examples/survey.mcl", &["--time-limit", "12"], "limit12.jsonl");
     assert_eq!(code, 3);
-    assert_eq!(of_kinds(&tr, &["outcome"])[0]["t"], 12.0);
+    assert_eq!(ends(&tr)[0].t, 12.0);
     assert!(stderr(&out).contains("TIME_LIMIT at t=12.000 s"), "{}", stderr(&out));
     let out = mcl(&["run", "--mock", "--virtual-time", "-q", "--time-limit", "-1", "examples/survey.mcl"]);
     assert_eq!(out.status.code(), Some(2));
@@ -990,8 +1082,8 @@ fn unreachable_aac_is_told_in_the_live_log() {
     assert!(err.contains("no vehicle answered within 1.5 s"), "{err}");
     // The trace has the attempts and nothing else happened.
     let tr = trace(&tp);
-    assert!(of_kinds(&tr, &["link"]).len() >= 2);
-    assert!(of_kinds(&tr, &["action"]).is_empty());
+    assert!(tr.iter().filter(|r| matches!(r.kind, RecordKind::Link { .. })).count() >= 2);
+    assert!(acts(&tr).is_empty());
     // -q: no live log, but the link's news on standard error.
     let out = mcl(&["run", "--aac", &addr, "-q", "--connect-timeout", "1", "examples/extract-5-4.mcl"]);
     assert_eq!(out.status.code(), Some(2));
@@ -1025,11 +1117,11 @@ fn the_mission_starts_when_the_vehicle_is_connected() {
     let _ = aac.wait();
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let tr = trace(&tp);
-    let first = &of_kinds(&tr, &["action"])[0];
+    let first = &acts(&tr)[0];
     // Mission time at speed 20: the 1.5 s without a vehicle would be 30 s.
-    assert!(first["t"].as_f64().unwrap() < 1.0, "{first}");
-    assert!(first.get("queued").is_none(), "{first}");
-    assert!(tr.iter().any(|r| r["kind"] == "link" && r["message"] == "link to the AAC up"));
+    assert!(first.t < 1.0, "{first:?}");
+    assert!(!first.queued, "{first:?}");
+    assert!(tr.iter().any(|r| matches!(&r.kind, RecordKind::Link { message } if message == "link to the AAC up")));
 }
 
 fn png_size(path: &Path) -> Option<(u32, u32, u64)> {
@@ -1097,8 +1189,10 @@ fn chronogram_renders_in_a_browser() {
     // (not only in a tooltip), and its tooltip gives the call's source line.
     let tr = trace(&tp);
     assert!(text.contains(r#"class="mark-name""#), "no mark names");
-    for r in of_kinds(&tr, &["action", "event"]) {
-        let name = r["action"].as_str().or(r["event"].as_str()).unwrap();
+    for r in &tr {
+        let (RecordKind::Action { action: name, .. } | RecordKind::Event { event: name, .. }) = &r.kind else {
+            continue;
+        };
         assert!(text.contains(&format!(">{name}<title>")), "{name} has no name on the page");
     }
     assert!(text.contains("event eventWallInspectionFail (task WallInspect) at examples/dam-inspection.mcl:27"));

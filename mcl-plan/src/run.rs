@@ -38,7 +38,7 @@ use mcl_runtime::link::{Action, Inbound};
 use mcl_runtime::mock::{tables_of, CallInfo, MockVehicle, TaskEvents};
 use mcl_runtime::player::{Outcome as PlayerOutcome, Output, Player, PlayerOptions};
 use mcl_runtime::scenario::Scenario;
-use mcl_runtime::trace::{live_line, round_time, SourceMap, Tracer};
+use mcl_runtime::trace::{live_line, round_time, Record, RecordKind, SourceMap, Tracer};
 use mcl_syntax::ast::{Item, Value, ValueKind};
 use serde_json::{json, Value as Json};
 use std::collections::HashMap;
@@ -424,6 +424,14 @@ impl Run<'_> {
         self.sink.record(r, live);
     }
 
+    /// Emits a record of one of the player's kinds (a warning, a link
+    /// notice...), with the planner's live line.
+    fn emit_kind(&mut self, kind: RecordKind) {
+        let r = serde_json::to_value(Record::new(self.t, kind)).unwrap_or_default();
+        let live = self.live(&r);
+        self.sink.record(r, live);
+    }
+
     fn live(&self, r: &Json) -> Option<String> {
         let s = |k: &str| r.get(k).and_then(Json::as_str).unwrap_or("").to_string();
         let what = match s("kind").as_str() {
@@ -502,10 +510,10 @@ impl Run<'_> {
             let mut r = run.tracer.record(o);
             // An aborted mission is left with nothing to fire: that is the
             // executor's doing, not a stuck mission.
-            if let (Some(why), "outcome") = (self.aborting, r.kind.as_str()) {
-                if r.result.as_deref() == Some("stuck") {
-                    r.result = Some("aborted".into());
-                    r.reason = Some(why.into());
+            if let (Some(why), RecordKind::Outcome { result, reason, .. }) = (self.aborting, &mut r.kind) {
+                if result == "stuck" {
+                    *result = "aborted".into();
+                    *reason = Some(why.into());
                 }
             }
             records.push(r);
@@ -537,7 +545,7 @@ impl Run<'_> {
             Vehicle::Aac(_) => Vec::new(),
         };
         for w in warnings {
-            self.emit("warning", json!({ "message": w }));
+            self.emit_kind(RecordKind::Warning { message: w });
         }
     }
 
@@ -563,7 +571,7 @@ impl Run<'_> {
     fn perceive(&mut self, name: String, value: Json) {
         match &mut self.running {
             Some(_) => self.apply(Input::Perception(self.t, name.clone(), value.clone())),
-            None => self.emit("perception", json!({ "name": name, "value": value })),
+            None => self.emit_kind(RecordKind::Perception { name: name.clone(), value: value.clone() }),
         }
         let before = self.world.facts().clone();
         self.world.perceive(&name, percept(&value));
@@ -636,12 +644,14 @@ impl Run<'_> {
             // in each step's player's: not checked here.
             Inbound::Event { event, .. } => match &self.running {
                 Some(_) => self.apply(Input::Event(self.t, event, None)),
-                None => self.emit("unexpected_event", json!({ "event": event, "reason": "no mission is running" })),
+                None => self.emit_kind(RecordKind::UnexpectedEvent { event, reason: "no mission is running".into() }),
             },
             Inbound::Perception { name, value, .. } => self.perceive(name, value),
-            Inbound::Disconnected => self.emit("warning", json!({ "message": "link to the AAC lost; reconnecting" })),
-            Inbound::Connected => self.emit("warning", json!({ "message": "link to the AAC up" })),
-            Inbound::Notice { message } => self.emit("link", json!({ "message": message })),
+            Inbound::Disconnected => {
+                self.emit_kind(RecordKind::Warning { message: "link to the AAC lost; reconnecting".into() })
+            }
+            Inbound::Connected => self.emit_kind(RecordKind::Warning { message: "link to the AAC up".into() }),
+            Inbound::Notice { message } => self.emit_kind(RecordKind::Link { message }),
             Inbound::Ack { .. } | Inbound::Session { .. } => {}
         }
     }
@@ -827,10 +837,11 @@ impl Run<'_> {
             let next = match (tp, tm) {
                 (None, None) => {
                     let awaited = self.running.as_ref().map(|r| r.player.awaited_events()).unwrap_or_default();
-                    self.emit(
-                        "warning",
-                        json!({ "message": format!("the mission waits for {} and nothing more can happen: the step fails", awaited.join(", ")) }),
+                    let message = format!(
+                        "the mission waits for {} and nothing more can happen: the step fails",
+                        awaited.join(", ")
                     );
+                    self.emit_kind(RecordKind::Warning { message });
                     self.abort_running("the step waits for what can no longer happen");
                     self.end_step(false);
                     continue;

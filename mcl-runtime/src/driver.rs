@@ -19,7 +19,7 @@ use crate::journal::{Entry, Input, JournalWriter};
 use crate::link::{AacEnd, Action, Delivered, Inbound, Link};
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player};
-use crate::trace::{Record, Tracer};
+use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::{Pose, VirtualVehicle};
 
 /// Receives trace records as they are produced.
@@ -150,8 +150,8 @@ impl<'a> Session<'a> {
             return;
         }
         let mut r = self.tracer.record(o);
-        if self.link_down && matches!(o, Output::Send { .. }) {
-            r.queued = Some(true);
+        if let (true, RecordKind::Action { queued, .. }) = (self.link_down, &mut r.kind) {
+            *queued = true;
         }
         self.sink.record(&r);
     }
@@ -250,24 +250,17 @@ impl<'a> Session<'a> {
 
     /// Records the end of a run that the player did not decide itself.
     pub fn end_by_driver(&mut self, t: f64, result: &str, reason: String) {
-        let mut r = Record::new(t, "outcome");
-        r.result = Some(result.to_string());
-        r.reason = Some(reason);
-        self.emit_record(r);
+        self.emit_record(Record::outcome(t, result, Some(reason)));
     }
 
     /// Records a warning.
     pub fn warn(&mut self, t: f64, message: String) {
-        let mut r = Record::new(t, "warning");
-        r.message = Some(message);
-        self.emit_record(r);
+        self.emit_record(Record::warning(t, message));
     }
 
     /// Records a notice of the link to the AAC.
     pub fn link_notice(&mut self, t: f64, message: String) {
-        let mut r = Record::new(t, "link");
-        r.message = Some(message);
-        self.emit_record(r);
+        self.emit_record(Record::link(t, message));
     }
 }
 
@@ -391,13 +384,8 @@ pub(crate) fn drain_poses(s: &mut Session, vehicle: &mut (impl VirtualVehicle + 
 
 /// The `pose` trace record of `p`.
 pub fn pose_record(mission: Option<&str>, p: &Pose) -> Record {
-    let mut r = Record::new(p.t, "pose");
-    r.mission = mission.map(str::to_string);
-    r.x = Some(p.x);
-    r.y = Some(p.y);
-    r.z = Some(p.z);
-    r.yaw = Some(p.yaw);
-    r
+    let r = Record::new(p.t, RecordKind::Pose { x: p.x, y: p.y, z: p.z, yaw: p.yaw });
+    Record { mission: mission.map(str::to_string), ..r }
 }
 
 /// Runs `s` against `mock` in virtual time until the mission ends, nothing
@@ -710,9 +698,11 @@ mod tests {
         let net = net();
         let names = |c: &Collect| -> Vec<String> {
             c.0.iter()
-                .filter(|r| matches!(r.kind.as_str(), "action" | "event" | "outcome"))
-                .map(|r| {
-                    format!("{} {}", r.t, r.action.clone().or(r.event.clone()).or(r.result.clone()).unwrap_or_default())
+                .filter_map(|r| match &r.kind {
+                    RecordKind::Action { action: what, .. }
+                    | RecordKind::Event { event: what, .. }
+                    | RecordKind::Outcome { result: what, .. } => Some(format!("{} {what}", r.t)),
+                    _ => None,
                 })
                 .collect()
         };

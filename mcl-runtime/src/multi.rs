@@ -44,7 +44,7 @@ use crate::driver::{feed_mock, perception_or_event, End, Limits, SameInstant, Se
 use crate::journal::{Entry, Input, JournalWriter, Replay, Step};
 use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player, PlayerOptions};
-use crate::trace::{Record, Tracer};
+use crate::trace::{Record, RecordKind, Tracer};
 use mcl_net::Net;
 
 /// How long virtual time waits for a message to cross the transport.
@@ -257,11 +257,8 @@ impl Live<'_> {
         {
             self.mutex.returns += 1;
         }
-        let mut r = Record::new(t, "coord_send");
-        r.to = Some(m.to.clone());
-        r.transition = Some(m.transition.clone());
-        r.seq = Some(m.seq);
-        self.s.emit_record(r);
+        let kind = RecordKind::CoordSend { seq: m.seq, transition: m.transition.clone(), to: m.to.clone() };
+        self.s.emit_record(Record::new(t, kind));
         m
     }
 
@@ -440,21 +437,20 @@ impl Live<'_> {
             self.peers_ended += 1;
             return Ok(true);
         }
-        let mut r = Record::new(t, "coord_receive");
-        r.from = Some(m.from.clone());
-        r.transition = Some(m.transition.clone());
-        r.seq = Some(m.seq);
-        r.event = Some(m.event());
-        self.s.emit_record(r);
+        let kind = RecordKind::CoordReceive {
+            seq: m.seq,
+            event: m.event(),
+            transition: m.transition.clone(),
+            from: m.from.clone(),
+        };
+        self.s.emit_record(Record::new(t, kind));
         self.inbox.push_back(m);
         Ok(false)
     }
 
     /// Records a line or connection that the transport refused.
     fn rejected(&mut self, why: String, t: f64) {
-        let mut r = Record::new(t.max(self.s.player.now()), "coord_reject");
-        r.message = Some(why);
-        self.s.emit_record(r);
+        self.s.emit_record(Record::new(t.max(self.s.player.now()), RecordKind::CoordReject { message: why }));
     }
 
     /// Rebuilds the vehicle from its journal: the player (inputs), the
@@ -474,8 +470,7 @@ impl Live<'_> {
         let inputs = r?;
         let resend = std::mem::take(&mut self.resend);
         let t = self.s.player.now();
-        let mut r = Record::new(t, "link");
-        r.message = Some(format!(
+        let r = Record::link(t, format!(
             "resumed from the journal: {inputs} inputs replayed, {} transitions fired, {} messages sent again, {} waiting",
             self.s.player.fired_count(),
             resend.len(),
@@ -594,10 +589,14 @@ impl Live<'_> {
                 let net = b.build().map_err(|e| format!("`{}`: {e}", self.name))?;
                 self.s.player = Player::new(Arc::new(net), self.opts.clone());
                 for (event, transition) in delivered {
-                    let mut r = Record::new(t, "event");
-                    r.event = Some(event);
-                    r.transition = Some(transition.to_string());
-                    self.s.emit_record(r);
+                    let kind = RecordKind::Event {
+                        event,
+                        transition: transition.to_string(),
+                        call: Default::default(),
+                        activation: None,
+                        ends: None,
+                    };
+                    self.s.emit_record(Record::new(t, kind));
                 }
             }
         }
@@ -689,13 +688,9 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
 pub const ALL_MISSIONS: &str = "*";
 
 fn summary(sink: &SharedSink, t: f64, end: &MultiEnd) {
-    let mut r = Record::new(t, "coord_summary");
-    r.mission = Some(ALL_MISSIONS.to_string());
-    r.messages = Some(end.messages);
-    if end.mutex.total() > 0 {
-        r.value = serde_json::to_value(end.mutex).ok();
-    }
-    r.result = Some(end.result().to_string());
+    let value = if end.mutex.total() > 0 { serde_json::to_value(end.mutex).ok() } else { None };
+    let kind = RecordKind::CoordSummary { value, result: end.result().to_string(), messages: end.messages };
+    let r = Record { mission: Some(ALL_MISSIONS.to_string()), ..Record::new(t, kind) };
     if let Ok(mut s) = sink.lock() {
         s.record(&r);
     }

@@ -1,25 +1,15 @@
 //! Traces: one JSON object per line (JSONL), and the live log.
 //!
-//! Every record has `t` (seconds from the start of the mission) and `kind`;
-//! `mission` is present when the mission is named (or when the file holds
-//! several missions: then on every record, `"*"` on the `coord_summary`
-//! that concerns them all). Kinds and their fields:
-//!
-//! | kind | fields |
-//! |---|---|
-//! | `action` | `seq`, `action`, `primitive`, `command`, `params`, `task`, `call_site`, `label`, `src`; `queued: true` when the link to the AAC was down (sent once it is up) |
-//! | `event` | `event`, `task` (whose transition it fired), `transition`, `call_site`, `label`, `src`, `activation` (when the AAC named it) |
-//! | `fire` | `transition`, `task`, `call_site`, `label` |
-//! | `unexpected_event` | `event`, `reason` |
-//! | `stale_event` | `event`, `activation`, `reason`: an answer of a primitive run that was disabled since (ignored) |
-//! | `link` | `message`: the link to the AAC (connection attempts, errors the AAC reports, malformed messages, gaps in event numbers) |
-//! | `timer` | `transition`, `task`, `deadline` (a timer of a positive delay started) |
-//! | `perception` | `name`, `value` |
-//! | `warning` | `message` |
-//! | `outcome` | `result` (`ok`, `fail`, `stuck`, `time_limit`), `reason` |
-//! | `coord_send` | `to`, `transition` (own, just fired), `seq`: a coordination message sent |
-//! | `coord_receive` | `from`, `transition` (the sender's), `seq`, `event` (the event it becomes) |
-//! | `coord_summary` | `messages` (sent), `result` (of the whole run), `mission: "*"`: the last record of a coordinated run |
+//! A line is a [`Record`]: `t` (seconds from the start of the mission),
+//! `mission` when the mission is named (or when the file holds several
+//! missions: then on every record, `"*"` on the `coord_summary` that
+//! concerns them all), then `kind` and the fields of that kind
+//! ([`RecordKind`], one variant per kind: `action`, `event`, `fire`,
+//! `unexpected_event`, `stale_event`, `timer`, `perception`, `warning`,
+//! `link`, `outcome`, `coord_send`, `coord_receive`, `coord_reject`,
+//! `coord_summary`, `pose`). docs/scenarios.md (*Traces*) lists every kind
+//! with its fields and their types. Kinds this version does not know (the
+//! planner's) are read as [`RecordKind::Other`] and ignored.
 //!
 //! `src` is `file:line` of the call that sent the action or received the
 //! event (from the net's provenance; the line is computed from the source
@@ -36,117 +26,243 @@ use serde_json::{Map, Value};
 
 use crate::player::Output;
 
-/// One line of a trace.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// One line of a trace: when, for which mission, and what happened
+/// ([`RecordKind`], whose fields follow `t`, `mission` and `kind` on the
+/// line).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Record {
     /// Seconds from the start of the mission.
     pub t: f64,
-    /// The mission's name.
+    /// The mission's name (`"*"`: every mission of a coordinated run).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<String>,
-    /// `action`, `event`, `fire`, `unexpected_event`, `stale_event`, `timer`, `perception`,
-    /// `warning`, `link`, `outcome`, `coord_send`, `coord_receive`, `coord_summary`.
-    pub kind: String,
-    /// Action sequence number.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub seq: Option<u64>,
-    /// Action name.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub action: Option<String>,
-    /// Primitive of the action.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub primitive: Option<String>,
-    /// Command of the action.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub command: Option<String>,
-    /// Parameters of the action.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub params: Option<Map<String, Value>>,
-    /// Event name.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub event: Option<String>,
-    /// Transition id.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub transition: Option<String>,
-    /// Task concerned.
+    /// What happened: the `kind` field and the fields of that kind.
+    #[serde(flatten)]
+    pub kind: RecordKind,
+}
+
+/// What a trace record says, tagged by its `kind` (the table in the
+/// module's documentation and in docs/scenarios.md). Fields are written in
+/// the order declared here.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RecordKind {
+    /// An action sent to the vehicle.
+    Action {
+        /// Its sequence number.
+        seq: u64,
+        /// The action's name.
+        action: String,
+        /// Its primitive.
+        primitive: String,
+        /// Its command (`enable`, `disable`, ...).
+        command: String,
+        /// Its parameters.
+        params: Map<String, Value>,
+        /// The call that sent it.
+        #[serde(flatten)]
+        call: Call,
+        /// Produced while the link to the AAC was down: sent once it is up.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        queued: bool,
+    },
+    /// An event from the vehicle fired a transition.
+    Event {
+        /// The event's name.
+        event: String,
+        /// The transition it fired.
+        transition: String,
+        /// The task of that transition and the call it answers.
+        #[serde(flatten)]
+        call: Call,
+        /// The activation it named (the `seq` of the action that started
+        /// the primitive run that raised it), when the AAC named one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        activation: Option<u64>,
+        /// Whether it is one of its task's ok or fail events (`none`: neither).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ends: Option<Ends>,
+    },
+    /// A transition fired.
+    Fire {
+        /// Its id.
+        transition: String,
+        /// Its task and call; `src`: where the handler it starts is written.
+        #[serde(flatten)]
+        call: Call,
+        /// `timeout` (a task's time-out), `catch` or `condition` (a handler).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ends: Option<Ends>,
+    },
+    /// An event that no transition waited for.
+    UnexpectedEvent {
+        /// The event's name.
+        event: String,
+        /// Why it was not expected.
+        reason: String,
+    },
+    /// An answer of a primitive run disabled since (ignored).
+    StaleEvent {
+        /// The event's name.
+        event: String,
+        /// Why it is stale.
+        reason: String,
+        /// The activation it named.
+        activation: u64,
+    },
+    /// A timer of a positive delay started.
+    Timer {
+        /// The timed transition.
+        transition: String,
+        /// Its task.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        task: Option<String>,
+        /// When it fires (mission seconds).
+        deadline: f64,
+    },
+    /// A perception from the vehicle.
+    Perception {
+        /// Its name.
+        name: String,
+        /// Its value.
+        value: Value,
+    },
+    /// A warning (a scenario's missing answer, a delay without a value...).
+    Warning {
+        /// The warning.
+        message: String,
+    },
+    /// What happened to the link to the AAC (connection attempts, errors
+    /// the AAC reports, malformed messages, gaps in event numbers), or a
+    /// resumed run.
+    Link {
+        /// The notice.
+        message: String,
+    },
+    /// How the mission ended.
+    Outcome {
+        /// `ok`, `fail`, `stuck`, `time_limit` (`aborted` for a planned step
+        /// the planner stopped).
+        result: String,
+        /// Why, when it did not end by itself.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reason: Option<String>,
+        /// How it got there when it left its nominal path: the last handler
+        /// it went through (`the catch at FILE:LINE`, `the condition of the
+        /// monitor at FILE:LINE`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        via: Option<String>,
+    },
+    /// A coordination message sent.
+    CoordSend {
+        /// Its number on its link.
+        seq: u64,
+        /// The sender's transition (just fired).
+        transition: String,
+        /// The mission it is sent to.
+        to: String,
+    },
+    /// A coordination message received.
+    CoordReceive {
+        /// Its number on its link.
+        seq: u64,
+        /// The event it becomes (`mission/transition`).
+        event: String,
+        /// The sender's transition.
+        transition: String,
+        /// The sending mission.
+        from: String,
+    },
+    /// A coordination line or connection the transport refused.
+    CoordReject {
+        /// Why.
+        message: String,
+    },
+    /// The last record of a coordinated run (`mission: "*"`).
+    CoordSummary {
+        /// The mutex protocol's message counts (`grants`, `requests`,
+        /// `returns`), when it sent any.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        value: Option<Value>,
+        /// The result of the whole run (the worst of the missions').
+        result: String,
+        /// Coordination messages sent.
+        messages: u64,
+    },
+    /// Where a simulated vehicle is.
+    Pose {
+        /// East, metres.
+        x: f64,
+        /// North, metres.
+        y: f64,
+        /// Depth, metres (≥ 0).
+        z: f64,
+        /// Heading, radians (0 towards +x, counter-clockwise).
+        yaw: f64,
+    },
+    /// A record of a kind this version does not know (the planner's `plan`,
+    /// `step`... in a `mcl plan --run` trace): read, ignored by every
+    /// reader.
+    #[serde(other)]
+    Other,
+}
+
+/// The call a record concerns: `task`, `call_site`, `label`, `src` on the line.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Call {
+    /// The task.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub task: Option<String>,
-    /// Call site concerned.
+    /// The call site (numbered by the compiler).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub call_site: Option<u32>,
-    /// Label of that call.
+    /// The call's label.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label: Option<String>,
-    /// Timer deadline.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub deadline: Option<f64>,
-    /// Perception name.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub name: Option<String>,
-    /// Perception value.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub value: Option<Value>,
-    /// Mission result.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub result: Option<String>,
-    /// Why (outcome, unexpected event).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reason: Option<String>,
-    /// Warning text.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub message: Option<String>,
-    /// `file:line` of the call.
+    /// `file:line` of the call (of a handler, on a `fire`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub src: Option<String>,
-    /// Coordination: the mission a message is sent to.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub to: Option<String>,
-    /// Coordination: the mission a message comes from.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub from: Option<String>,
-    /// Coordination: number of messages sent in the run.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub messages: Option<u64>,
-    /// The activation an event named (the `seq` of the action that started
-    /// the primitive run that raised it).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub activation: Option<u64>,
-    /// An action produced while the link to the AAC was down: queued, sent
-    /// when the link is up again.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub queued: Option<bool>,
-    /// What an event or a firing ends, from the compiled net (never from
-    /// names): on an `event`, `ok` or `fail` when it is one of its task's ok
-    /// or fail events (the net's `task_events` property), `none` when it is
-    /// neither; on a `fire`,
-    /// `timeout` when the transition is a task's timed transition (a
-    /// time-out, shown in the live log without `-v`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ends: Option<String>,
-    /// On an `outcome`: how the mission got there when it left its nominal
-    /// path, the last handler it went through (`the catch at FILE:LINE`,
-    /// `the condition of the monitor at FILE:LINE`). Absent when it
-    /// completed its plan.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub via: Option<String>,
-    /// On a `pose`: east, metres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub x: Option<f64>,
-    /// On a `pose`: north, metres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub y: Option<f64>,
-    /// On a `pose`: depth, metres (≥ 0).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub z: Option<f64>,
-    /// On a `pose`: heading, radians (0 towards +x, counter-clockwise).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub yaw: Option<f64>,
+}
+
+/// What an event or a firing ends, from the compiled net (never from names).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Ends {
+    /// One of its task's ok events (the net's `task_events`).
+    Ok,
+    /// One of its task's fail events.
+    Fail,
+    /// An event that is neither (progress, condition).
+    #[serde(rename = "none")]
+    Neither,
+    /// A task's timed transition fired (a time-out).
+    Timeout,
+    /// The transition that starts a catch fired.
+    Catch,
+    /// The transition that ends a monitor on its condition fired.
+    Condition,
 }
 
 impl Record {
-    /// A record of this kind at time `t`.
-    pub fn new(t: f64, kind: &str) -> Self {
-        Record { t: round_time(t), kind: kind.to_string(), ..Default::default() }
+    /// A record of `kind` at time `t` (rounded to the microsecond), without
+    /// a mission.
+    pub fn new(t: f64, kind: RecordKind) -> Self {
+        Record { t: round_time(t), mission: None, kind }
+    }
+
+    /// A `warning` record.
+    pub fn warning(t: f64, message: String) -> Self {
+        Record::new(t, RecordKind::Warning { message })
+    }
+
+    /// A `link` record.
+    pub fn link(t: f64, message: String) -> Self {
+        Record::new(t, RecordKind::Link { message })
+    }
+
+    /// An `outcome` record.
+    pub fn outcome(t: f64, result: &str, reason: Option<String>) -> Self {
+        Record::new(t, RecordKind::Outcome { result: result.to_string(), reason, via: None })
     }
 }
 
@@ -262,14 +378,14 @@ impl Tracer {
     /// `ok` or `fail` when `event` is one of `task`'s ok or fail events,
     /// `none` when it is neither (a progress or condition event); `None`
     /// when the net does not say (a net without `task_events`).
-    fn ends(&self, task: Option<&str>, event: &str) -> Option<String> {
+    fn ends(&self, task: Option<&str>, event: &str) -> Option<Ends> {
         let e = self.outcomes.get(task?)?;
         Some(if e.ok.iter().any(|x| x == event) {
-            "ok".into()
+            Ends::Ok
         } else if e.fail.iter().any(|x| x == event) {
-            "fail".into()
+            Ends::Fail
         } else {
-            "none".into()
+            Ends::Neither
         })
     }
 
@@ -278,194 +394,160 @@ impl Tracer {
         self.mission.as_deref()
     }
 
-    fn call(&self, r: &mut Record, call_site: Option<u32>) {
-        r.call_site = call_site;
-        if let Some((label, src)) = call_site.and_then(|c| self.calls.get(&c)) {
-            r.label = label.clone();
-            r.src = src.clone();
-        }
+    /// The call at `call_site` of `task`: its label and source line.
+    fn call(&self, task: Option<String>, call_site: Option<u32>) -> Call {
+        let (label, src) = call_site.and_then(|c| self.calls.get(&c)).cloned().unwrap_or_default();
+        Call { task, call_site, label, src }
     }
 
     /// The record of an output.
     pub fn record(&self, out: &Output) -> Record {
-        let mut r = match out {
-            Output::Send { t, action } => {
-                let mut r = Record::new(*t, "action");
-                r.seq = Some(action.seq);
-                r.action = Some(action.action.clone());
-                r.primitive = Some(action.primitive.clone());
-                r.command = Some(action.command.clone());
-                r.params = Some(action.params.clone());
-                r.task = action.task.clone();
-                self.call(&mut r, action.call_site);
-                r
-            }
-            Output::Fired { t, transition, call_site } => {
-                let mut r = Record::new(*t, "fire");
-                r.transition = Some(self.ids[transition.index()].clone());
-                r.task = self.tasks[transition.index()].clone();
-                if self.timeouts[transition.index()] {
-                    r.ends = Some("timeout".into());
-                }
-                if let Some((kind, src)) = self.handlers.get(&transition.index()) {
-                    let (ends, what) = match kind {
-                        mcl_net::HandlerKind::Catch => ("catch", "the catch"),
-                        mcl_net::HandlerKind::Condition => ("condition", "the condition of the monitor"),
+        let kind = match out {
+            Output::Send { action, .. } => RecordKind::Action {
+                seq: action.seq,
+                action: action.action.clone(),
+                primitive: action.primitive.clone(),
+                command: action.command.clone(),
+                params: action.params.clone(),
+                call: self.call(action.task.clone(), action.call_site),
+                queued: false,
+            },
+            Output::Fired { transition, call_site, .. } => {
+                let mut ends = self.timeouts[transition.index()].then_some(Ends::Timeout);
+                let mut src = None;
+                if let Some((kind, at)) = self.handlers.get(&transition.index()) {
+                    let (end, what) = match kind {
+                        mcl_net::HandlerKind::Catch => (Ends::Catch, "the catch"),
+                        mcl_net::HandlerKind::Condition => (Ends::Condition, "the condition of the monitor"),
                     };
-                    r.ends = Some(ends.into());
-                    r.src = src.clone();
-                    let via = match src {
+                    ends = Some(end);
+                    src = at.clone();
+                    let via = match at {
                         Some(s) => format!("{what} at {s}"),
                         None => what.to_string(),
                     };
                     *self.last_handler.borrow_mut() = Some(via);
                 }
-                r.call_site = *call_site;
-                r.label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
-                r
+                let label = call_site.and_then(|c| self.calls.get(&c)).and_then(|(l, _)| l.clone());
+                let task = self.tasks[transition.index()].clone();
+                RecordKind::Fire {
+                    transition: self.ids[transition.index()].clone(),
+                    call: Call { task, call_site: *call_site, label, src },
+                    ends,
+                }
             }
-            Output::Event { t, event, transition, call_site, activation } => {
-                let mut r = Record::new(*t, "event");
-                r.event = Some(event.clone());
-                r.task = self.tasks[transition.index()].clone();
-                r.ends = self.ends(r.task.as_deref(), event);
-                r.transition = Some(self.ids[transition.index()].clone());
-                r.activation = *activation;
-                self.call(&mut r, *call_site);
-                r
+            Output::Event { event, transition, call_site, activation, .. } => {
+                let task = self.tasks[transition.index()].clone();
+                RecordKind::Event {
+                    event: event.clone(),
+                    transition: self.ids[transition.index()].clone(),
+                    ends: self.ends(task.as_deref(), event),
+                    call: self.call(task, *call_site),
+                    activation: *activation,
+                }
             }
-            Output::Stale { t, event, activation, reason } => {
-                let mut r = Record::new(*t, "stale_event");
-                r.event = Some(event.clone());
-                r.activation = Some(*activation);
-                r.reason = Some(reason.clone());
-                r
+            Output::Stale { event, activation, reason, .. } => {
+                RecordKind::StaleEvent { event: event.clone(), reason: reason.clone(), activation: *activation }
             }
-            Output::Unexpected { t, event, reason } => {
-                let mut r = Record::new(*t, "unexpected_event");
-                r.event = Some(event.clone());
-                r.reason = Some(reason.to_string());
-                r
+            Output::Unexpected { event, reason, .. } => {
+                RecordKind::UnexpectedEvent { event: event.clone(), reason: reason.to_string() }
             }
-            Output::Timer { t, transition, deadline } => {
-                let mut r = Record::new(*t, "timer");
-                r.transition = Some(self.ids[transition.index()].clone());
-                r.task = self.tasks[transition.index()].clone();
-                r.deadline = Some(round_time(*deadline));
-                r
+            Output::Timer { transition, deadline, .. } => RecordKind::Timer {
+                transition: self.ids[transition.index()].clone(),
+                task: self.tasks[transition.index()].clone(),
+                deadline: round_time(*deadline),
+            },
+            Output::Perception { name, value, .. } => {
+                RecordKind::Perception { name: name.clone(), value: value.clone() }
             }
-            Output::Perception { t, name, value } => {
-                let mut r = Record::new(*t, "perception");
-                r.name = Some(name.clone());
-                r.value = Some(value.clone());
-                r
-            }
-            Output::Warning { t, message } => {
-                let mut r = Record::new(*t, "warning");
-                r.message = Some(message.clone());
-                r
-            }
-            Output::Outcome { t, outcome, reason } => {
-                let mut r = Record::new(*t, "outcome");
-                r.result = Some(outcome.as_str().to_string());
-                r.reason = reason.clone();
-                r.via = self.last_handler.borrow().clone();
-                r
-            }
+            Output::Warning { message, .. } => RecordKind::Warning { message: message.clone() },
+            Output::Outcome { outcome, reason, .. } => RecordKind::Outcome {
+                result: outcome.as_str().to_string(),
+                reason: reason.clone(),
+                via: self.last_handler.borrow().clone(),
+            },
         };
-        r.mission = self.mission.clone();
-        r
+        Record { mission: self.mission.clone(), ..Record::new(out.time(), kind) }
     }
 }
 
 /// The live-log line of a record (None for records not shown: fires and
-/// timers unless `verbose`).
+/// timers unless `verbose`, poses, kinds this version does not know).
 pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
-    let what = match r.kind.as_str() {
-        "action" => {
-            let params: Vec<String> = r.params.iter().flatten().map(|(k, v)| format!("{k}={v}")).collect();
+    let (what, call) = match &r.kind {
+        RecordKind::Action { action, primitive, command, params, call, queued, .. } => {
+            let params: Vec<String> = params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            let queued = if *queued { "  (queued: the AAC is not connected)" } else { "" };
+            (format!("action   {primitive} {command}({})  [{action}]{queued}", params.join(", ")), Some(call))
+        }
+        RecordKind::Event { event, ends, call, .. } => {
+            let ends = match ends {
+                Some(Ends::Ok) => "  (ends ok)",
+                Some(Ends::Fail) => "  (ends fail)",
+                _ => "",
+            };
+            (format!("event    {event}{ends}"), Some(call))
+        }
+        RecordKind::UnexpectedEvent { event, reason } => (format!("UNEXPECTED event {event} ({reason})"), None),
+        RecordKind::StaleEvent { event, reason, .. } => (format!("stale    {event} ignored ({reason})"), None),
+        RecordKind::Link { message } => (format!("link     {message}"), None),
+        RecordKind::Perception { name, value } => (format!("percept  {name} = {value}"), None),
+        RecordKind::Warning { message } => (format!("warning  {message}"), None),
+        RecordKind::CoordReject { message } => (format!("REFUSED  coordination: {message}"), None),
+        RecordKind::Outcome { result, reason, via } => (
             format!(
-                "action   {} {}({}){}",
-                r.primitive.as_deref().unwrap_or("?"),
-                r.command.as_deref().unwrap_or("?"),
-                params.join(", "),
-                r.action.as_ref().map(|a| format!("  [{a}]")).unwrap_or_default()
-            ) + if r.queued == Some(true) { "  (queued: the AAC is not connected)" } else { "" }
+                "MISSION {}{}{}",
+                result.to_uppercase(),
+                reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default(),
+                via.as_ref().map(|v| format!(" (through {v})")).unwrap_or_default()
+            ),
+            None,
+        ),
+        RecordKind::CoordSend { seq, transition, to } => (format!("send     {transition} -> {to}  (#{seq})"), None),
+        RecordKind::CoordReceive { seq, transition, from, .. } => {
+            (format!("receive  {from}/{transition}  (#{seq})"), None)
         }
-        "event" => format!(
-            "event    {}{}",
-            r.event.as_deref().unwrap_or("?"),
-            r.ends.as_deref().filter(|e| *e != "none").map(|e| format!("  (ends {e})")).unwrap_or_default()
-        ),
-        "unexpected_event" => {
-            format!("UNEXPECTED event {} ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
+        RecordKind::CoordSummary { result, messages, .. } => {
+            (format!("ALL MISSIONS {}: {messages} coordination messages sent", result.to_uppercase()), None)
         }
-        "stale_event" => {
-            format!("stale    {} ignored ({})", r.event.as_deref().unwrap_or("?"), r.reason.as_deref().unwrap_or(""))
+        RecordKind::Fire { ends: Some(Ends::Catch), call, .. } => {
+            ("CATCH    the try block failed: its catch starts".to_string(), Some(call))
         }
-        "link" => format!("link     {}", r.message.as_deref().unwrap_or("")),
-        "perception" => format!(
-            "percept  {} = {}",
-            r.name.as_deref().unwrap_or("?"),
-            r.value.as_ref().map(|v| v.to_string()).unwrap_or_default()
-        ),
-        "warning" => format!("warning  {}", r.message.as_deref().unwrap_or("")),
-        "coord_reject" => format!("REFUSED  coordination: {}", r.message.as_deref().unwrap_or("")),
-        "outcome" => format!(
-            "MISSION {}{}{}",
-            r.result.as_deref().unwrap_or("?").to_uppercase(),
-            r.reason.as_ref().map(|x| format!(": {x}")).unwrap_or_default(),
-            r.via.as_ref().map(|v| format!(" (through {v})")).unwrap_or_default()
-        ),
-        "coord_send" => format!(
-            "send     {} -> {}  (#{})",
-            r.transition.as_deref().unwrap_or("?"),
-            r.to.as_deref().unwrap_or("?"),
-            r.seq.unwrap_or_default()
-        ),
-        "coord_receive" => format!(
-            "receive  {}/{}  (#{})",
-            r.from.as_deref().unwrap_or("?"),
-            r.transition.as_deref().unwrap_or("?"),
-            r.seq.unwrap_or_default()
-        ),
-        "coord_summary" => format!(
-            "ALL MISSIONS {}: {} coordination messages sent",
-            r.result.as_deref().unwrap_or("?").to_uppercase(),
-            r.messages.unwrap_or_default()
-        ),
-        "fire" if r.ends.as_deref() == Some("catch") => "CATCH    the try block failed: its catch starts".to_string(),
-        "fire" if r.ends.as_deref() == Some("condition") => {
-            "CONDITION of a monitor ended: its watched block stops, its do block runs".to_string()
+        RecordKind::Fire { ends: Some(Ends::Condition), call, .. } => {
+            ("CONDITION of a monitor ended: its watched block stops, its do block runs".to_string(), Some(call))
         }
-        "fire" if r.ends.as_deref() == Some("timeout") => {
-            format!("TIME-OUT {}", r.transition.as_deref().unwrap_or("?"))
+        RecordKind::Fire { ends: Some(Ends::Timeout), transition, call } => {
+            (format!("TIME-OUT {transition}"), Some(call))
         }
-        "fire" if verbose => format!("fire     {}", r.transition.as_deref().unwrap_or("?")),
-        "timer" if verbose => format!(
-            "timer    {} until {}",
-            r.transition.as_deref().unwrap_or("?"),
-            r.deadline.map(|d| format!("{d:.3}")).unwrap_or_default()
-        ),
+        RecordKind::Fire { transition, call, .. } if verbose => (format!("fire     {transition}"), Some(call)),
+        RecordKind::Timer { transition, task, deadline } if verbose => {
+            let line = format!("timer    {transition} until {deadline:.3}");
+            return Some(with_call(r, line, Some(&Call { task: task.clone(), ..Call::default() })));
+        }
         _ => return None,
     };
+    Some(with_call(r, what, call))
+}
+
+/// `[time] mission: what`, then the call's task, label and source line.
+fn with_call(r: &Record, what: String, call: Option<&Call>) -> String {
     let mut line = format!("[{:>10.3}] ", r.t);
     if let Some(m) = r.mission.as_deref().filter(|m| *m != "*") {
         line.push_str(&format!("{m}: "));
     }
     line.push_str(&what);
-    if matches!(r.kind.as_str(), "action" | "event" | "fire" | "timer") {
-        if let Some(task) = &r.task {
+    if let Some(c) = call {
+        if let Some(task) = &c.task {
             line.push_str(&format!("  task={task}"));
         }
-        if let Some(l) = &r.label {
+        if let Some(l) = &c.label {
             line.push_str(&format!(":{l}"));
         }
-        if let Some(src) = &r.src {
+        if let Some(src) = &c.src {
             line.push_str(&format!("  at {src}"));
         }
     }
-    Some(line)
+    line
 }
 
 /// Writes records as JSON lines that survive the end of the process.
@@ -549,20 +631,24 @@ impl TraceWriter {
 
     /// Appends one record (a whole line).
     pub fn write(&mut self, r: &Record) -> std::io::Result<()> {
-        self.write_line(&r.kind, r)
+        let last = matches!(r.kind, RecordKind::Outcome { .. } | RecordKind::CoordSummary { .. });
+        self.write_line(last, r)
     }
 
     /// Appends one record given as JSON (`mcl plan --run`'s records).
     pub fn write_json(&mut self, r: &Value) -> std::io::Result<()> {
-        self.write_line(r["kind"].as_str().unwrap_or(""), r)
+        let last = Record::deserialize(r)
+            .is_ok_and(|r| matches!(r.kind, RecordKind::Outcome { .. } | RecordKind::CoordSummary { .. }));
+        self.write_line(last, r)
     }
 
-    fn write_line(&mut self, kind: &str, r: &impl Serialize) -> std::io::Result<()> {
+    /// Appends `r`; flushes when it is an outcome (`last`) or the buffer is full.
+    fn write_line(&mut self, last: bool, r: &impl Serialize) -> std::io::Result<()> {
         let mut line = serde_json::to_vec(r)?;
         line.push(b'\n');
         let mut p = self.pending();
         p.buf.extend_from_slice(&line);
-        if p.buf.len() >= FLUSH_BYTES || matches!(kind, "outcome" | "coord_summary") {
+        if p.buf.len() >= FLUSH_BYTES || last {
             p.flush();
         }
         p.take_error()
@@ -619,7 +705,7 @@ mod tests {
 
     #[test]
     fn a_cut_last_line_is_ignored_and_others_are_errors() {
-        let r = Record::new(1.0, "fire");
+        let r = Record::warning(1.0, "w".into());
         let line = serde_json::to_string(&r).unwrap();
         let whole = format!("{line}\n{line}\n");
         assert_eq!(parse_trace(&whole).unwrap().len(), 2);
@@ -634,18 +720,33 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mcl-trace-writer-{}", std::process::id()));
         let path = dir.join("t.jsonl");
         let mut w = TraceWriter::create(&path).unwrap();
-        w.write(&Record::new(0.0, "fire")).unwrap();
-        w.write(&Record::new(0.5, "outcome")).unwrap();
+        w.write(&Record::warning(0.0, "w".into())).unwrap();
+        w.write(&Record::outcome(0.5, "ok", None)).unwrap();
         assert_eq!(read_trace(&path).unwrap().len(), 2, "flushed at the outcome");
-        w.write(&Record::new(1.0, "fire")).unwrap();
+        w.write(&Record::warning(1.0, "w".into())).unwrap();
         std::thread::sleep(FLUSH_EVERY * 2 + std::time::Duration::from_millis(200));
         assert_eq!(read_trace(&path).unwrap().len(), 3, "flushed by the timer");
-        w.write(&Record::new(2.0, "fire")).unwrap();
+        w.write(&Record::warning(2.0, "w".into())).unwrap();
         let f = w.flusher();
         f.flush();
         assert_eq!(read_trace(&path).unwrap().len(), 4, "flushed by a flusher");
         drop(w);
         f.flush();
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn kinds_this_version_does_not_know_are_read_and_ignored() {
+        let text = "{\"t\":1.0,\"kind\":\"plan\",\"plan\":1,\"steps\":[\"a\"]}\n{\"t\":2.0,\"kind\":\"link\",\"message\":\"up\"}\n";
+        let rs = parse_trace(text).unwrap();
+        assert_eq!(rs[0].kind, RecordKind::Other);
+        assert_eq!(rs[1].kind, RecordKind::Link { message: "up".into() });
+        assert!(live_line(&rs[0], true).is_none());
+    }
+
+    #[test]
+    fn a_known_kind_without_its_fields_is_an_error() {
+        let err = parse_trace("{\"t\":1.0,\"kind\":\"action\",\"seq\":1}\n").unwrap_err();
+        assert!(err.starts_with("1: ") && err.contains("missing field"), "{err}");
     }
 }

@@ -16,7 +16,7 @@ use mcl_runtime::link;
 use mcl_runtime::mock::MockVehicle;
 use mcl_runtime::player::{Outcome, Player, PlayerOptions};
 use mcl_runtime::scenario::Scenario;
-use mcl_runtime::trace::{Record, SourceMap, Tracer};
+use mcl_runtime::trace::{Record, RecordKind, SourceMap, Tracer};
 
 fn examples() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples")
@@ -38,22 +38,17 @@ fn missions(file: &Path) -> Vec<(String, Arc<Net>)> {
 fn attribution(records: &[Record]) -> Vec<String> {
     records
         .iter()
-        .filter_map(|r| match r.kind.as_str() {
-            "action" => Some(format!(
-                "action {} {} {:?} call {:?} {:?}",
-                r.action.as_deref().unwrap_or("?"),
-                r.task.as_deref().unwrap_or("?"),
-                r.params,
-                r.call_site,
-                r.label
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { action, params, call, .. } => Some(format!(
+                "action {action} {} {params:?} call {:?} {:?}",
+                call.task.as_deref().unwrap_or("?"),
+                call.call_site,
+                call.label
             )),
-            "event" => Some(format!(
-                "event {} {} call {:?}",
-                r.event.as_deref().unwrap_or("?"),
-                r.task.as_deref().unwrap_or("?"),
-                r.call_site
-            )),
-            "outcome" => Some(format!("outcome {}", r.result.as_deref().unwrap_or("?"))),
+            RecordKind::Event { event, call, .. } => {
+                Some(format!("event {event} {} call {:?}", call.task.as_deref().unwrap_or("?"), call.call_site))
+            }
+            RecordKind::Outcome { result, .. } => Some(format!("outcome {result}")),
             _ => None,
         })
         .collect()
@@ -103,8 +98,10 @@ fn compare(file: &str, scenario: Option<&str>, seed: u64) {
         assert_eq!(ev, End::Outcome(Outcome::Ok), "{ctx}");
         assert_eq!(er, ev, "{ctx}");
         assert_eq!(attribution(&r), attribution(&v), "{ctx}");
-        let unexpected: Vec<&Record> =
-            r.iter().filter(|r| matches!(r.kind.as_str(), "unexpected_event" | "stale_event")).collect();
+        let unexpected: Vec<&Record> = r
+            .iter()
+            .filter(|r| matches!(r.kind, RecordKind::UnexpectedEvent { .. } | RecordKind::StaleEvent { .. }))
+            .collect();
         assert!(unexpected.is_empty(), "{ctx}: {unexpected:?}");
     }
 }
@@ -120,8 +117,9 @@ fn extract_5_4_simultaneous_answers() {
     }
     let net = &missions(&examples().join("extract-5-4.mcl"))[0].1;
     let (_, r) = real_run(net, &Scenario::default(), 3);
-    let last = r.iter().rfind(|r| r.kind == "event").unwrap();
-    assert_eq!((last.event.as_deref(), last.call_site, last.t), (Some("eventDepthOk"), Some(4), 15.0));
+    let last = r.iter().rfind(|r| matches!(r.kind, RecordKind::Event { .. })).unwrap();
+    let RecordKind::Event { event, call, .. } = &last.kind else { unreachable!() };
+    assert_eq!((event.as_str(), call.call_site, last.t), ("eventDepthOk", Some(4), 15.0));
 }
 
 #[test]

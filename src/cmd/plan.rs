@@ -41,36 +41,89 @@ pub enum PlanFormat {
     Json,
 }
 
+/// Options of `mcl plan` (its command-line arguments).
+#[derive(Debug, clap::Args)]
 pub struct Options {
+    /// The .mcl file defining the mission operators the domain's `:mcl` calls name.
     pub file: Option<PathBuf>,
+    /// PDDL domain file (default: domain.pddl beside FILE.mcl).
+    #[arg(long, value_name = "D.pddl")]
     pub domain: Option<PathBuf>,
+    /// PDDL problem file (default: problem.pddl beside FILE.mcl).
+    #[arg(long, value_name = "P.pddl")]
     pub problem: Option<PathBuf>,
+    /// The .mcl file of mission operators (instead of FILE).
+    #[arg(long, value_name = "FILE.mcl")]
     pub operators: Option<PathBuf>,
+    /// Search algorithm.
+    #[arg(long, value_enum, default_value = "astar")]
     pub search: SearchChoice,
+    /// Heuristic of A*.
+    #[arg(long, value_enum, default_value = "hmax")]
     pub heuristic: HeuristicChoice,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "ipc")]
     pub format: PlanFormat,
+    /// Validate this plan (IPC format) instead of planning.
+    #[arg(long, value_name = "PLAN")]
     pub validate: Option<PathBuf>,
+    /// Give up after storing this many states.
+    #[arg(long, default_value_t = mcl_plan::search::DEFAULT_MAX_STATES)]
     pub max_states: u64,
+    /// Print grounding and search statistics on standard error.
+    #[arg(long)]
     pub stats: bool,
-    /// `--run`: execute the plan.
-    pub execute: Option<Execute>,
+    /// Execute the plan: run each step's MCL mission on the player, watch the world through
+    /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock or --aac).
+    #[arg(long)]
+    pub run: bool,
+    /// How to execute it (with `--run`).
+    #[command(flatten)]
+    pub execute: Execute,
 }
 
 /// Options of `mcl plan FILE.mcl --run`.
+#[derive(Debug, clap::Args)]
 pub struct Execute {
+    /// With --run: against the in-process mock vehicle (a dry run).
+    #[arg(long, requires = "run")]
     pub mock: bool,
-    /// `--aac HOST:PORT`: a vehicle's AAC over TCP.
+    /// With --run: against the vehicle's AAC listening at HOST:PORT, in real time (e.g.
+    /// `mcl mock-aac --plan FILE.mcl`).
+    #[arg(long, value_name = "HOST:PORT", requires = "run", conflicts_with = "mock")]
     pub aac: Option<String>,
+    /// With --aac: shared secret for the AAC.
+    #[arg(long, requires = "aac")]
     pub token: Option<String>,
+    /// With --run: how the mock vehicle answers and which perceptions it sends (TOML, docs/scenarios.md).
+    #[arg(long, value_name = "S.toml", requires = "run")]
     pub scenario: Option<PathBuf>,
+    /// With --run: fact-provider scripts (default: world.xml beside FILE.mcl).
+    #[arg(long, value_name = "W.xml", requires = "run")]
     pub world: Option<PathBuf>,
+    /// With --run: virtual time (instantaneous and deterministic).
+    #[arg(long, requires = "run")]
     pub virtual_time: bool,
+    /// With --run: mission time runs FACTOR times faster than real time.
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, requires = "run")]
     pub speed: f64,
+    /// With --run: write the trace (JSON lines: player records, plans, re-plans, steps, facts).
+    #[arg(long, value_name = "T.jsonl", requires = "run")]
     pub trace: Option<PathBuf>,
+    /// With --run: seed of the players and of the mock vehicle (default: the scenario's, else 0).
+    #[arg(long, requires = "run")]
     pub seed: Option<u64>,
+    /// With --run: mission of FILE.mcl (without parameters) the vehicle runs while re-planning.
+    #[arg(long, value_name = "MISSION", requires = "run")]
     pub holding: Option<String>,
+    /// With --run: stop (exit status 3) when mission time passes SECONDS.
+    #[arg(long, value_name = "SECONDS", requires = "run")]
     pub time_limit: Option<f64>,
+    /// With --run: give up after this many plans.
+    #[arg(long, value_name = "N", default_value_t = 100, requires = "run")]
     pub max_plans: u32,
+    /// With --run: no live log.
+    #[arg(short, long)]
     pub quiet: bool,
 }
 
@@ -193,7 +246,7 @@ pub fn run(o: Options) -> u8 {
         match files[..] {
             [] => {}
             [f] => run_ops = Some(f.to_path_buf()),
-            _ if o.execute.is_some() => {
+            _ if o.run => {
                 let list: Vec<String> = files.iter().map(|f| format!("`{}`", f.display())).collect();
                 eprintln!(
                     "error: --run plays the mission operators of one file, but they are defined in {}: move them into one file",
@@ -204,7 +257,7 @@ pub fn run(o: Options) -> u8 {
             _ => {}
         }
     }
-    if let Some(x) = o.execute {
+    if let Some(x) = o.run.then_some(o.execute) {
         if o.validate.is_some() {
             eprintln!("error: give either --run or --validate");
             return 2;

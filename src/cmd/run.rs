@@ -17,7 +17,7 @@ use mcl_runtime::journal::{self, Entry, JournalWriter};
 use mcl_runtime::mock::MockVehicle;
 use mcl_runtime::player::{Output, Player, PlayerOptions};
 use mcl_runtime::scenario::{ProgramNames, Scenario};
-use mcl_runtime::trace::{live_line, Record, SourceMap, TraceWriter, Tracer};
+use mcl_runtime::trace::{live_line, Record, RecordKind, SourceMap, TraceWriter, Tracer};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::io::{IsTerminal, Write};
@@ -227,12 +227,14 @@ impl Sink for RunSink {
                 let _ = writeln!(out, "{line}");
                 let _ = out.flush();
             }
-        } else if !self.live && !self.quiet_replay && r.kind == "link" {
-            // Even a quiet run says when it cannot reach the vehicle.
-            eprintln!("link: {}", r.message.as_deref().unwrap_or(""));
-        } else if !self.live && r.kind == "coord_reject" {
-            // ... and when it refuses a coordination message.
-            eprintln!("warning: coordination: refused {}", r.message.as_deref().unwrap_or(""));
+        } else if !self.live {
+            match &r.kind {
+                // Even a quiet run says when it cannot reach the vehicle.
+                RecordKind::Link { message } if !self.quiet_replay => eprintln!("link: {message}"),
+                // ... and when it refuses a coordination message.
+                RecordKind::CoordReject { message } => eprintln!("warning: coordination: refused {message}"),
+                _ => {}
+            }
         }
         self.records.push(r.clone());
     }
@@ -601,17 +603,20 @@ pub fn run(o: Options) -> u8 {
         eprintln!("error: {e}");
         return 2;
     }
-    let count = |k: &str| sink.records.iter().filter(|r| r.kind == k).count();
+    let counts = Counts::of(sink.records.iter());
     // How it got there, when it left its nominal path (a catch, a monitor's condition).
-    let via = sink.records.iter().rev().find(|r| r.kind == "outcome").and_then(|r| r.via.clone());
+    let via = sink.records.iter().rev().find_map(|r| match &r.kind {
+        RecordKind::Outcome { via, .. } => Some(via.clone()),
+        _ => None,
+    });
     eprintln!(
         "mission `{}`: {}{} at t={end_time:.3} s ({} actions, {} events, {} unexpected events, {fired} firings)",
         chosen.name,
         end.result().to_uppercase(),
-        via.map(|v| format!(" through {v}")).unwrap_or_default(),
-        count("action"),
-        count("event"),
-        count("unexpected_event"),
+        via.flatten().map(|v| format!(" through {v}")).unwrap_or_default(),
+        counts.actions,
+        counts.events,
+        counts.unexpected,
     );
     end.exit_code()
 }
@@ -705,9 +710,31 @@ fn vehicle_journal(
     Ok((Some(w), None))
 }
 
-/// Records of a coordinated run: kept for the end of the run and the chronogram.
-fn count(records: &[Record], mission: &str, kind: &str) -> usize {
-    records.iter().filter(|r| r.kind == kind && r.mission.as_deref() == Some(mission)).count()
+/// What the summary line of a run counts among its records.
+#[derive(Debug, Default)]
+struct Counts {
+    actions: usize,
+    events: usize,
+    unexpected: usize,
+    sent: usize,
+    received: usize,
+}
+
+impl Counts {
+    fn of<'a>(records: impl Iterator<Item = &'a Record>) -> Counts {
+        let mut c = Counts::default();
+        for r in records {
+            match r.kind {
+                RecordKind::Action { .. } => c.actions += 1,
+                RecordKind::Event { .. } => c.events += 1,
+                RecordKind::UnexpectedEvent { .. } => c.unexpected += 1,
+                RecordKind::CoordSend { .. } => c.sent += 1,
+                RecordKind::CoordReceive { .. } => c.received += 1,
+                _ => {}
+            }
+        }
+        c
+    }
 }
 
 /// `mcl run --mock FILE` on a file with several missions: every vehicle at
@@ -951,14 +978,15 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         return 2;
     }
     for ((name, e, t), fired) in end.ends.iter().zip(&end.fired) {
+        let c = Counts::of(sink.records.iter().filter(|r| r.mission.as_deref() == Some(name.as_str())));
         eprintln!(
             "mission `{name}`: {} at t={t:.3} s ({} actions, {} events, {} unexpected events, {fired} firings, {} messages sent, {} received)",
             e.result().to_uppercase(),
-            count(&sink.records, name, "action"),
-            count(&sink.records, name, "event"),
-            count(&sink.records, name, "unexpected_event"),
-            count(&sink.records, name, "coord_send"),
-            count(&sink.records, name, "coord_receive"),
+            c.actions,
+            c.events,
+            c.unexpected,
+            c.sent,
+            c.received,
         );
     }
     let mutex = if end.mutex.total() > 0 {

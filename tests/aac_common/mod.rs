@@ -12,6 +12,7 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use mcl_runtime::trace::{Record, RecordKind};
 use serde_json::{json, Value};
 
 pub const STEP: Duration = Duration::from_secs(10);
@@ -361,8 +362,8 @@ pub fn resumed_run(addr: &str, file: &Path, journal: &Path, trace: &Path, args: 
 }
 
 /// The records of a trace file.
-pub fn records(trace: &Path) -> Vec<Value> {
-    std::fs::read_to_string(trace).unwrap().lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
+pub fn records(trace: &Path) -> Vec<Record> {
+    mcl_runtime::trace::read_trace(trace).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every action and event of a trace with the call it is credited to (no
@@ -370,12 +371,19 @@ pub fn records(trace: &Path) -> Vec<Value> {
 pub fn calls(trace: &Path) -> Vec<String> {
     records(trace)
         .iter()
-        .filter_map(|r| match r["kind"].as_str()? {
-            "action" => {
-                Some(format!("action {} {} task {} call {}", r["action"], r["params"], r["task"], r["call_site"]))
+        .filter_map(|r| match &r.kind {
+            // Fields as JSON text (`"name"`, `null`, `{"x":1}`).
+            RecordKind::Action { action, params, call, .. } => Some(format!(
+                "action {} {} task {} call {}",
+                json!(action),
+                json!(params),
+                json!(call.task),
+                json!(call.call_site)
+            )),
+            RecordKind::Event { event, call, .. } => {
+                Some(format!("event {} task {} call {}", json!(event), json!(call.task), json!(call.call_site)))
             }
-            "event" => Some(format!("event {} task {} call {}", r["event"], r["task"], r["call_site"])),
-            "outcome" => Some(format!("outcome {}", r["result"])),
+            RecordKind::Outcome { result, .. } => Some(format!("outcome {}", json!(result))),
             _ => None,
         })
         .collect()
@@ -383,12 +391,32 @@ pub fn calls(trace: &Path) -> Vec<String> {
 
 /// The sequence numbers of the actions of a trace.
 pub fn sent(trace: &Path) -> Vec<u64> {
-    records(trace).iter().filter(|r| r["kind"] == "action").filter_map(|r| r["seq"].as_u64()).collect()
+    records(trace)
+        .iter()
+        .filter_map(|r| match r.kind {
+            RecordKind::Action { seq, .. } => Some(seq),
+            _ => None,
+        })
+        .collect()
 }
 
-/// The records of a trace of these kinds.
-pub fn of_kind(trace: &Path, kinds: &[&str]) -> Vec<Value> {
-    records(trace).into_iter().filter(|r| kinds.iter().any(|k| r["kind"] == *k)).collect()
+/// The unexpected and stale events of a trace.
+pub fn odd_events(trace: &Path) -> Vec<Record> {
+    records(trace)
+        .into_iter()
+        .filter(|r| matches!(r.kind, RecordKind::UnexpectedEvent { .. } | RecordKind::StaleEvent { .. }))
+        .collect()
+}
+
+/// The messages of the warnings of a trace.
+pub fn warnings(trace: &Path) -> Vec<String> {
+    records(trace)
+        .into_iter()
+        .filter_map(|r| match r.kind {
+            RecordKind::Warning { message } => Some(message),
+            _ => None,
+        })
+        .collect()
 }
 
 /// [`calls`] of the uninterrupted run of `file` on the in-process mock, in
