@@ -285,8 +285,9 @@ fn random_missions_fire_along_the_explored_state_space() {
 /// Events of the random nets.
 const EVENTS: [&str; 3] = ["e0", "e1", "e2"];
 
-/// A random net (after mcl-net's explorer test): immediate transitions with
-/// random priorities, events, timed transitions, extra arcs and weights.
+/// A random net (after mcl-net's explorer test): immediate and deferred
+/// transitions with random priorities, events, timed transitions, extra
+/// arcs and weights.
 fn random_net(r: &mut Rng) -> Net {
     let mut b = NetBuilder::new("random");
     let np = 2 + r.below(7);
@@ -301,7 +302,9 @@ fn random_net(r: &mut Rng) -> Net {
         let kind = match r.below(5) {
             0..=2 => TransitionKind::Immediate,
             3 => TransitionKind::Event((*r.pick(&EVENTS)).into()),
-            _ => TransitionKind::Timed(Delay::Fixed((1 + r.below(3)) as f64)),
+            // Delay 0: a deferred transition (fires in tangible markings,
+            // by priority among those due).
+            _ => TransitionKind::Timed(Delay::Fixed(r.below(3) as f64)),
         };
         let mut t = Transition::new(format!("t{i}")).with_kind(kind);
         if r.chance(50) {
