@@ -3,9 +3,10 @@
 //! * [`run_virtual`]: the player's timers and an in-process vehicle's
 //!   agenda ([`VirtualVehicle`]: the mock, a simulator) stepped by the one
 //!   discrete-event loop of [`crate::virtual_loop`], in virtual time:
-//!   deterministic for a seed, and instantaneous. At equal times the player's timers go first,
-//!   then the mock's messages in the order they were scheduled; the actions
-//!   an input produces reach the mock before the next message is taken.
+//!   deterministic for a seed, and instantaneous. At equal times the
+//!   player's timers go first, then the vehicle's messages in the order they
+//!   were scheduled; the actions an input produces reach the vehicle before
+//!   the next message is taken.
 //! * [`run_real_time`]: a tokio loop over a [`Link`] to any AAC (the
 //!   in-process mock served by [`serve_mock`], or a TCP link), selecting
 //!   between the link's inbound channel and a sleep until the player's next
