@@ -354,3 +354,39 @@ fn the_mcl_planning_model_runs_like_the_pddl_files() {
     assert_eq!(plans(&ra), plans(&rb));
     assert_eq!(kind(&ra, "outcome"), kind(&rb, "outcome"));
 }
+
+/// A planned step whose mission loops without mission time advancing (its
+/// tasks answer at once) is stopped by the virtual-time loop's zero-time
+/// guard: the step fails as stuck and the run goes on (here: re-plans until
+/// `--max-plans`), instead of hanging.
+#[test]
+fn a_step_that_loops_in_zero_time_ends_stuck() {
+    let sc = tmp("zero-time.toml");
+    std::fs::write(&sc, "default_duration = 0\n[tasks.GetPositionFix]\noutcome = \"ok\"\n").unwrap();
+    let t = tmp("zero-time.jsonl");
+    let o = mcl(&[
+        "tests/run/plan-loop/plan.mcl",
+        "--run",
+        "--mock",
+        "--virtual-time",
+        "--scenario",
+        sc.to_str().unwrap(),
+        "--max-plans",
+        "2",
+        "--trace",
+        &t.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}\n{}", text(&o.stdout), text(&o.stderr));
+    assert!(text(&o.stderr).contains("gave up after 2 plans"), "{}", text(&o.stderr));
+    let rs: Vec<Value> =
+        std::fs::read_to_string(&t).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let warnings: Vec<&str> = kind(&rs, "warning").iter().filter_map(|w| w["message"].as_str()).collect();
+    assert_eq!(
+        warnings.iter().filter(|w| w.starts_with("zero-time loop: 10000 inputs at t=0 s")).count(),
+        2,
+        "{warnings:?}"
+    );
+    let ends = kind(&rs, "step_end");
+    assert_eq!(ends.len(), 2, "{ends:?}");
+    assert!(ends.iter().all(|e| e["result"] != "ok"), "{ends:?}");
+}

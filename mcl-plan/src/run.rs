@@ -33,12 +33,15 @@ use mcl_compiler::compile::compile_file;
 use mcl_compiler::diagnostics::render_human;
 use mcl_compiler::{check_file, Database, Db};
 use mcl_net::{Net, Place, SourceSpan, Transition, TransitionKind};
+use mcl_runtime::driver::Limits;
 use mcl_runtime::journal::Input;
 use mcl_runtime::link::{Action, Inbound};
 use mcl_runtime::mock::{tables_of, CallInfo, MockVehicle, TaskEvents};
 use mcl_runtime::player::{Outcome as PlayerOutcome, Output, Player, PlayerOptions};
 use mcl_runtime::scenario::Scenario;
 use mcl_runtime::trace::{live_line, round_time, Record, RecordKind, SourceMap, Tracer};
+use mcl_runtime::vehicle::VirtualVehicle;
+use mcl_runtime::virtual_loop::{self, Discrete, Stop};
 use mcl_syntax::ast::{Item, Value, ValueKind};
 use serde_json::{json, Value as Json};
 use std::collections::HashMap;
@@ -119,9 +122,10 @@ pub trait AacLink {
 /// last event travel behind it).
 pub const AAC_SETTLE: Duration = Duration::from_millis(20);
 
-/// Where the actions go: the in-process mock, or a vehicle's AAC.
+/// Where the actions go: a vehicle in virtual time (the in-process mock, a
+/// simulated vehicle), or a vehicle's AAC.
 enum Vehicle<'a> {
-    Mock(Box<MockVehicle>),
+    Mock(Box<dyn VirtualVehicle + 'a>),
     Aac(&'a mut dyn AacLink),
 }
 
@@ -829,13 +833,12 @@ impl Run<'_> {
                 }
                 continue;
             }
-            let tp = self.running.as_ref().and_then(|r| r.player.next_deadline());
-            let tm = match &self.vehicle {
-                Vehicle::Mock(mock) => mock.next_deadline(),
-                Vehicle::Aac(_) => None,
-            };
-            let next = match (tp, tm) {
-                (None, None) => {
+            // Until the step ends: the one virtual-time loop (in real time
+            // with a mock, each input waits for its time).
+            let limits = Limits { time_limit: self.opts.time_limit, default_limit: false, connect_timeout: None };
+            match virtual_loop::run_now(self, &limits)? {
+                Stop::Over => {}
+                Stop::Quiescent => {
                     let awaited = self.running.as_ref().map(|r| r.player.awaited_events()).unwrap_or_default();
                     let message = format!(
                         "the mission waits for {} and nothing more can happen: the step fails",
@@ -844,27 +847,62 @@ impl Run<'_> {
                     self.emit_kind(RecordKind::Warning { message });
                     self.abort_running("the step waits for what can no longer happen");
                     self.end_step(false);
-                    continue;
                 }
-                (a, b) => a.unwrap_or(f64::INFINITY).min(b.unwrap_or(f64::INFINITY)),
-            };
-            if let Some(limit) = self.opts.time_limit {
-                if next > limit {
+                Stop::TimeLimit(limit) => {
                     self.t = limit;
                     return Ok(self.finish("time_limit", Some(format!("the time limit of {limit} s passed"))));
                 }
-            }
-            self.wait_until(next);
-            self.t = self.t.max(next);
-            if tp.is_some_and(|a| a <= next) {
-                self.apply(Input::Timer(next));
-            } else if let Some((_, m)) = match &mut self.vehicle {
-                Vehicle::Mock(mock) => mock.pop_due(next),
-                Vehicle::Aac(_) => None,
-            } {
-                self.deliver(m);
+                Stop::ZeroTimeLoop(t) => {
+                    self.emit(
+                        "warning",
+                        json!({ "message": format!("{}: the step fails", virtual_loop::zero_time_message(t)) }),
+                    );
+                    self.abort_running("the step loops without mission time advancing");
+                    self.end_step(false);
+                }
             }
         }
+    }
+}
+
+/// Where the next input of a running step comes from.
+#[derive(Clone, Copy, Debug)]
+enum Source {
+    Timer,
+    Vehicle,
+}
+
+/// The running step and the vehicle, for the virtual-time loop: over when
+/// the step has ended (or was aborted by a perception).
+impl Discrete for Run<'_> {
+    type Source = Source;
+
+    fn is_over(&mut self) -> bool {
+        self.running.as_ref().is_none_or(|r| r.player.outcome().is_some())
+    }
+
+    fn deadlines(&self, out: &mut Vec<(f64, Source)>) {
+        out.extend(self.running.as_ref().and_then(|r| r.player.next_deadline()).map(|t| (t, Source::Timer)));
+        if let Vehicle::Mock(mock) = &self.vehicle {
+            out.extend(mock.next_deadline().map(|t| (t, Source::Vehicle)));
+        }
+    }
+
+    async fn step(&mut self, t: f64, source: Source) -> Result<(), String> {
+        self.wait_until(t);
+        self.t = self.t.max(t);
+        match source {
+            Source::Timer => self.apply(Input::Timer(t)),
+            Source::Vehicle => {
+                if let Some((_, m)) = match &mut self.vehicle {
+                    Vehicle::Mock(mock) => mock.pop_due(t),
+                    Vehicle::Aac(_) => None,
+                } {
+                    self.deliver(m);
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -884,7 +922,21 @@ pub fn run_planned(
     let missions = Missions::load(operators)?;
     let (tasks, calls) = missions.mock_tables();
     let mock = MockVehicle::new(tasks, calls, scenario, opts.seed);
-    run_with(ex, world, missions, Vehicle::Mock(Box::new(mock)), opts, sink)
+    run_planned_on(ex, world, missions, Box::new(mock), opts, sink)
+}
+
+/// Runs the planned mission like [`run_planned`] against any vehicle in
+/// virtual time (the mock, a simulated vehicle), whose tables are those of
+/// `missions` ([`Missions::mock_tables`]).
+pub fn run_planned_on<'a>(
+    ex: Executor,
+    world: WorldModeler,
+    missions: Missions,
+    vehicle: Box<dyn VirtualVehicle + 'a>,
+    opts: RunOptions,
+    sink: &'a mut dyn RecordSink,
+) -> Result<Report, String> {
+    run_with(ex, world, missions, Vehicle::Mock(vehicle), opts, sink)
 }
 
 /// Runs the planned mission like [`run_planned`], in real time

@@ -1,10 +1,12 @@
 //! Drivers: what feeds time and messages to a [`Player`].
 //!
-//! * [`run_virtual`]: a discrete-event loop over the player's timers and an
-//!   in-process [`MockVehicle`]'s agenda, in virtual time: deterministic for
-//!   a seed, and instantaneous. At equal times the player's timers go first,
-//!   then the mock's messages in the order they were scheduled; the actions
-//!   an input produces reach the mock before the next message is taken.
+//! * [`run_virtual`]: the player's timers and an in-process vehicle's
+//!   agenda ([`VirtualVehicle`]: the mock, a simulator) stepped by the one
+//!   discrete-event loop of [`crate::virtual_loop`], in virtual time:
+//!   deterministic for a seed, and instantaneous. At equal times the
+//!   player's timers go first, then the vehicle's messages in the order they
+//!   were scheduled; the actions an input produces reach the vehicle before
+//!   the next message is taken.
 //! * [`run_real_time`]: a tokio loop over a [`Link`] to any AAC (the
 //!   in-process mock served by [`serve_mock`], or a TCP link), selecting
 //!   between the link's inbound channel and a sleep until the player's next
@@ -21,6 +23,7 @@ use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player};
 use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::{Pose, VirtualVehicle};
+use crate::virtual_loop::{self, Discrete, Stop};
 
 /// Receives trace records as they are produced.
 pub trait Sink {
@@ -277,9 +280,7 @@ pub fn actions(out: &[Output]) -> impl Iterator<Item = &Action> {
 /// filling the disk with its trace; `--time-limit` changes it.
 pub const DEFAULT_VIRTUAL_TIME_LIMIT: f64 = 86_400.0;
 
-/// Inputs in a row at one instant of virtual time after which a run is
-/// stopped as a zero-time loop (tasks that answer at once, in a loop).
-pub const ZERO_TIME_INPUTS: u64 = 10_000;
+pub use crate::virtual_loop::ZERO_TIME_INPUTS;
 
 /// Limits of a run.
 #[derive(Clone, Copy, Debug, Default)]
@@ -319,32 +320,6 @@ impl Limits {
         } else {
             format!("the time limit of {limit} s passed")
         }
-    }
-}
-
-/// Counts the inputs of a virtual-time run at one instant.
-#[derive(Debug, Default)]
-pub(crate) struct SameInstant {
-    t: f64,
-    n: u64,
-}
-
-impl SameInstant {
-    /// One more input at `t`; true when there were too many at that instant.
-    pub(crate) fn tick(&mut self, t: f64) -> bool {
-        if t > self.t {
-            self.t = t;
-            self.n = 0;
-        }
-        self.n += 1;
-        self.n > ZERO_TIME_INPUTS
-    }
-
-    /// The message of a zero-time loop at `t`.
-    pub(crate) fn message(t: f64) -> String {
-        format!(
-            "zero-time loop: {ZERO_TIME_INPUTS} inputs at t={t} s without mission time advancing (a loop whose tasks answer at once?)"
-        )
     }
 }
 
@@ -391,62 +366,87 @@ pub fn pose_record(mission: Option<&str>, p: &Pose) -> Record {
 /// Runs `s` against `mock` in virtual time until the mission ends, nothing
 /// more can happen, or the time limit passes. Starts the player if it has
 /// not started (a resumed player has). `mock.initial()` must have been called.
+/// The loop is [`virtual_loop::run`]: at equal times the player's timers go
+/// before the vehicle's messages.
 pub fn run_virtual(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), limits: Limits) -> Result<End, String> {
     if !started(s) {
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, mock, 0.0, &actions);
     }
-    let mut same = SameInstant::default();
-    loop {
-        if let Some(o) = s.player.outcome() {
-            return Ok(End::Outcome(o));
+    let mut one = Single { s, vehicle: mock };
+    let stop = virtual_loop::run_now(&mut one, &limits)?;
+    let s = one.s;
+    Ok(match stop {
+        Stop::Over => End::Outcome(s.player.outcome().unwrap_or(Outcome::Stuck)),
+        Stop::Quiescent => {
+            let awaited = s.player.awaited_events();
+            let t = s.player.now();
+            s.end_by_driver(
+                t,
+                "stuck",
+                format!(
+                    "nothing more can happen: no timer is pending and the mock vehicle has nothing left to send; the mission waits for {}",
+                    if awaited.is_empty() { "nothing".to_string() } else { awaited.join(", ") }
+                ),
+            );
+            End::Quiescent { awaited }
         }
-        let tp = s.player.next_deadline();
-        let tm = mock.next_deadline();
-        let next = match (tp, tm) {
-            (None, None) => {
-                let awaited = s.player.awaited_events();
-                let t = s.player.now();
-                s.end_by_driver(
-                    t,
-                    "stuck",
-                    format!(
-                        "nothing more can happen: no timer is pending and the mock vehicle has nothing left to send; the mission waits for {}",
-                        if awaited.is_empty() { "nothing".to_string() } else { awaited.join(", ") }
-                    ),
-                );
-                return Ok(End::Quiescent { awaited });
-            }
-            (Some(a), Some(b)) => a.min(b),
-            (Some(a), None) => a,
-            (None, Some(b)) => b,
-        };
-        if let Some(limit) = limits.time_limit {
-            if next > limit {
-                s.end_by_driver(limit, "time_limit", limits.passed(limit));
-                return Ok(End::TimeLimit(limit));
-            }
+        Stop::TimeLimit(limit) => {
+            s.end_by_driver(limit, "time_limit", limits.passed(limit));
+            End::TimeLimit(limit)
         }
-        if same.tick(next) {
-            s.end_by_driver(next, "stuck", SameInstant::message(next));
-            return Ok(End::ZeroTimeLoop(next));
+        Stop::ZeroTimeLoop(t) => {
+            s.end_by_driver(t, "stuck", virtual_loop::zero_time_message(t));
+            End::ZeroTimeLoop(t)
         }
-        let actions = if tp.is_some_and(|a| a <= next) {
-            s.step(Input::Timer(next))?
-        } else {
-            // A simulated vehicle may only advance to `next` (a step with
-            // nothing to send but poses).
-            let Some((t, m)) = mock.pop_due(next) else {
-                drain_poses(s, mock);
-                continue;
-            };
-            match perception_or_event(t, m) {
-                Some(input) => s.step(input)?,
-                None => continue,
+    })
+}
+
+/// Where the next input of a single run comes from.
+#[derive(Clone, Copy, Debug)]
+enum Source {
+    Timer,
+    Vehicle,
+}
+
+/// A player and its vehicle, for the virtual-time loop.
+struct Single<'s, 'a, V: VirtualVehicle + ?Sized> {
+    s: &'s mut Session<'a>,
+    vehicle: &'s mut V,
+}
+
+impl<V: VirtualVehicle + ?Sized> Discrete for Single<'_, '_, V> {
+    type Source = Source;
+
+    fn is_over(&mut self) -> bool {
+        self.s.player.outcome().is_some()
+    }
+
+    fn deadlines(&self, out: &mut Vec<(f64, Source)>) {
+        out.extend(self.s.player.next_deadline().map(|t| (t, Source::Timer)));
+        out.extend(self.vehicle.next_deadline().map(|t| (t, Source::Vehicle)));
+    }
+
+    async fn step(&mut self, t: f64, source: Source) -> Result<(), String> {
+        let (s, vehicle) = (&mut *self.s, &mut *self.vehicle);
+        let actions = match source {
+            Source::Timer => s.step(Input::Timer(t))?,
+            Source::Vehicle => {
+                // A simulated vehicle may only advance to `t` (a step with
+                // nothing to send but poses).
+                let Some((tm, m)) = vehicle.pop_due(t) else {
+                    drain_poses(s, vehicle);
+                    return Ok(());
+                };
+                match perception_or_event(tm, m) {
+                    Some(input) => s.step(input)?,
+                    None => return Ok(()),
+                }
             }
         };
         let now = s.player.now();
-        feed_mock(s, mock, now, &actions);
+        feed_mock(s, vehicle, now, &actions);
+        Ok(())
     }
 }
 

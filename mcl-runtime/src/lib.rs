@@ -21,3 +21,4 @@ pub mod scenario;
 pub mod tcp;
 pub mod trace;
 pub mod vehicle;
+pub mod virtual_loop;

@@ -14,8 +14,9 @@
 //! all (otherwise two vehicles woken by one release of a mutex could both
 //! take it).
 //!
-//! * [`run_virtual`]: one discrete-event loop over every vehicle's timers and
-//!   mock, in virtual time. Deterministic for a seed, whatever the transport:
+//! * [`run_virtual`]: the discrete-event loop of [`crate::virtual_loop`]
+//!   over every vehicle's timers and vehicle (the mock, a simulated one:
+//!   any [`VirtualVehicle`]), in virtual time. Deterministic for a seed, whatever the transport:
 //!   after each input the loop waits until the messages it sent have reached
 //!   their receivers, and delivers them at the same virtual instant, before
 //!   anything else happens, one receiving vehicle at a time, each reaction's
@@ -40,11 +41,12 @@ use std::time::Duration;
 
 use crate::clock::Clock;
 use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, Incoming, MutexMessages, TokenMutex};
-use crate::driver::{feed_mock, perception_or_event, End, Limits, SameInstant, Session, Sink};
+use crate::driver::{feed_mock, perception_or_event, End, Limits, Session, Sink};
 use crate::journal::{Entry, Input, JournalWriter, Replay, Step};
-use crate::mock::MockVehicle;
 use crate::player::{Outcome, Output, Player, PlayerOptions};
 use crate::trace::{Record, RecordKind, Tracer};
+use crate::vehicle::VirtualVehicle;
+use crate::virtual_loop::{self, Discrete, Stop};
 use mcl_net::Net;
 
 /// How long virtual time waits for a message to cross the transport.
@@ -82,7 +84,7 @@ pub struct Vehicle {
     player: Player,
     opts: PlayerOptions,
     tracer: Tracer,
-    mock: MockVehicle,
+    mock: Box<dyn VirtualVehicle + Send>,
     transport: Box<dyn CoordTransport>,
     sends: HashMap<String, Vec<String>>,
     tokens: Vec<TokenMutex>,
@@ -93,18 +95,20 @@ pub struct Vehicle {
 
 impl Vehicle {
     /// A vehicle named `name` playing `net` (its tracer should name it
-    /// too). Reads the send table from the net's `coord.send` property and
-    /// calls `mock.initial()`.
+    /// too) against `mock` (the mock vehicle, a simulated one). Reads the
+    /// send table from the net's `coord.send` property and calls
+    /// `mock.initial()`.
     pub fn new(
         name: &str,
         net: Arc<Net>,
         opts: PlayerOptions,
         tracer: Tracer,
-        mut mock: MockVehicle,
+        mock: impl VirtualVehicle + Send + 'static,
         transport: Box<dyn CoordTransport>,
     ) -> Result<Self, String> {
         let sends = send_table(&net)?;
         let tokens = token_table(&net)?;
+        let mut mock: Box<dyn VirtualVehicle + Send> = Box::new(mock);
         mock.initial();
         let player = Player::new(net, opts.clone());
         Ok(Vehicle {
@@ -180,7 +184,7 @@ struct Live<'a> {
     name: String,
     s: Session<'a>,
     opts: PlayerOptions,
-    mock: MockVehicle,
+    mock: Box<dyn VirtualVehicle + Send>,
     transport: Box<dyn CoordTransport>,
     sends: HashMap<String, Vec<String>>,
     inbox: VecDeque<CoordMessage>,
@@ -226,7 +230,7 @@ impl Live<'_> {
     fn commit(&mut self, outs: &[Output], mut sent: Vec<CoordMessage>) -> Result<Vec<CoordMessage>, String> {
         self.s.sync()?;
         let now = self.s.player.now();
-        feed_mock(&mut self.s, &mut self.mock, now, outs);
+        feed_mock(&mut self.s, &mut *self.mock, now, outs);
         for m in &sent {
             if self.replaying {
                 self.resend.push(m.clone());
@@ -717,27 +721,77 @@ fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
 
 /// Runs `vehicles` in virtual time (see the [module documentation](self)),
 /// writing records to `sink`. Runs inside a tokio runtime (the transport's).
+/// The loop is [`virtual_loop::run`].
 pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limits) -> Result<MultiEnd, String> {
     let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
-    let mut vs = live(vehicles, &mut handles);
+    let vs = live(vehicles, &mut handles);
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
-    let mut work: VecDeque<(usize, Vec<Output>)> = VecDeque::new();
-    let mut sent = 0u64;
-    let mut now = 0.0f64;
+    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0 };
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings.
-    let mut to_start = 0;
-    let mut same = SameInstant::default();
-    loop {
-        // Settle the consequences of the last input, messages included, at `now`.
-        while let Some((i, outs)) = work.pop_front() {
-            let msgs = vs[i].after(&outs)?;
-            sent += msgs.len() as u64;
+    fleet.settle().await?;
+    for i in 0..fleet.vs.len() {
+        let outs = fleet.vs[i].start(0.0)?;
+        fleet.work.push_back((i, outs));
+        fleet.settle().await?;
+    }
+    let stop = virtual_loop::run(&mut fleet, &limits).await?;
+    let running = fleet.vs.iter_mut().filter(|v| v.end.is_none());
+    match stop {
+        Stop::Over => {}
+        Stop::Quiescent => {
+            for v in running {
+                let t = v.s.player.now();
+                v.end = Some(v.stuck(t));
+            }
+        }
+        Stop::TimeLimit(limit) => {
+            for v in running {
+                v.s.end_by_driver(limit, "time_limit", limits.passed(limit));
+                v.end = Some(End::TimeLimit(limit));
+            }
+            fleet.now = fleet.now.max(limit);
+        }
+        Stop::ZeroTimeLoop(t) => {
+            for v in running {
+                v.s.end_by_driver(t, "stuck", virtual_loop::zero_time_message(t));
+                v.end = Some(End::ZeroTimeLoop(t));
+            }
+        }
+    }
+    let end = finish(&fleet.vs, fleet.sent);
+    summary(&sink, fleet.now, &end);
+    Ok(end)
+}
+
+/// The vehicles of a virtual-time run, for the virtual-time loop: the
+/// inputs whose consequences are not yet settled (`work`), the messages
+/// sent, the time.
+struct Fleet<'a> {
+    vs: Vec<Live<'a>>,
+    index: HashMap<String, usize>,
+    work: VecDeque<(usize, Vec<Output>)>,
+    sent: u64,
+    now: f64,
+}
+
+impl Fleet<'_> {
+    /// Settles the consequences of the last inputs, messages included, at
+    /// `now`: each message is awaited until its receiver has it; then one
+    /// vehicle takes its messages, and what it does in reaction reaches the
+    /// others before the next one does.
+    async fn settle(&mut self) -> Result<(), String> {
+        let now = self.now;
+        while let Some((i, outs)) = self.work.pop_front() {
+            let msgs = self.vs[i].after(&outs)?;
+            self.sent += msgs.len() as u64;
             for m in msgs {
-                let j =
-                    *index.get(&m.to).ok_or_else(|| format!("`{}` sends to an unknown mission `{}`", m.from, m.to))?;
+                let j = *self
+                    .index
+                    .get(&m.to)
+                    .ok_or_else(|| format!("`{}` sends to an unknown mission `{}`", m.from, m.to))?;
                 loop {
-                    let got = tokio::time::timeout(DELIVERY_TIMEOUT, vs[j].transport.recv())
+                    let got = tokio::time::timeout(DELIVERY_TIMEOUT, self.vs[j].transport.recv())
                         .await
                         .map_err(|_| {
                             format!("a message from `{}` did not reach `{}` within {DELIVERY_TIMEOUT:?}", m.from, m.to)
@@ -745,85 +799,60 @@ pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limit
                         .ok_or_else(|| format!("the transport of `{}` closed", m.to))?;
                     match got {
                         Incoming::Message(got) => {
-                            vs[j].received(got, now.max(m.t))?;
+                            self.vs[j].received(got, now.max(m.t))?;
                             break;
                         }
-                        Incoming::Rejected(why) => vs[j].rejected(why, now),
+                        Incoming::Rejected(why) => self.vs[j].rejected(why, now),
                     }
                 }
             }
-            if work.is_empty() {
-                // One vehicle takes its messages; what it does in reaction
-                // reaches the others before the next one does.
-                for (j, v) in vs.iter_mut().enumerate() {
+            if self.work.is_empty() {
+                for (j, v) in self.vs.iter_mut().enumerate() {
                     if let Some(outs) = v.deliver(now)? {
-                        work.push_back((j, outs));
+                        self.work.push_back((j, outs));
                         break;
                     }
                 }
             }
         }
-        if to_start < vs.len() {
-            work.push_back((to_start, vs[to_start].start(0.0)?));
-            to_start += 1;
-            continue;
-        }
-        for v in vs.iter_mut().filter(|v| v.end.is_none()) {
+        Ok(())
+    }
+}
+
+impl Discrete for Fleet<'_> {
+    /// The vehicle, and whether its timers (else its vehicle's messages).
+    type Source = (usize, bool);
+
+    fn is_over(&mut self) -> bool {
+        for v in self.vs.iter_mut().filter(|v| v.end.is_none()) {
             if let Some(o) = v.s.player.outcome() {
                 v.end = Some(End::Outcome(o));
             }
         }
-        if vs.iter().all(|v| v.end.is_some()) {
-            break;
-        }
-        // The next input: the earliest timer or mock message of a running vehicle.
-        let mut next: Option<(f64, usize, bool)> = None;
-        for (i, v) in vs.iter().enumerate().filter(|(_, v)| v.end.is_none()) {
-            for (t, timer) in [(v.s.player.next_deadline(), true), (v.mock.next_deadline(), false)] {
-                if let Some(t) = t {
-                    if next.is_none_or(|(n, _, _)| t < n) {
-                        next = Some((t, i, timer));
-                    }
-                }
-            }
-        }
-        let Some((t, i, timer)) = next else {
-            for v in vs.iter_mut().filter(|v| v.end.is_none()) {
-                let t = v.s.player.now();
-                v.end = Some(v.stuck(t));
-            }
-            break;
-        };
-        if let Some(limit) = limits.time_limit {
-            if t > limit {
-                for v in vs.iter_mut().filter(|v| v.end.is_none()) {
-                    v.s.end_by_driver(limit, "time_limit", limits.passed(limit));
-                    v.end = Some(End::TimeLimit(limit));
-                }
-                now = now.max(limit);
-                break;
-            }
-        }
-        if same.tick(t) {
-            for v in vs.iter_mut().filter(|v| v.end.is_none()) {
-                v.s.end_by_driver(t, "stuck", SameInstant::message(t));
-                v.end = Some(End::ZeroTimeLoop(t));
-            }
-            break;
-        }
-        now = now.max(t);
-        let v = &mut vs[i];
-        if timer {
-            work.push_back((i, v.s.step(Input::Timer(t))?));
-        } else if let Some((tm, m)) = v.mock.pop_due(t) {
-            if let Some(input) = perception_or_event(tm, m) {
-                work.push_back((i, v.s.step(input)?));
-            }
+        self.vs.iter().all(|v| v.end.is_some())
+    }
+
+    fn deadlines(&self, out: &mut Vec<(f64, (usize, bool))>) {
+        for (i, v) in self.vs.iter().enumerate().filter(|(_, v)| v.end.is_none()) {
+            out.extend(v.s.player.next_deadline().map(|t| (t, (i, true))));
+            out.extend(v.mock.next_deadline().map(|t| (t, (i, false))));
         }
     }
-    let end = finish(&vs, sent);
-    summary(&sink, now, &end);
-    Ok(end)
+
+    async fn step(&mut self, t: f64, (i, timer): (usize, bool)) -> Result<(), String> {
+        self.now = self.now.max(t);
+        let v = &mut self.vs[i];
+        if timer {
+            let outs = v.s.step(Input::Timer(t))?;
+            self.work.push_back((i, outs));
+        } else if let Some((tm, m)) = v.mock.pop_due(t) {
+            if let Some(input) = perception_or_event(tm, m) {
+                let outs = v.s.step(input)?;
+                self.work.push_back((i, outs));
+            }
+        }
+        self.settle().await
+    }
 }
 
 /// Shared state of the real-time run: which vehicles are idle (or ended), and
