@@ -174,6 +174,40 @@ fn several_counterexamples_are_numbered_and_a_violation_that_does_not_stop_the_m
     assert!(!out.exists());
 }
 
+/// A task defined in an imported file and called by one of several
+/// missions: the scenario runs that mission (`--mission`).
+#[test]
+fn an_imported_task_is_replayed_in_the_mission_that_calls_it() {
+    let dir = out_dir("imported");
+    std::fs::write(
+        dir.join("lib.mcl"),
+        "pattern {\n    P_DEAD {\n        places { begin.1; abort.1; ok.1; fail.1; run; }\n        transitions { T0; TA; }\n        arcs { begin.1 -> T0; T0 -> run; run -> TA; abort.1 -> TA; }\n    }\n}\ntasks { A(): P_DEAD { } B(): Instant { } }\n",
+    )
+    .unwrap();
+    let main = dir.join("main.mcl");
+    std::fs::write(&main, "import \"lib.mcl\";\nmission : one { B() ; A() }\nmission : two { B() }\n").unwrap();
+    let out = dir.join("cex.toml");
+    let o = mcl(&["check", main.to_str().unwrap(), "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("counterexample of E0601 at ") && err.contains("lib.mcl:"), "{err}");
+    assert!(err.contains("--mission one --scenario"), "{err}");
+    let o = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        "-q",
+        main.to_str().unwrap(),
+        "--mission",
+        "one",
+        "--scenario",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains(": reproduced (`one` stuck"), "{err}");
+}
+
 #[test]
 fn without_the_flag_or_with_other_errors_nothing_changes() {
     let dir = out_dir("unchanged");

@@ -26,49 +26,82 @@ pub const MAX_STATES: usize = 200_000;
 /// One diagnostic with a counterexample, and its scenario.
 #[derive(Clone, Debug)]
 pub struct Replay {
-    /// The diagnostic (E0406, E0601).
+    /// The diagnostic (E0406, E0601; an E0601 may be located in an
+    /// imported file, where the task is defined).
     pub diagnostic: FileDiagnostic,
+    /// The file whose missions the scenario runs.
+    pub root: SourceFile,
+    /// The mission it runs, when `root` has several and the scenario is for
+    /// one of them (E0601: `mcl run --mission NAME`).
+    pub mission: Option<String>,
     /// The scenario's TOML text, or why no replay could be built.
     pub scenario: Result<String, String>,
 }
 
 /// True for the diagnostics whose counterexamples can be replayed.
-pub fn has_counterexample(d: &Diagnostic) -> bool {
-    d.code == codes::DEADLOCKING_CONSTRAINTS || d.code == codes::BLOCK_PROPERTY
+pub fn has_counterexample(d: &FileDiagnostic) -> bool {
+    d.diag.code == codes::DEADLOCKING_CONSTRAINTS || d.diag.code == codes::BLOCK_PROPERTY
 }
 
-/// The scenarios of the diagnostics of `file` (E0406, and E0601 of a task
-/// that a mission of `file` calls) that `wanted` keeps, in the order of the
-/// diagnostics: the compiler's, then the coordination analysis'.
-pub fn counterexample_scenarios(db: &dyn Db, file: SourceFile, wanted: impl Fn(&Diagnostic) -> bool) -> Vec<Replay> {
+/// The scenarios of the diagnostics that `wanted` keeps among those with a
+/// counterexample that the missions of `file` run: E0406 of `file`, and
+/// E0601 of a task that a mission of `file` calls (the task may be defined
+/// in an imported file); in the order of the diagnostics, the compiler's
+/// then the coordination analysis'.
+pub fn counterexample_scenarios(
+    db: &dyn Db,
+    file: SourceFile,
+    wanted: impl Fn(&FileDiagnostic) -> bool,
+) -> Vec<Replay> {
     let mut out = Vec::new();
-    let blocks: Vec<&FileDiagnostic> = mcl_compiler::check_file(db, file)
+    let blocks: Vec<FileDiagnostic> = mcl_compiler::program(db, file)
+        .files
         .iter()
-        .filter(|d| d.file == file && d.diag.code == codes::BLOCK_PROPERTY && wanted(&d.diag))
+        .flat_map(|&g| {
+            mcl_compiler::check_file(db, g)
+                .iter()
+                .filter(|d| d.file == g && d.diag.code == codes::BLOCK_PROPERTY && wanted(d))
+                .cloned()
+                .collect::<Vec<_>>()
+        })
         .collect();
     if !blocks.is_empty() {
         let missions = compile_file_unverified(db, file);
-        for d in blocks {
-            let scenario = match (&missions, task_of(&d.diag)) {
-                (_, None) => continue, // a pattern no task uses: no mission runs it
-                (Err(e), _) => Err(format!("the missions cannot be compiled ({e})")),
-                (Ok(ms), Some(task)) => {
-                    let nets: Vec<(String, &Net)> = ms.iter().map(|m| (m.name.clone(), &m.net)).collect();
-                    block_scenario(&nets, &task, expected(db, d, "block"))
+        for d in &blocks {
+            // A pattern no task uses, or a task no mission of `file` calls:
+            // no run of `file` meets it.
+            let Some(task) = task_of(&d.diag) else { continue };
+            let scenario = match &missions {
+                Err(e) => Err(format!("the missions cannot be compiled ({e})")),
+                Ok(ms) => {
+                    let nets: Vec<(String, &Net)> =
+                        ms.iter().filter(|m| calls(&m.net, &task)).map(|m| (m.name.clone(), &m.net)).collect();
+                    if nets.is_empty() {
+                        continue;
+                    }
+                    let several = ms.len() > 1;
+                    let r = block_scenario(&nets, &task, expected(db, d, "block"));
+                    out.push(Replay {
+                        diagnostic: d.clone(),
+                        root: file,
+                        mission: r.as_ref().ok().and_then(|(m, _)| several.then(|| m.clone())),
+                        scenario: r.map(|(_, text)| text),
+                    });
+                    continue;
                 }
             };
-            out.push(Replay { diagnostic: d.clone(), scenario });
+            out.push(Replay { diagnostic: d.clone(), root: file, mission: None, scenario });
         }
     }
     let deadlocks: Vec<&FileDiagnostic> = crate::coordination_diagnostics(db, file)
         .iter()
         .filter(|d| d.diag.code == codes::DEADLOCKING_CONSTRAINTS)
         .collect();
-    if !deadlocks.iter().any(|d| wanted(&d.diag)) {
+    if !deadlocks.iter().any(|d| wanted(d)) {
         return out;
     }
     let scenarios = deadlock_scenarios(db, file);
-    for (k, d) in deadlocks.into_iter().enumerate().filter(|(_, d)| wanted(&d.diag)) {
+    for (k, d) in deadlocks.into_iter().enumerate().filter(|(_, d)| wanted(d)) {
         let scenario = match &scenarios {
             Err(e) => Err(e.clone()),
             Ok(list) => match list.get(k) {
@@ -76,9 +109,14 @@ pub fn counterexample_scenarios(db: &dyn Db, file: SourceFile, wanted: impl Fn(&
                 None => Err("the analysis no longer finds this deadlock".to_string()),
             },
         };
-        out.push(Replay { diagnostic: d.clone(), scenario });
+        out.push(Replay { diagnostic: d.clone(), root: file, mission: None, scenario });
     }
     out
+}
+
+/// True when some call of `net` is a call of `task`.
+fn calls(net: &Net, task: &str) -> bool {
+    net.transitions().iter().any(|t| t.binding.as_ref().is_some_and(|b| b.task == task))
 }
 
 /// The task named by an E0601 diagnostic's label (`... of task `T``).
@@ -108,13 +146,13 @@ pub fn shown(path: &std::path::Path) -> String {
     rel.as_deref().unwrap_or(path).display().to_string()
 }
 
-/// E0601: the shortest run of a mission that calls `task` to a dead marking
-/// in which the mission has not ended and `task` holds a token, replayed.
-fn block_scenario(missions: &[(String, &Net)], task: &str, mut want: Expected) -> Result<String, String> {
+/// E0601: the shortest run of a mission of `missions` (those that call
+/// `task`) to a dead marking in which the mission has not ended and `task`
+/// holds a token, replayed; with the mission's name.
+fn block_scenario(missions: &[(String, &Net)], task: &str, mut want: Expected) -> Result<(String, String), String> {
     let prefix = format!("task.{task}.");
-    let calls = |net: &Net| net.transitions().iter().any(|t| t.binding.as_ref().is_some_and(|b| b.task == task));
     let mut why = format!("no mission calls task `{task}`");
-    for (name, net) in missions.iter().filter(|(_, n)| calls(n)) {
+    for (name, net) in missions {
         let ss = explore(net, &Options { max_states: MAX_STATES, ..Options::default() });
         let ended = |m: &Marking| {
             net.places().iter().enumerate().any(|(i, p)| {
@@ -138,7 +176,8 @@ fn block_scenario(missions: &[(String, &Net)], task: &str, mut want: Expected) -
         want.marking = cx.marking(&ss.marking(s));
         let tasks = ProgramNames::of([*net]).tasks;
         let shared = Arc::new((*net).clone());
-        return cex::build(&cx, &tasks, &want, false, |t| cex::check_single(&shared, name, t));
+        return cex::build(&cx, &tasks, &want, false, |t| cex::check_single(&shared, name, t))
+            .map(|t| (name.clone(), t));
     }
     Err(why)
 }

@@ -113,12 +113,14 @@ fn write_scenarios(db: &Database, files: &[SourceFile], out: &Path) -> Result<()
         let line = text.get(..d.diag.span.start as usize).map_or(1, |b| b.matches('\n').count() + 1);
         let source = mcl_coord::replay::shown(d.file.path(db));
         let what = format!("{} at {source}:{line}", d.diag.code);
+        let root = mcl_coord::replay::shown(r.root.path(db));
+        let mission = r.mission.as_ref().map(|m| format!(" --mission {m}")).unwrap_or_default();
         match r.scenario {
             Ok(scenario) => {
                 let path = if n == 1 { out.to_path_buf() } else { numbered(out, i + 1) };
                 match std::fs::write(&path, scenario) {
                     Ok(()) => eprintln!(
-                        "counterexample of {what} written to {0} (replay: mcl run --mock --virtual-time {source} --scenario {0})",
+                        "counterexample of {what} written to {0} (replay: mcl run --mock --virtual-time {root}{mission} --scenario {0})",
                         path.display()
                     ),
                     Err(e) => {

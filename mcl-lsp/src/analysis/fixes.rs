@@ -9,7 +9,7 @@ use super::diagnostics::to_lsp;
 use super::Analysis;
 use mcl_compiler::queries::program;
 use mcl_compiler::scope::{self, DefKind};
-use mcl_compiler::{check_file, codes, SourceFile};
+use mcl_compiler::{check_file, codes, FileDiagnostic, SourceFile};
 use mcl_syntax::ast::*;
 use mcl_syntax::visit::calls;
 use mcl_syntax::Span;
@@ -92,14 +92,11 @@ pub fn code_actions(a: &Analysis<'_>, file: SourceFile, range: Span) -> Vec<Code
 /// check`), replaced if it exists.
 fn counterexample_actions(a: &Analysis<'_>, file: SourceFile, range: Span) -> Vec<CodeAction> {
     use mcl_coord::replay::{counterexample_scenarios, has_counterexample};
-    let touches = |d: &mcl_syntax::Diagnostic| d.span.end >= range.start && d.span.start <= range.end;
+    let touches =
+        |d: &FileDiagnostic| d.file == file && d.diag.span.end >= range.start && d.diag.span.start <= range.end;
     let coord = mcl_coord::coordination_diagnostics(a.db, file);
-    let all: Vec<&mcl_syntax::Diagnostic> = check_file(a.db, file)
-        .iter()
-        .chain(coord.iter())
-        .filter(|d| d.file == file && has_counterexample(&d.diag))
-        .map(|d| &d.diag)
-        .collect();
+    let all: Vec<&FileDiagnostic> =
+        check_file(a.db, file).iter().chain(coord.iter()).filter(|d| d.file == file && has_counterexample(d)).collect();
     if !all.iter().any(|d| touches(d)) {
         return Vec::new();
     }
@@ -109,7 +106,8 @@ fn counterexample_actions(a: &Analysis<'_>, file: SourceFile, range: Span) -> Ve
     for r in counterexample_scenarios(a.db, file, |d| has_counterexample(d) && touches(d)) {
         let Ok(text) = r.scenario else { continue };
         let d = &r.diagnostic.diag;
-        let k = all.iter().position(|x| x.code == d.code && x.span == d.span && x.message == d.message);
+        let k =
+            all.iter().map(|x| &x.diag).position(|x| x.code == d.code && x.span == d.span && x.message == d.message);
         let name = match (all.len(), k) {
             (1, _) | (_, None) => format!("{stem}.counterexample.toml"),
             (_, Some(k)) => format!("{stem}.counterexample-{}.toml", k + 1),
