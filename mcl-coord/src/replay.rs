@@ -187,9 +187,13 @@ fn block_scenario(missions: &[(String, &Net)], task: &str, mut want: Expected) -
 /// in from the problem).
 pub type Build = Box<dyn Fn(&Expected) -> Result<String, String>>;
 
+/// [`deadlock_replays`] of the missions of `file`; an edit in the editor
+/// stops the analysis part-way (as it does the diagnostics').
 fn deadlock_scenarios(db: &dyn Db, file: SourceFile) -> Result<Vec<Build>, String> {
     let (missions, constraints) = crate::source::load(db, file).map_err(|e| e.to_string())?;
-    deadlock_replays(&missions, &constraints)
+    let analysis = || crate::analyze_with(&missions, &constraints, &crate::check::options());
+    let report = crate::interrupt::interruptible(|| db.unwind_if_revision_cancelled(), analysis);
+    replays_of(&missions, report.map_err(|e| e.to_string())?)
 }
 
 /// E0406: one builder per reported problem ([`crate::check::reported`]),
@@ -199,6 +203,10 @@ fn deadlock_scenarios(db: &dyn Db, file: SourceFile) -> Result<Vec<Build>, Strin
 /// plays (built although the constraints deadlock).
 pub fn deadlock_replays(missions: &[Mission], constraints: &[Constraint]) -> Result<Vec<Build>, String> {
     let report = crate::analyze_with(missions, constraints, &crate::check::options()).map_err(|e| e.to_string())?;
+    replays_of(missions, report)
+}
+
+fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>, String> {
     let net =
         Arc::new(crate::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?);
     let vehicles: Vec<(String, Arc<Net>)> = crate::decentralize(missions, &report.supervisors)
