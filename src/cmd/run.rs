@@ -38,7 +38,10 @@ pub struct Options {
     /// Shared secret for the AAC.
     #[arg(long)]
     pub token: Option<String>,
-    /// How the mock vehicle answers (TOML, see docs/scenarios.md).
+    /// How the mock vehicle answers (TOML, see docs/scenarios.md). A scenario written by
+    /// `mcl check --counterexample-scenario` (its `[counterexample]` table) also runs a program
+    /// whose only errors are verification errors (E06xx, deadlocking constraints), and the run
+    /// ends by saying whether it reproduced the counterexample.
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// Seed of the random choices (default: the scenario's seed, else 0).
