@@ -46,6 +46,13 @@ enum Command {
         /// Color the human output.
         #[arg(long, value_enum, default_value = "auto")]
         color: ColorChoice,
+        /// For each deadlock that a verifier reports (E0406, and E0601 of a task a mission calls),
+        /// write a scenario under which `mcl run --mock --virtual-time FILE --scenario OUT.toml`
+        /// replays it and ends stuck there (exit status 3). Each is checked by a dry run first.
+        /// One counterexample is written to OUT.toml; several to OUT-1.toml, OUT-2.toml, ...
+        /// in the order of the diagnostics (docs/scenarios.md, "Counterexamples").
+        #[arg(long, value_name = "OUT.toml")]
+        counterexample_scenario: Option<PathBuf>,
     },
     /// Compile the missions of a file to Petri nets (PNML 2009), and optionally Graphviz.
     ///
@@ -216,7 +223,9 @@ fn main() -> ExitCode {
         }
     };
     let code = match cli.command {
-        Command::Check { paths, format, color } => cmd::check::run(&paths, format, color),
+        Command::Check { paths, format, color, counterexample_scenario } => {
+            cmd::check::run(&paths, format, color, counterexample_scenario.as_deref())
+        }
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
         Command::Interface { file, format } => cmd::interface::run(&file, format),
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),

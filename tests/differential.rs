@@ -29,7 +29,7 @@ use mcl_runtime::driver::{run_virtual, Collect, Limits, Session};
 use mcl_runtime::mock::MockVehicle;
 use mcl_runtime::player::{Player, PlayerOptions};
 use mcl_runtime::scenario::Scenario;
-use mcl_runtime::trace::{Record, SourceMap, Tracer};
+use mcl_runtime::trace::{Record, RecordKind, SourceMap, Tracer};
 use mcl_syntax::gen::Rng;
 use std::collections::HashMap;
 use std::path::Path;
@@ -91,11 +91,12 @@ fn state_space_cut(net: &Net, cut: Option<u32>) -> Option<StateSpace> {
 fn fired(net: &Net, records: &[Record], mission: Option<&str>) -> Vec<TransitionId> {
     records
         .iter()
-        .filter(|r| r.kind == "fire" && mission.is_none_or(|m| r.mission.as_deref() == Some(m)))
-        .map(|r| {
-            let id = r.transition.as_deref().expect("a fire record names its transition");
-            net.transition_by_id(id).unwrap_or_else(|| panic!("`{id}` is not a transition of `{}`", net.id()))
+        .filter(|r| mission.is_none_or(|m| r.mission.as_deref() == Some(m)))
+        .filter_map(|r| match &r.kind {
+            RecordKind::Fire { transition, .. } => Some(transition.as_str()),
+            _ => None,
         })
+        .map(|id| net.transition_by_id(id).unwrap_or_else(|| panic!("`{id}` is not a transition of `{}`", net.id())))
         .collect()
 }
 
@@ -470,11 +471,11 @@ fn check_vehicle(
                 what()
             )
         };
-        match r.kind.as_str() {
-            "outcome" => return,
+        match &r.kind {
+            RecordKind::Outcome { .. } => return,
             // Messages received before the start fire on the initial marking.
-            "event" if !started => {
-                if let Some(t) = r.transition.as_deref().and_then(|id| net.transition_by_id(id)) {
+            RecordKind::Event { transition, .. } if !started => {
+                if let Some(t) = net.transition_by_id(transition) {
                     if !mcl_net::semantics::is_enabled(net, &m, t) {
                         fail(
                             format!("`{}` delivered before the start but not enabled", net.transitions()[t.index()].id),
@@ -486,9 +487,9 @@ fn check_vehicle(
                     tally.received += 1;
                 }
             }
-            "fire" => {
+            RecordKind::Fire { transition, .. } => {
                 started = true;
-                let id = r.transition.as_deref().expect("a fire record names its transition");
+                let id = transition.as_str();
                 let t =
                     net.transition_by_id(id).unwrap_or_else(|| panic!("`{id}` is not a transition of `{}`", v.mission));
                 if receive.contains(&t) {

@@ -999,6 +999,62 @@ fn deadlocking_constraints_are_published_and_cleared_when_fixed() {
     assert_eq!(lsp.shutdown(), 0);
 }
 
+/// On E0406 the server offers to write a scenario that replays the
+/// counterexample (`mcl_coord::replay`): an edit creating
+/// `mission.counterexample.toml` next to the source, which `mcl run` replays
+/// to the deadlock.
+#[test]
+fn a_deadlock_offers_a_counterexample_scenario() {
+    let root = workspace("deadlock-scenario", &[("vehicle.mcl", VEHICLE), ("mission.mcl", ORDER_CYCLE)]);
+    let mut lsp = Lsp::start(&root);
+    lsp.initialize(client_caps());
+    lsp.open("mission.mcl", ORDER_CYCLE);
+    let d = lsp.diagnostics("mission.mcl", Some(1));
+    let e = d["diagnostics"][1].clone();
+    assert_eq!(e["code"], "E0406", "{d}");
+    let uri = lsp.uri("mission.mcl");
+    let actions = lsp.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": uri}, "range": e["range"], "context": {"diagnostics": [e]}}),
+    );
+    let action = actions
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["title"] == "Write a dry run of this counterexample to mission.counterexample.toml")
+        .unwrap_or_else(|| panic!("{actions}"))
+        .clone();
+    assert_eq!(action["diagnostics"][0]["code"], "E0406", "{action}");
+    let ops = action["edit"]["documentChanges"].as_array().unwrap();
+    let target = uri_of(&root.join("mission.counterexample.toml"));
+    assert_eq!(ops[0]["kind"], "create", "{action}");
+    assert_eq!(ops[0]["uri"], target.as_str(), "{action}");
+    assert_eq!(ops[0]["options"]["overwrite"], true, "{action}");
+    assert_eq!(ops[1]["textDocument"]["uri"], target.as_str(), "{action}");
+    let text = ops[1]["edits"][0]["newText"].as_str().unwrap();
+    assert!(text.contains("[counterexample]\ncode = \"E0406\""), "{text}");
+    // Nothing is offered away from the deadlock.
+    let elsewhere = lsp.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": uri}, "range": {"start": pos(ORDER_CYCLE, "Void()", 0), "end": pos(ORDER_CYCLE, "Void()", 0)},
+               "context": {"diagnostics": []}}),
+    );
+    assert_eq!(elsewhere, json!([]), "{elsewhere}");
+    assert_eq!(lsp.shutdown(), 0);
+    // The file the edit makes replays the deadlock.
+    let scenario = root.join("mission.counterexample.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--mock", "--virtual-time", "-q", "mission.mcl", "--scenario"])
+        .arg(&scenario)
+        .current_dir(&root)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("reproduced (`v1` stuck, `v2` stuck"), "{err}");
+}
+
 #[test]
 fn a_valid_coordination_verdict_stays_through_edits_elsewhere() {
     let root = workspace("deadlock-kept", &[("vehicle.mcl", VEHICLE), ("mission.mcl", ORDER_CYCLE)]);

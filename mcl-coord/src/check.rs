@@ -35,7 +35,7 @@ use crate::verify::WitnessKind;
 #[salsa::tracked(returns(ref))]
 pub fn coordination_diagnostics(db: &dyn Db, file: SourceFile) -> Vec<FileDiagnostic> {
     // An edit in the editor cancels this query part-way (see `interrupt`).
-    diagnostics_inner(db, file, &AnalyzeOptions { structure: false, ..AnalyzeOptions::default() }, true)
+    diagnostics_inner(db, file, &options(), true)
 }
 
 /// [`coordination_diagnostics`] with explicit options (not memoized).
@@ -108,19 +108,29 @@ fn diagnostics_inner(db: &dyn Db, file: SourceFile, opts: &AnalyzeOptions, inter
              link fewer vehicles), or remove constraints, until the analysis concludes",
         )],
         Verdict::Deadlock => {
-            let mut seen: Vec<Vec<usize>> = Vec::new();
-            let mut out = Vec::new();
-            for p in &report.problems {
-                if seen.contains(&p.constraints) {
-                    continue;
-                }
-                seen.push(p.constraints.clone());
-                out.push(deadlock(p, &missions, &constraints, block));
-            }
-            out
+            reported(&report.problems).into_iter().map(|p| deadlock(p, &missions, &constraints, block)).collect()
         }
     };
     conflicts.into_iter().chain(diags).map(|diag| FileDiagnostic { file, diag }).collect()
+}
+
+/// The problems that E0406 reports, one per set of constraints involved,
+/// in the order of the diagnostics.
+pub fn reported(problems: &[Problem]) -> Vec<&Problem> {
+    let mut seen: Vec<&[usize]> = Vec::new();
+    let mut out = Vec::new();
+    for p in problems {
+        if !seen.contains(&p.constraints.as_slice()) {
+            seen.push(&p.constraints);
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The options of the analysis behind the diagnostics.
+pub fn options() -> AnalyzeOptions {
+    AnalyzeOptions { structure: false, ..AnalyzeOptions::default() }
 }
 
 /// The keyword that opens a constraints block (the whole block when its

@@ -20,7 +20,9 @@
 //!    ([`check::coordination_diagnostics`]);
 //! 5. splits it into one net per vehicle with the least communication, from
 //!    an integer program (seed Extracts 6.2-6.4: [`decentral`],
-//!    [`decentralize`]).
+//!    [`decentralize`]);
+//! 6. turns the counterexamples of E0406 (and E0601) into scenarios that a
+//!    dry run replays ([`replay`]).
 //!
 //! ```no_run
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -49,6 +51,7 @@ pub mod decentral;
 pub mod error;
 pub mod interrupt;
 pub mod model;
+pub mod replay;
 pub mod source;
 pub mod structure;
 pub mod supervisor;

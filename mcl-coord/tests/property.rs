@@ -23,6 +23,12 @@
 //! deadlock found in one group while another vehicle can still move is a
 //! blocked marking of the whole net: it replays, and that group's missions
 //! are stuck in it.
+//!
+//! Every counterexample reported also replays on the runtime
+//! (`mcl_coord::replay`): it converts to a scenario under which the players
+//! of the vehicle nets, with the mock vehicle in virtual time, take its
+//! events one by one and end in its marking (`mcl check
+//! --counterexample-scenario`).
 
 use mcl_compiler::{Database, Db};
 use mcl_coord::source::load;
@@ -457,4 +463,63 @@ fn fixed_seeds_meet_stuck_missions() {
         stuck += r.problems.iter().filter(|p| p.kind == WitnessKind::Stuck).count();
     }
     assert!(stuck > 0, "no stuck case in the batch: the generator no longer exercises nominal runs");
+}
+
+/// The differential property of `mcl check --counterexample-scenario`:
+/// each problem the analysis reports converts to a scenario that the
+/// runtime replays, event by event, to the problem's marking (the builder
+/// checks it with `multi::run_virtual` before returning it). The one
+/// exception is proven, not assumed: a counterexample in which one vehicle
+/// takes its first steps after another's events (the verifier lets each
+/// vehicle move at its own pace) while no run of the supervised net under
+/// the player's rule, every vehicle starting at once as in a dry run,
+/// reaches that marking (an exhaustive exploration). Returns the problems
+/// replayed and those excepted.
+fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize), TestCaseError> {
+    let (ms, cs) = compile(text, seed);
+    let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+    if r.problems.is_empty() {
+        return Ok((0, 0));
+    }
+    let builds =
+        mcl_coord::replay::deadlock_replays(&ms, &cs).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+    let table =
+        mcl_runtime::counterexample::Expected { code: "E0406".into(), at: "property".into(), ..Default::default() };
+    let (mut ok, mut excepted) = (0, 0);
+    for (i, b) in builds.iter().enumerate() {
+        match b(&table) {
+            Ok(scenario) => {
+                prop_assert!(scenario.contains("[counterexample.marking]"), "{scenario}");
+                ok += 1;
+            }
+            Err(e) if e.contains("and no run reaches that marking when every vehicle starts at once") => excepted += 1,
+            Err(e) => return Err(TestCaseError::fail(format!("problem {}: {e}\n{text}", i + 1))),
+        }
+    }
+    Ok((ok, excepted))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Every counterexample replays on the runtime to its marking.
+    #[test]
+    fn every_counterexample_replays_on_the_runtime(seed in any::<u64>()) {
+        replays(seed, &case(seed), &AnalyzeOptions::default())?;
+    }
+}
+
+/// The same over a fixed batch that meets deadlocks and stuck missions;
+/// most replay.
+#[test]
+fn fixed_seeds_counterexamples_replay() {
+    let (mut ok, mut excepted) = (0, 0);
+    for seed in 0..40 {
+        let (o, e) =
+            replays(seed, &case(seed), &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        ok += o;
+        excepted += e;
+    }
+    eprintln!("{ok} counterexamples replayed, {excepted} need a vehicle to start late");
+    assert!(ok > 2 * excepted, "{ok} replayed, {excepted} need a vehicle to start late");
 }

@@ -32,6 +32,12 @@
 //! delay = 2.0                 # seconds after the event (default 0)
 //! name = "cable.detected"
 //! value = 1
+//!
+//! [counterexample]            # written by `mcl check --counterexample-scenario`
+//! code = "E0406"              # (crate::counterexample::Expected)
+//! at = "m.mcl:16"
+//! [counterexample.marking]
+//! v1 = ["call.1.wait"]
 //! ```
 //!
 //! Unknown keys and malformed values are errors that point at their line
@@ -67,6 +73,10 @@ pub struct Scenario {
     /// Perceptions sent at fixed times.
     #[serde(default)]
     pub perceptions: Vec<ScriptedPerception>,
+    /// The counterexample this scenario replays (`mcl check
+    /// --counterexample-scenario`), which `mcl run` reports on.
+    #[serde(default)]
+    pub counterexample: Option<crate::counterexample::Expected>,
     /// The file name it was read from (for messages).
     #[serde(skip)]
     pub origin: String,

@@ -2,15 +2,18 @@
 //! coordination analysis of every file with constraints (`mcl_coord::check`).
 //! A file that cannot be read (not UTF-8, not a regular file, over 16 MiB)
 //! is reported on standard error and the others are checked (exit status 2).
+//! With `--counterexample-scenario OUT.toml`, the counterexamples of the
+//! deadlocks reported are written as scenarios for `mcl run`
+//! (`mcl_coord::replay`; messages on standard error).
 
 use crate::{ColorChoice, Format};
 use mcl_compiler::diagnostics::{render_human, to_json};
 use mcl_compiler::{check_file, program, Database, Db, FileDiagnostic, SourceFile};
 use mcl_syntax::Severity;
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
+pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice, scenario_out: Option<&Path>) -> u8 {
     let files = match super::collect_mcl_files(paths) {
         Ok(f) => f,
         Err(e) => {
@@ -78,8 +81,66 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice) -> u8 {
             stdout.write_all(s.as_bytes())
         }
     };
-    if written.is_err() || unreadable > 0 {
+    drop(stdout);
+    let scenarios_failed = match scenario_out {
+        Some(out) => write_scenarios(&db, &to_check, out).is_err(),
+        None => false,
+    };
+    if written.is_err() || unreadable > 0 || scenarios_failed {
         return 2;
     }
     u8::from(errors > 0)
+}
+
+/// Writes the scenario of every counterexample of `files` (`OUT.toml` for
+/// one, `OUT-1.toml`, `OUT-2.toml`, ... for several) and says on standard
+/// error what was written, and which counterexample has no replay and why.
+/// `Err` when a file cannot be written.
+fn write_scenarios(db: &Database, files: &[SourceFile], out: &Path) -> Result<(), ()> {
+    let replays: Vec<mcl_coord::replay::Replay> = files
+        .iter()
+        .flat_map(|&f| mcl_coord::replay::counterexample_scenarios(db, f, mcl_coord::replay::has_counterexample))
+        .collect();
+    if replays.is_empty() {
+        eprintln!("note: no deadlock counterexample to write (E0406, or E0601 of a task a mission calls)");
+        return Ok(());
+    }
+    let mut result = Ok(());
+    let n = replays.len();
+    for (i, r) in replays.into_iter().enumerate() {
+        let d = &r.diagnostic;
+        let text = d.file.text(db).as_deref().unwrap_or("").to_string();
+        let line = text.get(..d.diag.span.start as usize).map_or(1, |b| b.matches('\n').count() + 1);
+        let source = mcl_coord::replay::shown(d.file.path(db));
+        let what = format!("{} at {source}:{line}", d.diag.code);
+        let root = mcl_coord::replay::shown(r.root.path(db));
+        let mission = r.mission.as_ref().map(|m| format!(" --mission {m}")).unwrap_or_default();
+        match r.scenario {
+            Ok(scenario) => {
+                let path = if n == 1 { out.to_path_buf() } else { numbered(out, i + 1) };
+                match std::fs::write(&path, scenario) {
+                    Ok(()) => eprintln!(
+                        "counterexample of {what} written to {0} (replay: mcl run --mock --virtual-time {root}{mission} --scenario {0})",
+                        path.display()
+                    ),
+                    Err(e) => {
+                        eprintln!("error: cannot write `{}`: {e}", path.display());
+                        result = Err(());
+                    }
+                }
+            }
+            Err(why) => eprintln!("warning: no scenario replays the counterexample of {what}: {why}"),
+        }
+    }
+    result
+}
+
+/// `OUT-k.toml` for `OUT.toml` (`OUT-k` for a path without extension).
+fn numbered(out: &Path, k: usize) -> PathBuf {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+    let name = match out.extension() {
+        Some(e) => format!("{stem}-{k}.{}", e.to_string_lossy()),
+        None => format!("{stem}-{k}"),
+    };
+    out.with_file_name(name)
 }

@@ -142,9 +142,11 @@ pub fn has_constraints(db: &Database, file: SourceFile) -> bool {
 /// its constraints: the supervisors (`mcl_coord::analyze`) split with the
 /// least communication (`mcl_coord::decentralize`). Constraints that
 /// deadlock are refused with the diagnostics of `mcl check` (E0406); an
-/// inconclusive analysis is a warning. On error, prints it and returns the
-/// exit status `code`.
-pub fn vehicle_nets(db: &Database, file: SourceFile, code: u8) -> Result<Vec<VehicleNet>, u8> {
+/// inconclusive analysis is a warning. With `deadlocks_allowed` (a run of
+/// a counterexample scenario, `mcl run` with `[counterexample]`), nets of
+/// constraints that deadlock are built all the same, with a note. On
+/// error, prints it and returns the exit status `code`.
+pub fn vehicle_nets(db: &Database, file: SourceFile, code: u8, deadlocks_allowed: bool) -> Result<Vec<VehicleNet>, u8> {
     let fail = |msg: String| {
         eprintln!("error: {msg}");
         code
@@ -157,6 +159,10 @@ pub fn vehicle_nets(db: &Database, file: SourceFile, code: u8) -> Result<Vec<Veh
         let report = mcl_coord::analyze_with(&missions, &constraints, &opts).map_err(|e| fail(e.to_string()))?;
         match &report.verdict {
             Verdict::Free => {}
+            Verdict::Deadlock if deadlocks_allowed => eprintln!(
+                "note: `{}`: the constraints deadlock (E0406); the vehicle nets are built all the same to replay the counterexample",
+                file.path(db).display()
+            ),
             Verdict::Deadlock => {
                 let diags = mcl_coord::coordination_diagnostics(db, file);
                 eprint!("{}", render_human(db, diags, std::io::stderr().is_terminal()));
@@ -218,7 +224,7 @@ pub fn run(o: Options<'_>) -> u8 {
         return 1;
     }
     if let (Some(dir), true) = (o.out_dir, missions.len() > 1 && has_constraints(&db, file)) {
-        let vehicles = match vehicle_nets(&db, file, 1) {
+        let vehicles = match vehicle_nets(&db, file, 1, false) {
             Ok(v) => v,
             Err(code) => return code,
         };

@@ -56,7 +56,7 @@ pub fn run(o: Options) -> u8 {
         return 2;
     }
     let served = match (&o.net, &o.plan) {
-        (Some(net), None) => match load_missions(net) {
+        (Some(net), None) => match load_missions(net, false) {
             Ok(m) if m.is_empty() => {
                 eprintln!("error: `{}` defines no mission", net.display());
                 return 2;

@@ -7,7 +7,7 @@
 //! With `--mock` and no `--mission`, a file with several missions runs every
 //! vehicle at once, coordinated by its constraints ([`run_coordinated`]).
 
-use mcl_compiler::compile::{compile_file, CompileError};
+use mcl_compiler::compile::{compile_file, compile_file_unverified, CompileError};
 use mcl_compiler::diagnostics::render_human;
 use mcl_compiler::{check_file, Database, Db};
 use mcl_net::Net;
@@ -38,7 +38,10 @@ pub struct Options {
     /// Shared secret for the AAC.
     #[arg(long)]
     pub token: Option<String>,
-    /// How the mock vehicle answers (TOML, see docs/scenarios.md).
+    /// How the mock vehicle answers (TOML, see docs/scenarios.md). A scenario written by
+    /// `mcl check --counterexample-scenario` (its `[counterexample]` table) also runs a program
+    /// whose only errors are verification errors (E06xx, deadlocking constraints), and the run
+    /// ends by saying whether it reproduced the counterexample.
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// Seed of the random choices (default: the scenario's seed, else 0).
@@ -133,8 +136,10 @@ pub struct LoadedMission {
 
 /// Loads the missions of an `.mcl` file (compiled in memory) or a `.pnml`
 /// file. On error, prints it (diagnostics like `mcl check`) and returns the
-/// exit status.
-pub fn load_missions(file: &Path) -> Result<Vec<LoadedMission>, u8> {
+/// exit status. With `unverified` (a run of a counterexample scenario), a
+/// program whose only errors are verification errors (E06xx) is compiled
+/// all the same.
+pub fn load_missions(file: &Path, unverified: bool) -> Result<Vec<LoadedMission>, u8> {
     if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("pnml") || e.eq_ignore_ascii_case("xml")) {
         let text = mcl_net::input::read_source(file).map_err(|e| {
             eprintln!("error: {e}");
@@ -151,8 +156,17 @@ pub fn load_missions(file: &Path) -> Result<Vec<LoadedMission>, u8> {
         eprintln!("error: {e}");
         2u8
     })?;
-    match compile_file(&db, f) {
-        Ok(ms) => Ok(ms.into_iter().map(|m| LoadedMission { name: m.name, net: m.net }).collect()),
+    let compiled = if unverified { compile_file_unverified(&db, f) } else { compile_file(&db, f) };
+    match compiled {
+        Ok(ms) => {
+            if unverified && check_file(&db, f).iter().any(|d| d.diag.is_error()) {
+                eprintln!(
+                    "note: `{}` breaks block properties (E06xx); it is run all the same to replay the counterexample",
+                    file.display()
+                );
+            }
+            Ok(ms.into_iter().map(|m| LoadedMission { name: m.name, net: m.net }).collect())
+        }
         Err(CompileError::HasErrors) => {
             let diags: Vec<_> = check_file(&db, f).iter().filter(|d| d.diag.is_error()).cloned().collect();
             eprint!("{}", render_human(&db, &diags, std::io::stderr().is_terminal()));
@@ -299,8 +313,9 @@ pub fn run(o: Options) -> u8 {
         }
     }
 
-    // The mission.
-    let missions = match load_missions(&o.file) {
+    // The mission; a counterexample scenario runs it even if it deadlocks.
+    let counterexample = counterexample_of(&o);
+    let missions = match load_missions(&o.file, counterexample.is_some()) {
         Ok(m) => m,
         Err(code) => return code,
     };
@@ -458,6 +473,7 @@ pub fn run(o: Options) -> u8 {
     }
     let mut mock = MockVehicle::from_net(&net, scenario, mock_seed);
     mock.initial();
+    let kept_net = net.clone();
 
     // Replay the journal.
     let mut player = player;
@@ -618,7 +634,43 @@ pub fn run(o: Options) -> u8 {
         counts.events,
         counts.unexpected,
     );
+    if let Some(expected) = &counterexample {
+        let stuck: Vec<String> =
+            mcl_runtime::counterexample::is_stuck(&end).then(|| chosen.name.clone()).into_iter().collect();
+        say_reproduced(expected, &[(chosen.name.clone(), kept_net.as_ref())], &sink.records, &stuck);
+    }
     end.exit_code()
+}
+
+/// The `[counterexample]` table of the scenario of a run with the mock
+/// (not resumed), if it has one.
+fn counterexample_of(o: &Options) -> Option<mcl_runtime::counterexample::Expected> {
+    if !o.mock || o.resume.is_some() {
+        return None;
+    }
+    let text = mcl_net::input::read_source(o.scenario.as_ref()?).ok()?;
+    mcl_runtime::counterexample::expected_of(&text)
+}
+
+/// Says whether the run reproduced the counterexample its scenario replays.
+fn say_reproduced(
+    expected: &mcl_runtime::counterexample::Expected,
+    nets: &[(String, &Net)],
+    records: &[Record],
+    stuck: &[String],
+) {
+    let what = format!("{} at {}", expected.code, expected.at);
+    match mcl_runtime::counterexample::reproduced(expected, nets, records, stuck) {
+        Ok(()) => {
+            let ms: Vec<String> = expected
+                .marking
+                .keys()
+                .map(|m| format!("`{m}` {}", if stuck.contains(m) { "stuck" } else { "ended" }))
+                .collect();
+            eprintln!("counterexample of {what}: reproduced ({}, in the marking it names)", ms.join(", "))
+        }
+        Err(why) => eprintln!("counterexample of {what}: NOT reproduced: {why}"),
+    }
 }
 
 /// The fleet secret of `--vehicle`'s coordination links (`--coord-token`,
@@ -766,7 +818,8 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     };
     let db = Database::new();
     let file = db.file(&o.file);
-    let vehicles = match super::compile::vehicle_nets(&db, file, 2) {
+    let counterexample = counterexample_of(o);
+    let vehicles = match super::compile::vehicle_nets(&db, file, 2, counterexample.is_some()) {
         Ok(v) => v,
         Err(code) => return code,
     };
@@ -876,6 +929,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     let mut sources = SourceMap::new();
     let mut parts = Vec::new();
     let mut journal_writer = None;
+    let mut kept_nets: Vec<(String, Arc<Net>)> = Vec::new();
     for (v, scenario) in vehicles.into_iter().zip(scenarios) {
         let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
         let mut mock_seed = scenario.seed.unwrap_or(seed);
@@ -903,6 +957,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         let opts = PlayerOptions { seed, symbols, ..Default::default() };
         let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut sources);
         let mock = MockVehicle::from_net(&net, scenario.clone(), mock_seed);
+        kept_nets.push((v.mission.clone(), net.clone()));
         parts.push((v.mission, net, opts, tracer, mock));
     }
     let rt = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
@@ -1007,5 +1062,15 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             Transport::Tcp => "TCP",
         }
     );
+    if let Some(expected) = &counterexample {
+        let stuck: Vec<String> = end
+            .ends
+            .iter()
+            .filter(|(_, e, _)| mcl_runtime::counterexample::is_stuck(e))
+            .map(|(n, _, _)| n.clone())
+            .collect();
+        let nets: Vec<(String, &Net)> = kept_nets.iter().map(|(n, net)| (n.clone(), net.as_ref())).collect();
+        say_reproduced(expected, &nets, &sink.records, &stuck);
+    }
     end.exit_code()
 }

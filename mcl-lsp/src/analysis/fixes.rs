@@ -1,18 +1,24 @@
 //! Quick fixes for the commonest errors: "did you mean" replacements,
 //! declaring a missing action or event (E0102, E0103), creating a missing
 //! task (E0101), fixing a call's number of arguments (E0201), and keeping an
-//! unused definition quietly (W0901).
+//! unused definition quietly (W0901); and, on a deadlock with a
+//! counterexample (E0406, E0601), writing a scenario that replays it next to
+//! the source (`NAME.counterexample.toml`, docs/lsp.md).
 
 use super::diagnostics::to_lsp;
 use super::Analysis;
 use mcl_compiler::queries::program;
 use mcl_compiler::scope::{self, DefKind};
-use mcl_compiler::{check_file, codes, SourceFile};
+use mcl_compiler::{check_file, codes, FileDiagnostic, SourceFile};
 use mcl_syntax::ast::*;
 use mcl_syntax::visit::calls;
 use mcl_syntax::Span;
 use std::collections::HashMap;
-use tower_lsp_server::ls_types::{CodeAction, CodeActionKind, Diagnostic, TextEdit, Uri, WorkspaceEdit};
+use tower_lsp_server::ls_types::{
+    CodeAction, CodeActionKind, CreateFile, CreateFileOptions, Diagnostic, DocumentChangeOperation, DocumentChanges,
+    OneOf, OptionalVersionedTextDocumentIdentifier, Position, Range, ResourceOp, TextDocumentEdit, TextEdit, Uri,
+    WorkspaceEdit,
+};
 
 struct Edits<'x> {
     a: &'x Analysis<'x>,
@@ -73,6 +79,57 @@ pub fn code_actions(a: &Analysis<'_>, file: SourceFile, range: Span) -> Vec<Code
             }
             _ => {}
         }
+    }
+    out.extend(counterexample_actions(a, file, range));
+    out
+}
+
+/// "Write a dry run of this counterexample": for each E0406 or E0601 that
+/// touches `range` and whose counterexample replays
+/// (`mcl_coord::replay`), an edit that creates the scenario next to the
+/// source: `NAME.counterexample.toml`, or `NAME.counterexample-K.toml` for
+/// the K-th of several counterexamples of the file (the order of `mcl
+/// check`), replaced if it exists.
+fn counterexample_actions(a: &Analysis<'_>, file: SourceFile, range: Span) -> Vec<CodeAction> {
+    use mcl_coord::replay::{counterexample_scenarios, has_counterexample};
+    let touches =
+        |d: &FileDiagnostic| d.file == file && d.diag.span.end >= range.start && d.diag.span.start <= range.end;
+    let coord = mcl_coord::coordination_diagnostics(a.db, file);
+    let all: Vec<&FileDiagnostic> =
+        check_file(a.db, file).iter().chain(coord.iter()).filter(|d| d.file == file && has_counterexample(d)).collect();
+    if !all.iter().any(|d| touches(d)) {
+        return Vec::new();
+    }
+    let path = a.path(file);
+    let stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+    let mut out = Vec::new();
+    for r in counterexample_scenarios(a.db, file, |d| has_counterexample(d) && touches(d)) {
+        let Ok(text) = r.scenario else { continue };
+        let d = &r.diagnostic.diag;
+        let k =
+            all.iter().map(|x| &x.diag).position(|x| x.code == d.code && x.span == d.span && x.message == d.message);
+        let name = match (all.len(), k) {
+            (1, _) | (_, None) => format!("{stem}.counterexample.toml"),
+            (_, Some(k)) => format!("{stem}.counterexample-{}.toml", k + 1),
+        };
+        let Some(uri) = Uri::from_file_path(path.with_file_name(&name)) else { continue };
+        let at = Position { line: 0, character: 0 };
+        let edit = WorkspaceEdit {
+            document_changes: Some(DocumentChanges::Operations(vec![
+                DocumentChangeOperation::Op(ResourceOp::Create(CreateFile {
+                    uri: uri.clone(),
+                    options: Some(CreateFileOptions { overwrite: Some(true), ignore_if_exists: None }),
+                    annotation_id: None,
+                })),
+                DocumentChangeOperation::Edit(TextDocumentEdit {
+                    text_document: OptionalVersionedTextDocumentIdentifier { uri, version: None },
+                    edits: vec![OneOf::Left(TextEdit { range: Range { start: at, end: at }, new_text: text })],
+                }),
+            ])),
+            ..Default::default()
+        };
+        let lsp = to_lsp(a, file, d);
+        out.extend(action(format!("Write a dry run of this counterexample to {name}"), &lsp, Some(edit), false));
     }
     out
 }

@@ -1,0 +1,241 @@
+//! `mcl check --counterexample-scenario` through the binary: the scenario it
+//! writes for a deadlock (E0406 of coordinated missions, E0601 of a task a
+//! mission calls) makes `mcl run --mock --virtual-time` end stuck (exit
+//! status 3) in the marking the diagnostic names, and `mcl run` says so.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mcl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run mcl")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("counterexample").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `mcl check FILE --counterexample-scenario OUT`: exit status 1 (the file
+/// has errors), and the scenario's text.
+fn check_writes(file: &str, out: &Path) -> String {
+    let o = mcl(&["check", file, "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("written to {}", out.display())), "{err}");
+    std::fs::read_to_string(out).unwrap_or_else(|e| panic!("{e}: {err}"))
+}
+
+/// `mcl run --mock --virtual-time FILE --scenario SCENARIO --trace ...`:
+/// the exit status, standard error and the trace records.
+fn run(file: &str, scenario: &Path) -> (Option<i32>, String, Vec<Value>) {
+    let trace = scenario.with_extension("jsonl");
+    let o = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        "-q",
+        file,
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    let records =
+        std::fs::read_to_string(&trace).unwrap_or_default().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    (o.status.code(), stderr(&o), records)
+}
+
+/// The result of each mission's `outcome` record.
+fn outcomes(records: &[Value]) -> Vec<(String, String)> {
+    records
+        .iter()
+        .filter(|r| r["kind"] == "outcome")
+        .map(|r| (r["mission"].as_str().unwrap_or("").to_string(), r["result"].as_str().unwrap().to_string()))
+        .collect()
+}
+
+/// The lines of the `[counterexample.marking]` table: (mission, places).
+fn marking(scenario: &str) -> Vec<(String, String)> {
+    let table = scenario.split("[counterexample.marking]\n").nth(1).unwrap_or("");
+    table
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_once(" = ").map(|(k, v)| (k.to_string(), v.to_string())))
+        .collect()
+}
+
+#[test]
+fn order_cycle_replays_to_both_vehicles_waiting() {
+    let dir = out_dir("order_cycle");
+    let out = dir.join("cycle.toml");
+    let file = "tests/ui/e0406_order_cycle.mcl";
+    let text = check_writes(file, &out);
+    assert!(text.contains("code = \"E0406\"") && text.contains("at = \"tests/ui/e0406_order_cycle.mcl:16\""), "{text}");
+    let m = marking(&text);
+    assert_eq!(m.iter().map(|(k, _)| k.as_str()).collect::<Vec<_>>(), ["v1", "v2"], "{text}");
+    let (code, err, records) = run(file, &out);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(err.contains("the vehicle nets are built all the same"), "{err}");
+    assert!(err.contains("counterexample of E0406 at tests/ui/e0406_order_cycle.mcl:16: reproduced"), "{err}");
+    assert_eq!(outcomes(&records), [("v1".into(), "stuck".into()), ("v2".into(), "stuck".into())]);
+    // Neither call ever started: no action was sent.
+    assert!(!records.iter().any(|r| r["kind"] == "action"), "{records:?}");
+}
+
+#[test]
+fn withdrawn_sync_partner_replays_to_the_auv_waiting_for_ever() {
+    let dir = out_dir("sync_withdrawn");
+    let out = dir.join("sync.toml");
+    let file = "tests/ui/e0406_sync_partner_withdrawn.mcl";
+    let text = check_writes(file, &out);
+    assert!(text.contains("kind = \"stuck\"") && text.contains("waiting = [\"auv:send\"]"), "{text}");
+    let (code, err, records) = run(file, &out);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(err.contains("reproduced (`asc` ended, `auv` stuck"), "{err}");
+    let mut o = outcomes(&records);
+    o.sort();
+    assert_eq!(o, [("asc".into(), "ok".into()), ("auv".into(), "stuck".into())]);
+    // The ASC's loop test failed (its nominal answer): that withdrew the receive.
+    assert!(
+        records.iter().any(|r| r["kind"] == "event" && r["mission"] == "asc" && r["event"] == "eventGotoTargetFail"),
+        "{records:?}"
+    );
+    // The AUV's send never started.
+    assert!(!records.iter().any(|r| r["kind"] == "action" && r["task"] == "SendData"), "{records:?}");
+
+    // Without the ASC's events the run ends elsewhere, and `mcl run` says so.
+    let cut: String = text.split("\n[[missions.asc.events]]").next().unwrap().to_string();
+    let other = dir.join("cut.toml");
+    std::fs::write(&other, cut).unwrap();
+    let (code, err, _) = run(file, &other);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(err.contains("NOT reproduced"), "{err}");
+}
+
+#[test]
+fn a_pattern_that_never_ends_replays_to_its_task_stuck() {
+    let dir = out_dir("never_marked");
+    let out = dir.join("never.toml");
+    let file = "tests/ui/e0601_never_marked.mcl";
+    let text = check_writes(file, &out);
+    assert!(text.contains("code = \"E0601\"") && text.contains("e0601_never_marked.mcl:10"), "{text}");
+    let m = marking(&text);
+    assert_eq!(m.len(), 1, "{text}");
+    assert_eq!(m[0].0, "mission");
+    assert!(m[0].1.contains("\"task.Sonar.running\""), "{text}");
+    let (code, err, records) = run(file, &out);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(err.contains("breaks block properties (E06xx); it is run all the same"), "{err}");
+    assert!(err.contains("counterexample of E0601 at tests/ui/e0601_never_marked.mcl:10: reproduced"), "{err}");
+    assert_eq!(outcomes(&records), [(String::new(), "stuck".into())]);
+    // The primitive was enabled, and nothing ended it.
+    assert!(records.iter().any(|r| r["kind"] == "action" && r["task"] == "Sonar"), "{records:?}");
+}
+
+#[test]
+fn several_counterexamples_are_numbered_and_a_violation_that_does_not_stop_the_mission_is_explained() {
+    let dir = out_dir("several");
+    let src = dir.join("two.mcl");
+    std::fs::write(
+        &src,
+        "pattern {\n    P_DEAD {\n        places { begin.1; abort.1; ok.1; fail.1; run; }\n        transitions { T0; TA; }\n        arcs { begin.1 -> T0; T0 -> run; run -> TA; abort.1 -> TA; }\n    }\n}\ntasks { A(): P_DEAD { } B(): P_DEAD { } }\nmission { parallel { A() } and { B() } }\n",
+    )
+    .unwrap();
+    let out = dir.join("cex.toml");
+    let o = mcl(&["check", src.to_str().unwrap(), "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for k in [1, 2] {
+        let p = dir.join(format!("cex-{k}.toml"));
+        assert!(err.contains(&format!("written to {}", p.display())), "{err}");
+        let (code, err, _) = run(src.to_str().unwrap(), &p);
+        assert_eq!(code, Some(3), "{err}");
+        assert!(err.contains(": reproduced"), "{err}");
+    }
+    assert!(!out.exists());
+
+    // A leaky pattern breaks reusability but never stops its one call: no file.
+    let out = dir.join("leaky.toml");
+    let o = mcl(&["check", "tests/ui/e0601_leaky_pattern.mcl", "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("no scenario replays the counterexample of E0601") && err.contains("does not stop"), "{err}");
+    assert!(!out.exists());
+}
+
+/// A task defined in an imported file and called by one of several
+/// missions: the scenario runs that mission (`--mission`).
+#[test]
+fn an_imported_task_is_replayed_in_the_mission_that_calls_it() {
+    let dir = out_dir("imported");
+    std::fs::write(
+        dir.join("lib.mcl"),
+        "pattern {\n    P_DEAD {\n        places { begin.1; abort.1; ok.1; fail.1; run; }\n        transitions { T0; TA; }\n        arcs { begin.1 -> T0; T0 -> run; run -> TA; abort.1 -> TA; }\n    }\n}\ntasks { A(): P_DEAD { } B(): Instant { } }\n",
+    )
+    .unwrap();
+    let main = dir.join("main.mcl");
+    std::fs::write(&main, "import \"lib.mcl\";\nmission : one { B() ; A() }\nmission : two { B() }\n").unwrap();
+    let out = dir.join("cex.toml");
+    let o = mcl(&["check", main.to_str().unwrap(), "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("counterexample of E0601 at ") && err.contains("lib.mcl:"), "{err}");
+    assert!(err.contains("--mission one --scenario"), "{err}");
+    let o = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        "-q",
+        main.to_str().unwrap(),
+        "--mission",
+        "one",
+        "--scenario",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains(": reproduced (`one` stuck"), "{err}");
+}
+
+#[test]
+fn without_the_flag_or_with_other_errors_nothing_changes() {
+    let dir = out_dir("unchanged");
+    // `mcl check` without the flag writes nothing and says nothing more.
+    let o = mcl(&["check", "tests/ui/e0406_order_cycle.mcl"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!stderr(&o).contains("counterexample of"), "{}", stderr(&o));
+    // A clean file has no counterexample.
+    let out = dir.join("none.toml");
+    let o = mcl(&["check", "examples/survey.mcl", "--counterexample-scenario", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no deadlock counterexample to write"), "{}", stderr(&o));
+    assert!(!out.exists());
+    // A counterexample scenario does not make `mcl run` accept other errors.
+    let cex = dir.join("cex.toml");
+    check_writes("tests/ui/e0601_needs_abort.mcl", &cex);
+    let broken = dir.join("broken.mcl");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui/e0601_needs_abort.mcl"))
+        .unwrap()
+        .replace("mission { A() }", "mission { A() ; Missing() }");
+    std::fs::write(&broken, text).unwrap();
+    let (code, err, _) = run(broken.to_str().unwrap(), &cex);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("E0101") || err.contains("has errors"), "{err}");
+    // ... and a run without such a scenario still refuses verification errors.
+    let o = mcl(&["run", "--mock", "--virtual-time", "tests/ui/e0601_needs_abort.mcl"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = mcl(&["run", "--mock", "--virtual-time", "tests/ui/e0406_order_cycle.mcl"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no vehicle net was made"), "{}", stderr(&o));
+}
