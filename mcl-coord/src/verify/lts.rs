@@ -248,3 +248,60 @@ pub(super) fn can_end_alone(l: &Lts) -> bool {
     }
     (0..n).all(|s| !reach[s] || co[s])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcl_net::{Delay, NetBuilder, Place, Transition, TransitionKind};
+
+    fn mission(net: mcl_net::Net) -> Mission {
+        let n = net.transition_count();
+        Mission {
+            name: "m".into(),
+            net,
+            initial_places: Vec::new(),
+            final_places: Vec::new(),
+            controllable: vec![true; n],
+            activities: Vec::new(),
+            off_nominal: Vec::new(),
+        }
+    }
+
+    fn deferred(id: &str, priority: u32) -> Transition {
+        Transition::new(id).with_kind(TransitionKind::Timed(Delay::Fixed(0.0))).with_priority(priority)
+    }
+
+    #[test]
+    fn deferred_transitions_fire_by_priority_before_events() {
+        // A call's release (deferred, priority 0) waits for a kill
+        // (deferred, higher priority); the event waits for both.
+        let mut b = NetBuilder::new("v");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let kill = b.add_transition(deferred("kill", 3));
+        let release = b.add_transition(deferred("release", 0));
+        let ev = b.add_transition(Transition::new("ev").with_kind(TransitionKind::Event("e".into())));
+        for t in [kill, release, ev] {
+            b.add_input(p, t, 1);
+        }
+        let m = mission(b.build().unwrap());
+        let Ok(lts) = build_lts(&m, 0, &[0; 3], &[false; 3], false, 100) else { panic!("built") };
+        let fired: Vec<u32> = lts.out(0).iter().map(|e| e.t).collect();
+        assert_eq!(fired, vec![kill.0]);
+    }
+
+    #[test]
+    fn events_wait_for_every_waiting_gated_start() {
+        // A gated start may be held: then the event may fire, else not.
+        let mut b = NetBuilder::new("v");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let q = b.add_place(Place::new("q").with_tokens(1));
+        let start = b.add_transition(Transition::new("start"));
+        let ev = b.add_transition(Transition::new("ev").with_kind(TransitionKind::Event("e".into())));
+        b.add_input(p, start, 1).add_input(q, ev, 1);
+        let m = mission(b.build().unwrap());
+        let Ok(lts) = build_lts(&m, 0, &[1, 0], &[true, false], false, 100) else { panic!("built") };
+        let out: Vec<(u32, u32)> = lts.out(0).iter().map(|e| (e.t, e.label)).collect();
+        assert_eq!(out, vec![(start.0, lab(1, false)), (ev.0, lab(0, true))]);
+        assert_eq!(lts.gates(0), &[1]);
+    }
+}

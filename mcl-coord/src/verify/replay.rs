@@ -223,3 +223,65 @@ pub(super) fn concretize(
     }
     Some(Witness { kind, path, marking: m, held })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcl_net::{Delay, NetBuilder, Place, Transition, TransitionKind};
+
+    /// Two vehicles: the first has an immediate `a`, an event `e` and two
+    /// deferred `lo`, `hi` on one marked place; the second an event `f`.
+    fn net() -> Net {
+        let mut b = NetBuilder::new("s");
+        let p = b.add_place(Place::new("p").with_tokens(1));
+        let q = b.add_place(Place::new("q").with_tokens(1));
+        let a = b.add_transition(Transition::new("a"));
+        let e = b.add_transition(Transition::new("e").with_kind(TransitionKind::Event("e".into())));
+        let timed = |id: &str, prio| {
+            Transition::new(id).with_kind(TransitionKind::Timed(Delay::Fixed(0.0))).with_priority(prio)
+        };
+        let lo = b.add_transition(timed("lo", 0));
+        let hi = b.add_transition(timed("hi", 2));
+        let f = b.add_transition(Transition::new("f").with_kind(TransitionKind::Event("f".into())));
+        for t in [a, e, lo, hi] {
+            b.add_input(p, t, 1);
+        }
+        b.add_input(q, f, 1);
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn a_step_replays_only_if_its_vehicle_could_choose_it() {
+        let snet = net();
+        let vehicles = [0..4, 4..5];
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[] };
+        let replays = |path: &[u32]| {
+            let path: Vec<TransitionId> = path.iter().map(|&t| TransitionId(t)).collect();
+            rules.replay(&snet, 0, &path).is_some()
+        };
+        // The immediate `a` is ready; the event and the deferred ones wait.
+        assert!(replays(&[0]));
+        assert!(!replays(&[1]));
+        assert!(!replays(&[2]));
+        assert!(!replays(&[3]));
+        // The other vehicle's event does not wait for `a`.
+        assert!(replays(&[4, 0]));
+        // Not enabled any more.
+        assert!(!replays(&[0, 0]));
+    }
+
+    #[test]
+    fn deferred_steps_replay_by_priority() {
+        // `a` (immediate, transition 0) belongs to no vehicle here: the
+        // vehicle 1..4 sees only `e`, `lo` and `hi`; `hi` goes first.
+        let snet = net();
+        let vehicles = [1..4, 4..5];
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[] };
+        let m = snet.initial_marking();
+        let tracker = EnabledTracker::new(&snet, &m).unwrap();
+        let mut buf = Vec::new();
+        assert!(rules.ready(&snet, &tracker, &m, TransitionId(3), &mut buf));
+        assert!(!rules.ready(&snet, &tracker, &m, TransitionId(2), &mut buf));
+        assert!(!rules.ready(&snet, &tracker, &m, TransitionId(1), &mut buf));
+    }
+}
