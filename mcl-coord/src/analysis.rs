@@ -25,16 +25,14 @@
 //! The invariants and minimal siphons of the final net (steps 1, 3, 4) are
 //! reported as well ([`crate::structure::Structure`]).
 
-use mcl_net::structural::Limits;
+use mcl_net::structural::{minimal_siphons_within, Limits};
 use mcl_net::{Net, PlaceId};
 use serde::Serialize;
 
 use crate::central::{centralize, Plant};
 use crate::error::CoordError;
 use crate::model::{Constraint, Mission};
-use crate::structure::{
-    analyze_structure, check_siphon_supervisor, minimal_siphons_within, siphon_supervisor, wrapped, Refusal, Structure,
-};
+use crate::structure::{analyze_structure, check_siphon_supervisor, siphon_supervisor, wrapped, Refusal, Structure};
 use crate::supervisor::{apply, synthesize, Supervisor};
 use crate::verify::{
     empty_places, has_off_nominal, verify, verify_quiet, Outcome, VerifyOptions, VerifyStats, Witness, WitnessKind,
@@ -187,7 +185,8 @@ pub fn analyze_with(
                     {
                         let empty = empty_places(&w.marking);
                         let req: Vec<PlaceId> = empty.iter().copied().filter(|p| p.index() >= np).collect();
-                        let (sets, _) = minimal_siphons_within(&wnet, &empty, &req, 2_000, 16);
+                        let caps = Limits { max_nodes: 2_000, max_results: 16, ..Limits::default() };
+                        let sets = minimal_siphons_within(&wnet, &empty, &req, &caps).sets;
                         for s in &sets {
                             let mut cs: Vec<usize> = s
                                 .iter()

@@ -59,6 +59,7 @@
 //! has not used it yet.
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, Solution, SolverModel, Variable};
+use mcl_net::coord_props::{BorrowedMutex, BorrowedStart, CoordProps, CoordReceive, CoordSend};
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId, TransitionKind};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
@@ -321,10 +322,9 @@ pub fn vehicle_nets(
 
 /// Net property of a vehicle net: the mutex supervisors between vehicles
 /// that it implements with a single holder (see [`vehicle_nets_with_tokens`]),
-/// `[{"supervisor", "holder", "place", "starts": [{"transition", "weight"}],
-/// "request", "return", "grant", "ends"}]` for the calls of this vehicle that must
-/// ask the holder (none for the holder's own calls).
-pub const TOKENS_PROPERTY: &str = "coord.tokens";
+/// one [`BorrowedMutex`] for each whose calls of this vehicle must ask the
+/// holder (none for the holder's own calls).
+pub const TOKENS_PROPERTY: &str = mcl_net::coord_props::TOKENS_PROPERTY;
 
 /// True when `s` is a mutex whose calls belong to several vehicles: it is
 /// implemented by a single holder with request / grant / return messages
@@ -548,7 +548,7 @@ pub fn vehicle_nets_with_tokens(
                 let mut starts = Vec::new();
                 for &(t, w) in s.consumed_by.iter().filter(|&&(t, _)| plant.parts[i].owns_transition(t)) {
                     b.add_input(c, local_t(t).1, w);
-                    starts.push(serde_json::json!({ "transition": local_id(t), "weight": w }));
+                    starts.push(BorrowedStart { transition: local_id(t), weight: w });
                 }
                 // Its ends give the tokens back to the holder.
                 let mut ends = Vec::new();
@@ -575,27 +575,31 @@ pub fn vehicle_nets_with_tokens(
                 );
                 b.add_output(tg, c, 1);
                 receive.push((grant.clone(), hname.clone()));
-                table.push(serde_json::json!({
-                    "supervisor": s.id, "holder": hname, "place": s.id, "starts": starts,
-                    "request": request, "return": ret, "grant": grant, "ends": ends,
-                }));
+                table.push(BorrowedMutex {
+                    ends,
+                    grant,
+                    holder: hname,
+                    place: s.id.clone(),
+                    request,
+                    ret,
+                    starts,
+                    supervisor: s.id.clone(),
+                });
             }
-        }
-        if !table.is_empty() {
-            b.property(TOKENS_PROPERTY, serde_json::Value::Array(table).to_string());
         }
         send.sort();
         send.dedup();
         receive.sort();
         receive.dedup();
-        let json = |v: &[(String, String)], key: &str| {
-            serde_json::Value::Array(
-                v.iter().map(|(t, who)| serde_json::json!({ "transition": t, key: who })).collect(),
-            )
-            .to_string()
-        };
-        b.property("coord.send", json(&send, "to"));
-        b.property("coord.receive", json(&receive, "from"));
+        CoordProps {
+            send: send.iter().map(|(t, to)| CoordSend { to: to.clone(), transition: t.clone() }).collect(),
+            receive: receive
+                .iter()
+                .map(|(t, from)| CoordReceive { from: from.clone(), transition: t.clone() })
+                .collect(),
+            tokens: table,
+        }
+        .write(&mut b);
         let net = b.build().map_err(CoordError::from)?;
         out.push(VehicleNet { mission: m.name.clone(), net, send, receive });
     }

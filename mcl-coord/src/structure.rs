@@ -27,7 +27,7 @@
 //! and Antsaklis) require the opposite inequality, which is used here.)
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, SolverModel};
-use mcl_net::structural::{max_siphon_within, max_trap_within, p_invariants, Limits};
+use mcl_net::structural::{max_trap_within, minimal_siphons_within, p_invariants, Limits};
 use mcl_net::{Net, NetBuilder, PlaceId};
 use serde::Serialize;
 
@@ -89,98 +89,6 @@ pub fn wrapped(net: &Net, plant: &Plant) -> Net {
         }
     }
     b.build().expect("adding transitions keeps the net valid")
-}
-
-/// All minimal siphons whose places are all in `allowed` and that contain at
-/// least one place of `required_any` (when it is not empty): a branch and
-/// bound of Cordone, Ferrarini and Piroddi over regions (allowed, required).
-/// Returns the siphons and whether the enumeration is complete (it stops
-/// after `max_nodes` regions or `max_results` siphons).
-pub fn minimal_siphons_within(
-    net: &Net,
-    allowed: &[PlaceId],
-    required_any: &[PlaceId],
-    max_nodes: usize,
-    max_results: usize,
-) -> (Vec<Vec<PlaceId>>, bool) {
-    let np = net.place_count();
-    let mut start = vec![false; np];
-    for p in allowed {
-        start[p.index()] = true;
-    }
-    let members = |v: &[bool]| -> Vec<PlaceId> { (0..np).filter(|&i| v[i]).map(|i| PlaceId(i as u32)).collect() };
-    let max_within = |v: &[bool]| -> Vec<bool> {
-        let s = max_siphon_within(net, &members(v));
-        let mut out = vec![false; np];
-        for p in s {
-            out[p.index()] = true;
-        }
-        out
-    };
-    let contains = |a: &[bool], b: &[bool]| a.iter().zip(b).all(|(&x, &y)| x || !y);
-    let mut found: Vec<Vec<PlaceId>> = Vec::new();
-    let mut stack: Vec<(Vec<bool>, Vec<bool>)> = Vec::new();
-    if required_any.is_empty() {
-        stack.push((start, vec![false; np]));
-    } else {
-        // Region i: contains required_any[i], none of the ones before it.
-        let mut a = start;
-        for &r in required_any {
-            if !a[r.index()] {
-                continue;
-            }
-            let mut req = vec![false; np];
-            req[r.index()] = true;
-            stack.push((a.clone(), req));
-            a[r.index()] = false;
-        }
-    }
-    let mut nodes = 0usize;
-    let mut complete = true;
-    while let Some((allowed, required)) = stack.pop() {
-        nodes += 1;
-        if nodes > max_nodes || found.len() >= max_results {
-            complete = false;
-            break;
-        }
-        let mut s = max_within(&allowed);
-        if !s.iter().any(|&x| x) || !contains(&s, &required) {
-            continue;
-        }
-        for p in 0..np {
-            if !s[p] || required[p] {
-                continue;
-            }
-            let mut t = s.clone();
-            t[p] = false;
-            let t = max_within(&t);
-            if t.iter().any(|&x| x) && contains(&t, &required) {
-                s = t;
-            }
-        }
-        // Globally minimal: removing any one place leaves no siphon.
-        let minimal = (0..np).filter(|&p| s[p]).all(|p| {
-            let mut t = s.clone();
-            t[p] = false;
-            !max_within(&t).iter().any(|&x| x)
-        });
-        if minimal {
-            let m = members(&s);
-            if !found.contains(&m) {
-                found.push(m);
-            }
-        }
-        let free: Vec<usize> = (0..np).filter(|&p| s[p] && !required[p]).collect();
-        let mut req = required.clone();
-        for &p in &free {
-            let mut a = allowed.clone();
-            a[p] = false;
-            stack.push((a, req.clone()));
-            req[p] = true;
-        }
-    }
-    found.sort();
-    (found, complete)
 }
 
 /// How `siphon` is controlled in `net` (see the module documentation).
@@ -300,7 +208,8 @@ pub fn analyze_structure(snet: &Net, plant: &Plant, supervisor_from: usize, limi
     } else {
         (supervisor_from..w.place_count()).map(|i| PlaceId(i as u32)).collect()
     };
-    let (sets, complete) = minimal_siphons_within(&w, &all, &required, limits.max_nodes, limits.max_results);
+    let found = minimal_siphons_within(&w, &all, &required, limits);
+    let (sets, complete) = (found.sets, found.complete);
     let m0 = w.initial_marking();
     let siphons = sets
         .iter()

@@ -122,8 +122,9 @@ fn auv_asc_constraints_are_free_of_deadlock() {
     // The supervised net carries a description of each supervisor.
     assert!(r.net.properties().iter().any(|(k, v)| k == "coord.supervisor:coord.order1" && v.contains("≤ 0")));
     // The reductions that make this exhaustive check possible.
-    // (7,166 markings for the AUV: zero-delay transitions fire before events, as on the player.)
-    assert!(r.stats.vehicle_states[0] > 5_000);
+    // (3,529 markings for the AUV: zero-delay transitions fire before events,
+    // by priority, so a call's release waits for the kills, as on the player.)
+    assert!(r.stats.vehicle_states[0] > 3_000, "{:?}", r.stats);
     assert!(r.stats.vehicle_classes[0] < r.stats.vehicle_states[0] / 10);
 }
 

@@ -8,6 +8,8 @@
 //!   incremental enabled-set tracker;
 //! * [`mod@explore`]: explicit-state reachability analysis;
 //! * [`structural`]: incidence matrix, invariants, siphons and traps;
+//! * [`graph`]: strongly connected components of implicit graphs;
+//! * [`coord_props`]: the coordination properties of a vehicle net;
 //! * [`input`]: the bounded reader of every input file (regular files only).
 //!
 //! ```
@@ -31,7 +33,9 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod coord_props;
 pub mod explore;
+pub mod graph;
 pub mod input;
 pub mod model;
 mod name;

@@ -97,6 +97,14 @@ pub fn is_enabled(net: &Net, m: &Marking, t: TransitionId) -> bool {
     t.index() < net.transition_count() && net.pre(t).iter().all(|&(p, w)| m.get(p) >= w)
 }
 
+/// [`is_enabled`] on any marking: `tokens(p)` is the number of tokens in
+/// place `p` (a verifier's compact `u8` marking, say). False for an unknown
+/// `t`.
+#[inline]
+pub fn is_enabled_with(net: &Net, t: TransitionId, tokens: impl Fn(PlaceId) -> u32) -> bool {
+    t.index() < net.transition_count() && net.pre(t).iter().all(|&(p, w)| tokens(p) >= w)
+}
+
 /// All transitions enabled in `m`, in index order.
 pub fn enabled(net: &Net, m: &Marking) -> Vec<TransitionId> {
     net.transition_ids().filter(|&t| is_enabled(net, m, t)).collect()

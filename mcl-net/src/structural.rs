@@ -357,13 +357,30 @@ impl Flow<'_> {
         }
     }
 
-    fn minimal_siphons(&self, limits: &Limits) -> PlaceSets {
+    /// The minimal siphons inside `allowed` that contain a place of
+    /// `required_any` (any, when it is empty).
+    fn minimal_siphons(&self, allowed: Vec<bool>, required_any: &[PlaceId], limits: &Limits) -> PlaceSets {
         let np = self.net.place_count();
         let mut sets = Vec::new();
         let mut nodes = 0usize;
         let mut complete = true;
-        // Regions: (allowed, required).
-        let mut stack: Vec<(Vec<bool>, Vec<bool>)> = vec![(vec![true; np], vec![false; np])];
+        // Regions: (allowed, required). With required places, region i
+        // holds the siphons that contain the i-th one and none before it.
+        let mut stack: Vec<(Vec<bool>, Vec<bool>)> = Vec::new();
+        if required_any.is_empty() {
+            stack.push((allowed, vec![false; np]));
+        } else {
+            let mut a = allowed;
+            for r in required_any.iter().filter(|r| r.index() < np) {
+                if !a[r.index()] {
+                    continue;
+                }
+                let mut req = vec![false; np];
+                req[r.index()] = true;
+                stack.push((a.clone(), req));
+                a[r.index()] = false;
+            }
+        }
         while let Some((allowed, required)) = stack.pop() {
             nodes += 1;
             if nodes > limits.max_nodes || sets.len() >= limits.max_results {
@@ -461,10 +478,22 @@ pub fn max_trap_within(net: &Net, places: &[PlaceId]) -> Vec<PlaceId> {
 
 /// All minimal non-empty siphons (capped by `limits`).
 pub fn minimal_siphons(net: &Net, limits: &Limits) -> PlaceSets {
-    Flow { net, reversed: false }.minimal_siphons(limits)
+    Flow { net, reversed: false }.minimal_siphons(vec![true; net.place_count()], &[], limits)
+}
+
+/// The minimal non-empty siphons whose places are all in `allowed` and that
+/// contain a place of `required_any` (every one inside `allowed` when it is
+/// empty), capped by `limits`: the search of [`minimal_siphons`] started
+/// from these regions. Places out of range are ignored.
+///
+/// A deadlock empties a siphon: with `allowed` the empty places of a dead
+/// marking and `required_any` the supervisor places, these are the siphons
+/// that a supervisor helped to empty.
+pub fn minimal_siphons_within(net: &Net, allowed: &[PlaceId], required_any: &[PlaceId], limits: &Limits) -> PlaceSets {
+    Flow { net, reversed: false }.minimal_siphons(membership(net, allowed), required_any, limits)
 }
 
 /// All minimal non-empty traps (capped by `limits`).
 pub fn minimal_traps(net: &Net, limits: &Limits) -> PlaceSets {
-    Flow { net, reversed: true }.minimal_siphons(limits)
+    Flow { net, reversed: true }.minimal_siphons(vec![true; net.place_count()], &[], limits)
 }

@@ -1,8 +1,8 @@
 //! Structural analysis on textbook nets and against brute force.
 
 use mcl_net::structural::{
-    incidence, is_siphon, is_trap, max_siphon_within, max_trap_within, minimal_siphons, minimal_traps, p_invariants,
-    t_invariants, Limits,
+    incidence, is_siphon, is_trap, max_siphon_within, max_trap_within, minimal_siphons, minimal_siphons_within,
+    minimal_traps, p_invariants, t_invariants, Limits,
 };
 use mcl_net::{Net, NetBuilder, Place, PlaceId, Transition, TransitionId};
 use proptest::prelude::*;
@@ -151,6 +151,22 @@ fn philosophers_deadlock_is_explained_by_an_empty_siphon() {
 }
 
 #[test]
+fn siphons_within_an_allowed_set_containing_a_required_place() {
+    let net = mutex();
+    let l = Limits::default();
+    let all: Vec<PlaceId> = net.place_ids().collect();
+    // The siphons through the mutex place, then those of the first process.
+    let s = minimal_siphons_within(&net, &all, &ids(&net, &["mutex"]), &l);
+    assert!(s.complete);
+    assert_eq!(s.sets, vec![ids(&net, &["mutex", "cs1", "cs2"])]);
+    let s = minimal_siphons_within(&net, &ids(&net, &["idle1", "cs1", "cs2"]), &[], &l);
+    assert_eq!(s.sets, vec![ids(&net, &["idle1", "cs1"])]);
+    // Not allowed to hold `cs2`: no siphon through the mutex; unknown places are ignored.
+    let s = minimal_siphons_within(&net, &ids(&net, &["mutex", "cs1"]), &[ids(&net, &["mutex"])[0], PlaceId(99)], &l);
+    assert_eq!((s.sets.len(), s.complete), (0, true));
+}
+
+#[test]
 fn caps_are_reported() {
     let net = philosophers(3);
     let tiny = Limits { max_rows: 1, max_nodes: 2, max_results: 1 };
@@ -208,6 +224,22 @@ proptest! {
         let t = minimal_traps(&net, &l);
         prop_assert!(t.complete);
         prop_assert_eq!(t.sets, brute_minimal(&net, is_trap));
+    }
+
+    #[test]
+    fn siphons_within_match_brute_force(net in random_net(), allowed in any::<u8>(), required in any::<u8>()) {
+        let pick = |mask: u8| -> Vec<PlaceId> {
+            net.place_ids().filter(|p| mask & (1 << p.index()) != 0).collect()
+        };
+        let (allowed, required) = (pick(allowed), pick(required));
+        let s = minimal_siphons_within(&net, &allowed, &required, &Limits::default());
+        prop_assert!(s.complete);
+        let expected: Vec<Vec<PlaceId>> = brute_minimal(&net, is_siphon)
+            .into_iter()
+            .filter(|s| s.iter().all(|p| allowed.contains(p)))
+            .filter(|s| required.is_empty() || s.iter().any(|p| required.contains(p)))
+            .collect();
+        prop_assert_eq!(s.sets, expected);
     }
 
     #[test]

@@ -27,17 +27,18 @@ use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
+use mcl_net::coord_props::CoordProps;
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc;
 
 pub use crate::coord_link::{tcp_mesh, Auth, TcpEnd};
 
-/// Net property of a vehicle net: `[{"transition": id, "to": mission}, …]`,
-/// the firings it must send.
-pub const SEND_PROPERTY: &str = "coord.send";
-/// Net property of a vehicle net: `[{"transition": id, "from": mission}, …]`,
-/// its receive transitions.
-pub const RECEIVE_PROPERTY: &str = "coord.receive";
+/// Net property of a vehicle net: the firings it must send
+/// ([`mcl_net::coord_props::CoordSend`]).
+pub const SEND_PROPERTY: &str = mcl_net::coord_props::SEND_PROPERTY;
+/// Net property of a vehicle net: its receive transitions
+/// ([`mcl_net::coord_props::CoordReceive`]).
+pub const RECEIVE_PROPERTY: &str = mcl_net::coord_props::RECEIVE_PROPERTY;
 
 /// "Mission `from` fired `transition`", for mission `to`. On the wire (TCP):
 /// `{"from":"asc","to":"auv","transition":"call3.ok","seq":1,"t":15.0}`.
@@ -204,8 +205,8 @@ impl CoordTransport for DelayedEnd {
 }
 
 /// Net property of a vehicle net: the mutexes between vehicles whose tokens
-/// it must ask a holder for (`mcl_coord::decentral::TOKENS_PROPERTY`).
-pub const TOKENS_PROPERTY: &str = "coord.tokens";
+/// it must ask a holder for ([`mcl_net::coord_props::BorrowedMutex`]).
+pub const TOKENS_PROPERTY: &str = mcl_net::coord_props::TOKENS_PROPERTY;
 
 /// A mutex between vehicles held by another vehicle (the *holder*): this
 /// vehicle asks for its tokens (request), receives them (grant) and gives
@@ -234,42 +235,17 @@ pub struct TokenMutex {
 /// `coord.tokens` property (empty without it). Errors on a malformed
 /// property.
 pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
-    #[derive(Deserialize)]
-    struct Start {
-        transition: String,
-        weight: u32,
-    }
-    #[derive(Deserialize)]
-    struct Entry {
-        supervisor: String,
-        holder: String,
-        place: String,
-        starts: Vec<Start>,
-        request: String,
-        #[serde(rename = "return")]
-        ret: String,
-        grant: String,
-        #[serde(default)]
-        ends: Vec<String>,
-    }
-    let Some((_, v)) = net.properties().iter().find(|(k, _)| k == TOKENS_PROPERTY) else { return Ok(Vec::new()) };
-    let bad =
-        |what: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names {what}, which the net does not have", net.name());
-    let list: Vec<Entry> =
-        serde_json::from_str(v).map_err(|e| format!("net `{}`: bad `{TOKENS_PROPERTY}` property: {e}", net.name()))?;
+    let props = read_props(net)?;
+    // `CoordProps::read` checked that every node named exists.
+    let missing =
+        |id: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names `{id}`, which the net does not have", net.name());
+    let transition = |id: &str| net.transition_by_id(id).ok_or_else(|| missing(id));
     let mut out = Vec::new();
-    for e in list {
-        let place = net.place_by_id(&e.place).ok_or_else(|| bad(&format!("place `{}`", e.place)))?;
-        let mut starts = Vec::new();
-        for s in e.starts {
-            let t =
-                net.transition_by_id(&s.transition).ok_or_else(|| bad(&format!("transition `{}`", s.transition)))?;
-            starts.push((t, s.weight));
-        }
-        for t in [&e.request, &e.ret] {
-            net.transition_by_id(t).ok_or_else(|| bad(&format!("transition `{t}`")))?;
-        }
-        let grant = net.transition_by_id(&e.grant).ok_or_else(|| bad(&format!("transition `{}`", e.grant)))?;
+    for e in props.tokens {
+        let place = net.place_by_id(&e.place).ok_or_else(|| missing(&e.place))?;
+        let starts =
+            e.starts.iter().map(|s| Ok((transition(&s.transition)?, s.weight))).collect::<Result<_, String>>()?;
+        let grant = transition(&e.grant)?;
         out.push(TokenMutex {
             supervisor: e.supervisor,
             holder: e.holder,
@@ -283,6 +259,11 @@ pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
     }
     out.sort_by(|a, b| a.supervisor.cmp(&b.supervisor));
     Ok(out)
+}
+
+/// The coordination properties of `net`, checked against its nodes.
+fn read_props(net: &mcl_net::Net) -> Result<CoordProps, String> {
+    CoordProps::read(net).map_err(|e| format!("net `{}`: {e}", net.name()))
 }
 
 /// Messages of the single-holder mutex protocol, by kind (counted by their
@@ -315,23 +296,8 @@ impl MutexMessages {
 /// from its `coord.send` property (empty without it). Errors on a malformed
 /// property.
 pub fn send_table(net: &mcl_net::Net) -> Result<HashMap<String, Vec<String>>, String> {
-    #[derive(Deserialize)]
-    struct Send {
-        transition: String,
-        to: String,
-    }
     let mut out: HashMap<String, Vec<String>> = HashMap::new();
-    let Some((_, v)) = net.properties().iter().find(|(k, _)| k == SEND_PROPERTY) else { return Ok(out) };
-    let list: Vec<Send> =
-        serde_json::from_str(v).map_err(|e| format!("net `{}`: bad `{SEND_PROPERTY}` property: {e}", net.name()))?;
-    for s in list {
-        if net.transition_by_id(&s.transition).is_none() {
-            return Err(format!(
-                "net `{}`: `{SEND_PROPERTY}` names transition `{}`, which the net does not have",
-                net.name(),
-                s.transition
-            ));
-        }
+    for s in read_props(net)?.send {
         out.entry(s.transition).or_default().push(s.to);
     }
     Ok(out)

@@ -786,61 +786,28 @@ fn coreachable(
 /// successor of a bad state must be bad.
 fn bottom(ss: &StateSpace, bad: &[bool], edge: impl Fn(TransitionId) -> bool) -> Option<(StateId, Vec<TransitionId>)> {
     let succ = |s: u32| ss.successors(StateId(s)).iter().filter(|(t, _)| edge(*t)).map(|&(t, d)| (t, d.0));
-    // Iterative Tarjan over the bad states.
+    // Strongly connected components of the bad states (the others are
+    // singletons without successors, left out).
     let n = ss.len();
     const UNSEEN: u32 = u32::MAX;
-    let mut index = vec![UNSEEN; n];
-    let mut low = vec![0u32; n];
-    let mut on_stack = vec![false; n];
-    let mut stack: Vec<u32> = Vec::new();
     let mut comp = vec![UNSEEN; n];
     let mut comps: Vec<Vec<u32>> = Vec::new();
-    let mut next = 0u32;
-    for root in 0..n as u32 {
-        if !bad[root as usize] || index[root as usize] != UNSEEN {
-            continue;
-        }
-        let mut call: Vec<(u32, usize)> = vec![(root, 0)];
-        index[root as usize] = next;
-        low[root as usize] = next;
-        next += 1;
-        stack.push(root);
-        on_stack[root as usize] = true;
-        while let Some(&mut (v, ref mut i)) = call.last_mut() {
-            let edges: Vec<u32> = succ(v).map(|(_, d)| d).filter(|&d| bad[d as usize]).collect();
-            if *i < edges.len() {
-                let w = edges[*i];
-                *i += 1;
-                if index[w as usize] == UNSEEN {
-                    index[w as usize] = next;
-                    low[w as usize] = next;
-                    next += 1;
-                    stack.push(w);
-                    on_stack[w as usize] = true;
-                    call.push((w, 0));
-                } else if on_stack[w as usize] {
-                    low[v as usize] = low[v as usize].min(index[w as usize]);
-                }
-            } else {
-                call.pop();
-                if let Some(&(u, _)) = call.last() {
-                    low[u as usize] = low[u as usize].min(low[v as usize]);
-                }
-                if low[v as usize] == index[v as usize] {
-                    let mut c = Vec::new();
-                    while let Some(w) = stack.pop() {
-                        on_stack[w as usize] = false;
-                        comp[w as usize] = comps.len() as u32;
-                        c.push(w);
-                        if w == v {
-                            break;
-                        }
-                    }
-                    comps.push(c);
-                }
+    mcl_net::graph::tarjan(
+        n,
+        |v, out| {
+            if bad[v as usize] {
+                out.extend(succ(v).map(|(_, d)| d).filter(|&d| bad[d as usize]));
             }
-        }
-    }
+        },
+        |c| {
+            if bad[c[0] as usize] {
+                for &w in c {
+                    comp[w as usize] = comps.len() as u32;
+                }
+                comps.push(c.to_vec());
+            }
+        },
+    );
     // Bottom components: no edge leaves them.
     let best = comps
         .iter()

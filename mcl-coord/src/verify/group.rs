@@ -1,0 +1,245 @@
+//! The groups of vehicles that supervisors link, each verified alone
+//! (exact: they share no place), and the verdict on one group from its
+//! product.
+
+use mcl_net::{Net, TransitionId};
+
+use super::hunt::hunt;
+use super::lts::Lts;
+use super::product::{explore_product, Effect, Product};
+use super::quotient::Quotient;
+use super::replay::{concretize, Replay, ReplayRules};
+use super::{VerifyOptions, VerifyStats, Witness, WitnessKind};
+use crate::central::Plant;
+use crate::supervisor::Supervisor;
+
+/// The groups of vehicles that supervisors link (connected components of
+/// the graph vehicle — supervisor), with their supervisors, in order.
+pub(super) fn groups(plant: &Plant, sups: &[Supervisor]) -> Vec<(Vec<usize>, Vec<usize>)> {
+    let nv = plant.parts.len();
+    let mut parent: Vec<usize> = (0..nv).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let owner = |t: TransitionId| plant.parts.iter().position(|p| p.owns_transition(t));
+    let mut sup_vehicle = Vec::with_capacity(sups.len());
+    for s in sups {
+        let vs: Vec<usize> = s.consumed_by.iter().chain(&s.produced_by).filter_map(|&(t, _)| owner(t)).collect();
+        for w in vs.windows(2) {
+            let (a, b) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
+            parent[a] = b;
+        }
+        sup_vehicle.push(vs.first().copied());
+    }
+    let mut out: Vec<(usize, Vec<usize>, Vec<usize>)> = Vec::new(); // (root, vehicles, sups)
+    for v in 0..nv {
+        let r = root(&mut parent, v);
+        match out.iter_mut().find(|(x, ..)| *x == r) {
+            Some(g) => g.1.push(v),
+            None => out.push((r, vec![v], Vec::new())),
+        }
+    }
+    for (k, v) in sup_vehicle.into_iter().enumerate() {
+        // A supervisor no transition touches is constant: any group may keep it.
+        let r = root(&mut parent, v.unwrap_or(0));
+        if let Some(g) = out.iter_mut().find(|(x, ..)| *x == r) {
+            g.2.push(k);
+        }
+    }
+    out.into_iter().map(|(_, vs, ss)| (vs, ss)).collect()
+}
+
+/// One group of linked vehicles: indices into the missions and supervisors.
+pub(super) struct Group<'a> {
+    pub(super) vehicles: &'a [usize],
+    pub(super) sups: &'a [usize],
+    pub(super) ltss: Vec<&'a Lts>,
+    pub(super) quots: Vec<&'a Quotient>,
+    pub(super) can_end: Vec<bool>,
+    /// The group holds every vehicle.
+    pub(super) whole: bool,
+    /// What a replay of its counterexamples applies.
+    pub(super) rules: &'a ReplayRules<'a>,
+}
+
+/// The verdict on one group.
+pub(super) enum GroupOutcome {
+    Verified,
+    Problems(Vec<Witness>),
+    Unknown(String),
+}
+
+/// Verifies one group: random walks first when its product is large, then
+/// the product, with a larger K while counterexamples do not replay.
+pub(super) fn verify_group(
+    grp: &Group<'_>,
+    plant: &Plant,
+    effects_all: &[Effect],
+    sups_all: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+    stats: &mut VerifyStats,
+) -> GroupOutcome {
+    let rules = grp.rules;
+    let sups: Vec<&Supervisor> = grp.sups.iter().map(|&k| &sups_all[k]).collect();
+    // Supervisor indices local to the group.
+    let mut local = vec![usize::MAX; sups_all.len()];
+    for (i, &k) in grp.sups.iter().enumerate() {
+        local[k] = i;
+    }
+    let effects: Vec<Effect> = effects_all
+        .iter()
+        .map(|e| Effect {
+            consume: e.consume.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
+            produce: e.produce.iter().filter(|(k, _)| local[*k] != usize::MAX).map(|&(k, w)| (local[k], w)).collect(),
+            take_back: e.take_back.iter().filter(|&&k| local[k] != usize::MAX).map(|&k| local[k]).collect(),
+        })
+        .collect();
+    let quots = &grp.quots;
+    let nv = grp.vehicles.len();
+    let can_end = &grp.can_end;
+    let group_ts: Vec<TransitionId> =
+        grp.vehicles.iter().flat_map(|&v| plant.parts[v].transitions.clone().map(TransitionId)).collect();
+    let replay =
+        Replay { snet, nsups: sups_all.len(), group_ts: if grp.whole { None } else { Some(&group_ts) }, rules };
+    let max_w = sups.iter().flat_map(|s| s.consumed_by.iter().map(|&(_, w)| w)).max().unwrap_or(1);
+    let max_init = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).max().unwrap_or(0);
+    let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
+    let init_of = |cap: u32| -> Vec<u32> {
+        let mut init: Vec<u32> = quots.iter().map(|q| q.block[0]).collect();
+        init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
+        init
+    };
+    // A large product: look for a deadlock by random walks first.
+    let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
+    if nv > 1 && estimate > opts.hunt_threshold as f64 {
+        let prod = Product { quots, can_end, effects: &effects, cap, nv };
+        if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps) {
+            stats.counter_cap = stats.counter_cap.max(cap);
+            return GroupOutcome::Problems(vec![w]);
+        }
+    }
+    loop {
+        let prod = Product { quots, can_end, effects: &effects, cap, nv };
+        let g = explore_product(&prod, init_of(cap), opts.max_product_states);
+        let states = g.states.len() / g.width.max(1);
+        stats.counter_cap = stats.counter_cap.max(cap);
+        if !g.complete {
+            stats.product_states += states;
+            stats.exact &= !g.over;
+            return GroupOutcome::Unknown(format!(
+                "the product of {} has more than {} states",
+                names(plant, grp.vehicles),
+                opts.max_product_states
+            ));
+        }
+        let is_end = |st: &[u32]| (0..nv).all(|v| quots[v].fin[st[v] as usize]);
+        let is_target = |st: &[u32]| (0..nv).all(|v| !can_end[v] || quots[v].fin[st[v] as usize]);
+        let n = g.pess_off.len() - 1;
+        // Backward reachability of the targets over pessimistic steps; the
+        // predecessors in one flat array (counting sort).
+        let mut pred_off = vec![0u32; n + 1];
+        for &t in &g.pess {
+            pred_off[t as usize + 1] += 1;
+        }
+        for k in 0..n {
+            pred_off[k + 1] += pred_off[k];
+        }
+        let mut fill = pred_off.clone();
+        let mut pred = vec![0u32; g.pess.len()];
+        for s in 0..n {
+            for &t in &g.pess[g.pess_off[s] as usize..g.pess_off[s + 1] as usize] {
+                pred[fill[t as usize] as usize] = s as u32;
+                fill[t as usize] += 1;
+            }
+        }
+        let preds = |s: u32| &pred[pred_off[s as usize] as usize..pred_off[s as usize + 1] as usize];
+        let mut co = vec![false; n];
+        let mut stack: Vec<u32> = (0..n as u32).filter(|&s| is_target(g.state(s))).collect();
+        for &s in &stack {
+            co[s as usize] = true;
+        }
+        while let Some(s) = stack.pop() {
+            for &p in preds(s) {
+                if !co[p as usize] {
+                    co[p as usize] = true;
+                    stack.push(p);
+                }
+            }
+        }
+        let mut is_dead = vec![false; n];
+        for &s in &g.dead {
+            is_dead[s as usize] = true;
+        }
+        let dead: Vec<u32> = g.dead.iter().copied().filter(|&s| !is_end(g.state(s))).collect();
+        let blocked: Vec<u32> = (0..n as u32).filter(|&s| !co[s as usize] && !is_dead[s as usize]).collect();
+        let settle = |stats: &mut VerifyStats| {
+            stats.product_states += states;
+            stats.exact &= !g.over;
+        };
+        if dead.is_empty() && blocked.is_empty() {
+            settle(stats);
+            return GroupOutcome::Verified;
+        }
+        // Counterexamples: every dead state (up to a few), and the first
+        // blocked state that holds some call (else the first blocked one).
+        let mut witnesses = Vec::new();
+        let mut spurious = false;
+        let held_state = |s: u32| {
+            let st = g.state(s);
+            (0..nv).any(|v| quots[v].gates[st[v] as usize].iter().any(|&t| !prod.allowed(st, t)))
+        };
+        let mut picks: Vec<(u32, WitnessKind)> = dead.iter().take(8).map(|&s| (s, WitnessKind::Dead)).collect();
+        // A dead marking explains itself; a blocked one is reported only
+        // when there is none.
+        if picks.is_empty() {
+            if let Some(&b) = blocked.iter().find(|&&s| held_state(s)).or(blocked.first()) {
+                picks.push((b, WitnessKind::Blocked));
+            }
+        }
+        for (s, kind) in picks {
+            match concretize(&g, s, &grp.ltss, quots, &replay, kind) {
+                Some(w) => witnesses.push(w),
+                None => spurious = true,
+            }
+        }
+        if witnesses.is_empty() && spurious {
+            if g.over && cap < opts.max_counter_cap {
+                cap = (cap * 2).min(opts.max_counter_cap);
+                continue;
+            }
+            settle(stats);
+            return GroupOutcome::Unknown(format!(
+                "counterexamples found with supervisor places counted up to {cap} tokens do not replay"
+            ));
+        }
+        // A blocked image reached through `>K` counts may be an artefact of
+        // the abstraction: only an exact product proves it.
+        if witnesses.iter().all(|w| w.kind == WitnessKind::Blocked) && g.over {
+            if cap < opts.max_counter_cap {
+                cap = (cap * 2).min(opts.max_counter_cap);
+                continue;
+            }
+            settle(stats);
+            return GroupOutcome::Unknown(format!(
+                "no deadlock, but whether every mission can always end is not decided: supervisor places \
+                 exceed {cap} tokens"
+            ));
+        }
+        settle(stats);
+        return GroupOutcome::Problems(witnesses);
+    }
+}
+
+fn names(plant: &Plant, vs: &[usize]) -> String {
+    let n: Vec<String> = vs.iter().map(|&v| format!("`{}`", plant.parts[v].name)).collect();
+    if n.len() == plant.parts.len() {
+        format!("the {} vehicles", n.len())
+    } else {
+        format!("the vehicles {}", n.join(", "))
+    }
+}

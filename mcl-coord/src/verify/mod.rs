@@ -1,0 +1,325 @@
+//! Exhaustive verification of a supervised centralized net, one vehicle at a
+//! time and then together.
+//!
+//! The plain product of two compiled missions is too large to explore (the
+//! AUV of `examples/auv-asc.mcl` alone has 3,500 markings, its product with
+//! the ASC over ten million), and the counters of order and sync supervisors
+//! are unbounded when calls sit in loops. The verification therefore works
+//! in three steps, each exact or a sound over-approximation:
+//!
+//! 1. **Vehicle graphs.** The reachable markings of each vehicle's net alone,
+//!    with the *per-vehicle* firing rule (seed Appendix A applied by each
+//!    vehicle's player to its own transitions, `mcl_net::semantics::
+//!    select_ready`): immediate transitions first, by priority; then
+//!    deferred ones (delay 0), by priority; then events and timers. A
+//!    transition that a supervisor controls (*gated*) may be held: events of
+//!    a marking in which a gated transition waits are recorded with a
+//!    *blocked* guard (they are ready only while every waiting gated
+//!    transition is held). Transitions connected to a supervisor place are
+//!    *visible*; the others are silent (τ). (`lts.rs`)
+//! 2. **Reduction.** Each vehicle graph is reduced modulo divergence-
+//!    preserving branching bisimulation (signature refinement, Blom and
+//!    Orzan), with the gated transitions waiting and the end of the mission
+//!    as state labels. Deadlocks, the reachability of the missions' ends and
+//!    every visible behaviour are preserved. (`quotient.rs`)
+//! 3. **Product.** The reduced graphs run together with the supervisor
+//!    places. A supervisor place holds 0..=K tokens exactly, or `>K`
+//!    (consuming from `>K` may leave `K` or `>K`): every reachable marking of
+//!    the real system has an image, so *no dead image* proves *no dead
+//!    marking*. The end of the missions must stay reachable from every image
+//!    through *pessimistic* steps (`>K` minus one is `K`), which every real
+//!    marking with that image can follow, so this proves that no vehicle can
+//!    be blocked forever. (`product.rs`)
+//!
+//! The product is explored breadth-first with a partial-order reduction:
+//! when a vehicle that has not ended (and can end alone) has only silent,
+//! unguarded moves, those moves form a persistent set (no other vehicle nor
+//! supervisor place can disable them or be affected by them), so only they
+//! are expanded — provided they all lead to new states, which keeps a fully
+//! expanded state on every cycle. Dead states are preserved, and so is the
+//! reachability of the end: any path to the end must move that vehicle, and
+//! its first move commutes to the front.
+//!
+//! A dead or blocked image is turned back into a firing sequence of the real
+//! net (through the vehicles' graphs) and replayed with exact token counts
+//! and the exact per-vehicle firing rule (each step ready for its vehicle);
+//! if the replay fails, the image came from an abstraction and the product
+//! is rebuilt with a larger K (`replay.rs`).
+//!
+//! The per-vehicle rule allows every interleaving that the centralized player
+//! (one rule for all vehicles) allows, and more: a deadlock-free verdict
+//! holds for both.
+//!
+//! Scaling (docs/coordination.md, "Scaling"): vehicles that no supervisor
+//! links are verified as separate groups (exact: they share no place), and
+//! when a group's product of class counts is large, seeded random walks look
+//! for a dead state first; only a walk whose end replays on the real net is
+//! reported (`group.rs`, `hunt.rs`).
+
+mod group;
+mod hunt;
+mod lts;
+mod product;
+mod quotient;
+mod replay;
+
+use mcl_net::{Marking, Net, PlaceId, TransitionId};
+use rustc_hash::FxHashMap;
+use serde::Serialize;
+
+use crate::central::Plant;
+use crate::model::Mission;
+use crate::supervisor::Supervisor;
+use group::{groups, verify_group, Group, GroupOutcome};
+use lts::{build_lts, can_end_alone, LtsError};
+use product::Effect;
+use quotient::{reduce, Quotient};
+use replay::ReplayRules;
+
+/// Caps of the verification.
+#[derive(Clone, Debug, Serialize)]
+pub struct VerifyOptions {
+    /// Largest number of markings of one vehicle's net.
+    pub max_vehicle_states: usize,
+    /// Largest number of states of the product.
+    pub max_product_states: usize,
+    /// First value of K (tokens counted exactly in a supervisor place).
+    pub counter_cap: u32,
+    /// Largest K tried before giving up on a spurious counterexample.
+    pub max_counter_cap: u32,
+    /// Above this many combinations of the vehicles' reduced states (the
+    /// product of their class counts), random walks look for a deadlock
+    /// before the exhaustive product.
+    pub hunt_threshold: u64,
+    /// Largest total number of random-walk steps.
+    pub hunt_steps: usize,
+}
+
+impl Default for VerifyOptions {
+    fn default() -> Self {
+        VerifyOptions {
+            max_vehicle_states: 2_000_000,
+            max_product_states: 4_000_000,
+            counter_cap: 1,
+            max_counter_cap: 32,
+            hunt_threshold: 1_000_000,
+            hunt_steps: 200_000,
+        }
+    }
+}
+
+/// Sizes met by a verification.
+#[derive(Clone, Debug, Default, Serialize, PartialEq, Eq)]
+pub struct VerifyStats {
+    /// Markings of each vehicle's graph.
+    pub vehicle_states: Vec<usize>,
+    /// Classes of each reduced graph.
+    pub vehicle_classes: Vec<usize>,
+    /// States of the product.
+    pub product_states: usize,
+    /// K used.
+    pub counter_cap: u32,
+    /// True when no supervisor place ever exceeded K (the product is then
+    /// exact, not an over-approximation).
+    pub exact: bool,
+}
+
+/// What is wrong in a witness marking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WitnessKind {
+    /// No transition can fire and some mission has not ended.
+    Dead,
+    /// Transitions can fire but some mission can no longer end.
+    Blocked,
+    /// A nominal run ([`Mission::off_nominal`]: no call fails outside a
+    /// condition, no alarm) reaches a marking from which, in nominal runs,
+    /// some mission can never end ([`verify_quiet`]).
+    Stuck,
+}
+
+/// A firing sequence of the supervised centralized net that ends in a
+/// deadlock or in a marking from which some mission can no longer end.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Witness {
+    /// Dead or blocked.
+    pub kind: WitnessKind,
+    /// The firing sequence, from the initial marking (transition indices of
+    /// the supervised net).
+    pub path: Vec<TransitionId>,
+    /// The marking it ends in.
+    pub marking: Marking,
+    /// Transitions that wait in that marking only because supervisor places
+    /// lack tokens, with the indices of those supervisors.
+    pub held: Vec<(TransitionId, Vec<usize>)>,
+}
+
+/// Result of a verification.
+#[derive(Clone, Debug)]
+pub enum Outcome {
+    /// No dead marking except the end of every mission, and from every
+    /// reachable marking the end of every mission that can end alone is
+    /// still reachable.
+    Verified(VerifyStats),
+    /// Counterexamples, replayed on the real net.
+    Problems(Vec<Witness>, VerifyStats),
+    /// A cap was reached, or a counterexample stayed spurious.
+    Unknown(String, VerifyStats),
+}
+
+/// Verifies the supervised net `snet` = plant + `sups` (supervisor places
+/// appended in order).
+pub fn verify(missions: &[Mission], plant: &Plant, sups: &[Supervisor], snet: &Net, opts: &VerifyOptions) -> Outcome {
+    verify_mode(missions, plant, sups, snet, opts, false)
+}
+
+/// True when some mission has off-nominal answers ([`Mission::off_nominal`]):
+/// only then can [`verify_quiet`] find more than [`verify`].
+pub fn has_off_nominal(missions: &[Mission]) -> bool {
+    missions.iter().any(|m| !m.off_nominal.is_empty())
+}
+
+/// [`verify`] restricted to nominal runs ([`Mission::off_nominal`]: no call
+/// fails outside a condition, no monitor condition fires; what a mock
+/// vehicle does unless told otherwise, whatever the timing). Its
+/// counterexamples, of kind [`WitnessKind::Stuck`], are markings reached by
+/// a nominal run from which a mission can end only through a failure or an
+/// alarm: a call waiting for ever for a sync partner that a `parallel ...
+/// or` withdrew, say. [`verify`] does not see them, since an alarm, always
+/// possible, would let the mission end.
+pub fn verify_quiet(
+    missions: &[Mission],
+    plant: &Plant,
+    sups: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+) -> Outcome {
+    match verify_mode(missions, plant, sups, snet, opts, true) {
+        Outcome::Problems(mut ws, st) => {
+            for w in &mut ws {
+                w.kind = WitnessKind::Stuck;
+            }
+            Outcome::Problems(ws, st)
+        }
+        o => o,
+    }
+}
+
+fn verify_mode(
+    missions: &[Mission],
+    plant: &Plant,
+    sups: &[Supervisor],
+    snet: &Net,
+    opts: &VerifyOptions,
+    quiet: bool,
+) -> Outcome {
+    let nt = plant.net.transition_count();
+    let mut gated = vec![false; nt];
+    let mut per_t: Vec<Effect> = vec![Effect::default(); nt];
+    let mut take_back: Vec<Vec<usize>> = vec![Vec::new(); nt];
+    for (k, s) in sups.iter().enumerate() {
+        for &t in &s.withdrawn_by {
+            per_t[t.index()].take_back.push(k);
+            take_back[t.index()].push(k);
+        }
+        for &(t, w) in &s.consumed_by {
+            gated[t.index()] = true;
+            per_t[t.index()].consume.push((k, w));
+        }
+        for &(t, w) in &s.produced_by {
+            per_t[t.index()].produce.push((k, w));
+        }
+    }
+    // One label per distinct effect on the supervisor places.
+    let mut effects: Vec<Effect> = vec![Effect::default()];
+    let mut effect_ids: FxHashMap<Effect, u32> = FxHashMap::default();
+    let effect_of: Vec<u32> = per_t
+        .into_iter()
+        .map(|e| {
+            if e.consume.is_empty() && e.produce.is_empty() && e.take_back.is_empty() {
+                return 0;
+            }
+            let next = effects.len() as u32;
+            *effect_ids.entry(e.clone()).or_insert_with(|| {
+                effects.push(e);
+                next
+            })
+        })
+        .collect();
+    let mut stats = VerifyStats::default();
+    let mut ltss = Vec::new();
+    for (m, part) in missions.iter().zip(&plant.parts) {
+        match build_lts(m, part.transitions.start, &effect_of, &gated, quiet, opts.max_vehicle_states) {
+            Ok(l) => {
+                stats.vehicle_states.push(l.len());
+                ltss.push(l);
+            }
+            Err(LtsError::TooMany) => {
+                return Outcome::Unknown(
+                    format!("mission `{}` has more than {} markings", m.name, opts.max_vehicle_states),
+                    stats,
+                )
+            }
+            Err(LtsError::Unbounded) => {
+                return Outcome::Unknown(
+                    format!("mission `{}` is not bounded (a place exceeds 200 tokens)", m.name),
+                    stats,
+                )
+            }
+        }
+    }
+    let quots: Vec<Quotient> = ltss.iter().map(reduce).collect();
+    stats.vehicle_classes = quots.iter().map(|q| q.n).collect();
+    // Which vehicles can end when nothing holds them.
+    let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
+    // The off-nominal answers, in centralized ids.
+    let mut quiet_ts: Vec<Vec<PlaceId>> = vec![Vec::new(); if quiet { nt } else { 0 }];
+    if quiet {
+        for (m, part) in missions.iter().zip(&plant.parts) {
+            for (t, ps) in &m.off_nominal {
+                if let Some(x) = quiet_ts.get_mut((t.0 + part.transitions.start) as usize) {
+                    *x = ps.iter().map(|p| PlaceId(p.0 + part.places.start)).collect();
+                }
+            }
+        }
+    }
+    let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
+    let rules = ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts };
+
+    // Vehicles that no supervisor links are independent: each group of
+    // linked vehicles is verified alone (docs/coordination.md).
+    let groups = groups(plant, sups);
+    stats.exact = true;
+    let mut witnesses = Vec::new();
+    let mut unknown: Option<String> = None;
+    for (vs, ss) in &groups {
+        let g = Group {
+            vehicles: vs,
+            sups: ss,
+            ltss: vs.iter().map(|&v| &ltss[v]).collect(),
+            quots: vs.iter().map(|&v| &quots[v]).collect(),
+            can_end: vs.iter().map(|&v| can_end[v]).collect(),
+            whole: groups.len() == 1,
+            rules: &rules,
+        };
+        match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
+            GroupOutcome::Verified => {}
+            GroupOutcome::Problems(ws) => witnesses.extend(ws),
+            GroupOutcome::Unknown(r) => {
+                unknown.get_or_insert(r);
+            }
+        }
+    }
+    if !witnesses.is_empty() {
+        return Outcome::Problems(witnesses, stats);
+    }
+    match unknown {
+        Some(r) => Outcome::Unknown(r, stats),
+        None => Outcome::Verified(stats),
+    }
+}
+
+/// The places of a marking that hold no token (for siphon analysis).
+pub fn empty_places(m: &Marking) -> Vec<PlaceId> {
+    m.0.iter().enumerate().filter(|(_, &n)| n == 0).map(|(i, _)| PlaceId(i as u32)).collect()
+}

@@ -1,0 +1,235 @@
+//! Step 3: the reduced vehicle graphs run together with the supervisor
+//! places, explored breadth-first with a partial-order reduction.
+//!
+//! A supervisor place holds 0..=K tokens exactly, or `>K` (consuming from
+//! `>K` may leave `K` or `>K`): every reachable marking of the real system
+//! has an image. A step is *pessimistic* when every real marking with that
+//! image can follow it (`>K` minus one is `K`).
+
+use rustc_hash::FxHashMap;
+
+use super::lts::{lab_action, lab_blocked, TAU};
+use super::quotient::Quotient;
+
+/// The supervisor arcs of one transition: (supervisor, weight) consumed and
+/// produced, and the supervisors it takes one token back from when they
+/// have one (a withdrawn sync arrival, [`crate::Supervisor::withdrawn_by`]).
+#[derive(Default, Clone, PartialEq, Eq, Hash)]
+pub(super) struct Effect {
+    pub(super) consume: Vec<(usize, u32)>,
+    pub(super) produce: Vec<(usize, u32)>,
+    pub(super) take_back: Vec<usize>,
+}
+
+/// The reduced vehicle graphs running together with the supervisor places
+/// (counted exactly up to `cap`, then `cap + 1` for `>K`).
+pub(super) struct Product<'a> {
+    pub(super) quots: &'a [&'a Quotient],
+    pub(super) can_end: &'a [bool],
+    pub(super) effects: &'a [Effect],
+    pub(super) cap: u32,
+    pub(super) nv: usize,
+}
+
+impl Product<'_> {
+    /// True when the supervisor places of `st` allow `effect`.
+    pub(super) fn allowed(&self, st: &[u32], effect: u32) -> bool {
+        self.effects[effect as usize].consume.iter().all(|&(s, w)| st[self.nv + s] >= w)
+    }
+
+    /// Successors of `st`: (next state, vehicle, label, pessimistic).
+    /// A vehicle whose moves form a persistent set in `st`: not ended, able
+    /// to end alone, and every move of its class a silent unguarded step
+    /// (independent of every other vehicle and of the supervisor places,
+    /// and never disabled by them).
+    pub(super) fn ample_vehicle(&self, st: &[u32]) -> Option<usize> {
+        (0..self.nv).find(|&v| {
+            let q = &self.quots[v];
+            let c = st[v];
+            self.can_end[v] && !q.fin[c as usize] && !q.out(c).is_empty() && q.out(c).iter().all(|&(l, _)| l == TAU)
+        })
+    }
+
+    /// Successors of `st` by the moves of the vehicles in `vehicles`.
+    pub(super) fn successors(
+        &self,
+        st: &[u32],
+        vehicles: std::ops::Range<usize>,
+        out: &mut Vec<(Vec<u32>, usize, u32, bool)>,
+        over: &mut bool,
+    ) {
+        for v in vehicles {
+            let q = st[v];
+            let qt = &self.quots[v];
+            let any_gate_allowed = || qt.gates[q as usize].iter().any(|&g| self.allowed(st, g));
+            for &(label, q2) in qt.out(q) {
+                if lab_blocked(label) && any_gate_allowed() {
+                    continue;
+                }
+                let mut base = st.to_vec();
+                base[v] = q2;
+                match lab_action(label) {
+                    None => out.push((base, v, label, true)),
+                    Some(t) => {
+                        if !self.allowed(st, t) {
+                            continue;
+                        }
+                        let e = &self.effects[t as usize];
+                        // Consumption, with the `>K` choices.
+                        let mut states: Vec<(Vec<u32>, bool)> = vec![(base, true)];
+                        for &(s, w) in &e.consume {
+                            let mut nexts = Vec::new();
+                            for (x, pess) in states {
+                                let c = x[self.nv + s];
+                                if c == self.cap + 1 {
+                                    *over = true;
+                                    // Concretely ≥ K+1: after − w, anything from K+1−w to >K.
+                                    for r in (self.cap + 1 - w.min(self.cap + 1))..=self.cap + 1 {
+                                        let mut y = x.clone();
+                                        y[self.nv + s] = r;
+                                        nexts.push((y, pess && r == self.cap + 1 - w.min(self.cap + 1)));
+                                    }
+                                } else {
+                                    let mut y = x;
+                                    y[self.nv + s] = c - w;
+                                    nexts.push((y, pess));
+                                }
+                            }
+                            states = nexts;
+                        }
+                        for (x, _) in states.iter_mut() {
+                            for &(s, w) in &e.produce {
+                                let c = &mut x[self.nv + s];
+                                *c = (*c + w).min(self.cap + 1);
+                                if *c == self.cap + 1 {
+                                    *over = true;
+                                }
+                            }
+                        }
+                        // Take-backs: one token if there is one; from `>K`,
+                        // `K` (the pessimistic choice) or `>K`.
+                        for &s in &e.take_back {
+                            let mut nexts = Vec::with_capacity(states.len());
+                            for (mut x, pess) in states {
+                                let c = x[self.nv + s];
+                                if c == self.cap + 1 {
+                                    *over = true;
+                                    let mut y = x.clone();
+                                    y[self.nv + s] = self.cap;
+                                    nexts.push((y, pess));
+                                    nexts.push((x, false));
+                                } else {
+                                    x[self.nv + s] = c.saturating_sub(1);
+                                    nexts.push((x, pess));
+                                }
+                            }
+                            states = nexts;
+                        }
+                        for (x, pess) in states {
+                            out.push((x, v, label, pess));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The explored product: states, how each was first reached, the dead
+/// ones and the pessimistic successors.
+pub(super) struct ProductGraph {
+    pub(super) width: usize,
+    pub(super) states: Vec<u32>,
+    pub(super) parent: Vec<(u32, u32, u32)>, // (parent, vehicle, label)
+    pub(super) dead: Vec<u32>,
+    /// Pessimistic successors of state `s`: `pess[pess_off[s]..pess_off[s + 1]]`
+    /// (one flat array: millions of states made millions of small vectors).
+    pub(super) pess_off: Vec<u32>,
+    pub(super) pess: Vec<u32>,
+    pub(super) over: bool,
+    pub(super) complete: bool,
+}
+
+impl ProductGraph {
+    /// State `i` (vehicle classes, then supervisor counts).
+    pub(super) fn state(&self, i: u32) -> &[u32] {
+        &self.states[i as usize * self.width..(i as usize + 1) * self.width]
+    }
+}
+
+/// Explores the product breadth-first from `init`, up to `max` states.
+pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph {
+    let width = init.len();
+    let mut index: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
+    let mut g = ProductGraph {
+        width,
+        states: init.clone(),
+        parent: vec![(u32::MAX, 0, 0)],
+        dead: Vec::new(),
+        pess_off: vec![0],
+        pess: Vec::new(),
+        over: false,
+        complete: true,
+    };
+    index.insert(init, 0);
+    let mut i = 0usize;
+    let mut succ = Vec::new();
+    while i < index.len() {
+        if i % 4096 == 0 {
+            crate::interrupt::poll();
+        }
+        let st = g.state(i as u32).to_vec();
+        succ.clear();
+        // Partial-order reduction: the moves of one vehicle only, when they
+        // form a persistent set and all lead to new states (which keeps
+        // every cycle through a fully expanded state). Dead states and the
+        // reachability of the end are preserved (docs/coordination.md).
+        let mut reduced = false;
+        if let Some(v) = p.ample_vehicle(&st) {
+            p.successors(&st, v..v + 1, &mut succ, &mut g.over);
+            if succ.iter().all(|(x, ..)| !index.contains_key(x)) {
+                reduced = true;
+            } else {
+                succ.clear();
+            }
+        }
+        if !reduced {
+            p.successors(&st, 0..p.nv, &mut succ, &mut g.over);
+        }
+        if succ.is_empty() {
+            g.dead.push(i as u32);
+        }
+        let first = g.pess.len();
+        for (x, v, label, pess) in succ.drain(..) {
+            let n = index.len() as u32;
+            let to = match index.get(&x) {
+                Some(&to) => to,
+                None => {
+                    if index.len() >= max {
+                        g.complete = false;
+                        continue;
+                    }
+                    g.states.extend_from_slice(&x);
+                    g.parent.push((i as u32, v as u32, label));
+                    index.insert(x, n);
+                    n
+                }
+            };
+            if pess {
+                g.pess.push(to);
+            }
+        }
+        g.pess[first..].sort_unstable();
+        let mut kept = first;
+        for k in first..g.pess.len() {
+            if kept == first || g.pess[kept - 1] != g.pess[k] {
+                g.pess[kept] = g.pess[k];
+                kept += 1;
+            }
+        }
+        g.pess.truncate(kept);
+        g.pess_off.push(g.pess.len() as u32);
+        i += 1;
+    }
+    g
+}
