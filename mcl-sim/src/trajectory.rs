@@ -24,6 +24,13 @@ fn tick_step(span: f64, n: f64) -> f64 {
     [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * p).find(|s| *s >= raw).unwrap_or(10.0 * p)
 }
 
+/// The ticks every `step` in [lo, hi] (at most 50: far from the origin a
+/// step may be lost in rounding).
+fn ticks(lo: f64, hi: f64, step: f64) -> impl Iterator<Item = f64> {
+    let first = (lo / step).ceil() * step;
+    (0..50).map(move |k| first + k as f64 * step).take_while(move |g| *g <= hi)
+}
+
 /// A tick value without float noise nor "-0".
 fn tick(v: f64) -> String {
     let r = (v * 1000.0).round() / 1000.0;
@@ -90,8 +97,7 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
         r##"<g id="plan"><rect x="{px}" y="{py}" width="{ps}" height="{ps}" fill="#f4f8fb" stroke="#888"/>"##
     );
     let st = tick_step(span, 8.0);
-    let mut g = (bx0 / st).ceil() * st;
-    while g <= bx0 + span {
+    for g in ticks(bx0, bx0 + span, st) {
         let _ = writeln!(
             s,
             r##"<line x1="{0:.1}" y1="{py}" x2="{0:.1}" y2="{1}" stroke="#dde3ea"/><text x="{0:.1}" y="{2}" text-anchor="middle" fill="#555">{3}</text>"##,
@@ -100,10 +106,8 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             py + ps + 16.0,
             tick(g)
         );
-        g += st;
     }
-    let mut g = (by0 / st).ceil() * st;
-    while g <= by0 + span {
+    for g in ticks(by0, by0 + span, st) {
         let _ = writeln!(
             s,
             r##"<line x1="{px}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#dde3ea"/><text x="{2}" y="{3:.1}" text-anchor="end" fill="#555">{4}</text>"##,
@@ -113,7 +117,6 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             sy(g) + 4.0,
             tick(g)
         );
-        g += st;
     }
     let _ = writeln!(
         s,
@@ -271,8 +274,7 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
         qy - 10.0
     );
     let stt = tick_step(tmax, 10.0);
-    let mut g = 0.0;
-    while g <= tmax {
+    for g in ticks(0.0, tmax, stt) {
         let _ = writeln!(
             s,
             r##"<line x1="{0:.1}" y1="{qy}" x2="{0:.1}" y2="{1}" stroke="#dde3ea"/><text x="{0:.1}" y="{2}" text-anchor="middle" fill="#555">{3}</text>"##,
@@ -281,11 +283,9 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             qy + qh + 14.0,
             tick(g)
         );
-        g += stt;
     }
     let stz = tick_step(zmax, 4.0);
-    let mut g = 0.0;
-    while g <= zmax {
+    for g in ticks(0.0, zmax, stz) {
         let _ = writeln!(
             s,
             r##"<text x="{}" y="{:.1}" text-anchor="end" fill="#555">{}</text>"##,
@@ -293,7 +293,6 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             tz(g) + 4.0,
             tick(g)
         );
-        g += stz;
     }
     let _ = writeln!(
         s,
@@ -351,5 +350,13 @@ mod tests {
         assert!(s.contains("a &amp; b") && s.contains("Cable&lt;Tracking&gt;") && s.contains(">Goto<"));
         assert_eq!(s.matches("stroke-dasharray").count(), 1, "one buried section");
         assert_eq!(s.matches("<polyline").count(), 1 + 3 + 3, "seabed + 3 stretches in each view");
+    }
+
+    #[test]
+    fn far_from_the_origin_the_axes_stay_bounded() {
+        let world = World::from_toml("[start]\nposition = [1e17, 1e17]\n", "w").unwrap();
+        let p = Pose { t: 0.0, x: 1e17, y: 1e17, z: 0.0, yaw: 0.0 };
+        let track = Track { points: vec![(p, 0)], labels: vec!["-".into()], waypoints: vec![] };
+        assert!(svg(&track, &world, "far").len() < 100_000);
     }
 }

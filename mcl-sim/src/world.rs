@@ -127,11 +127,12 @@ impl Cable {
 
     /// The nearest visible (not buried) point beyond arc length `after`
     /// within `range` of (x, y): its arc length. Scans the cable every
-    /// half metre.
+    /// half metre (at most 20,000 points: coarser on a longer cable).
     pub fn visible_near(&self, x: f64, y: f64, after: f64) -> Option<f64> {
         let mut best: Option<(f64, f64)> = None;
         let mut s = after.max(0.0);
         let len = self.length();
+        let ds = (len / 20_000.0).max(0.5);
         while s <= len {
             if !self.is_buried(s) {
                 let (px, py) = self.point_at(s);
@@ -140,7 +141,7 @@ impl Cable {
                     best = Some((s, d));
                 }
             }
-            s += 0.5;
+            s += ds;
         }
         best.map(|b| b.0)
     }
