@@ -100,7 +100,7 @@ enum Command {
     /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
     /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
     /// flushed first).
-    Run(cmd::run::Options),
+    Run(Box<cmd::run::Options>),
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
         /// A JSONL trace.
@@ -232,7 +232,7 @@ fn main() -> ExitCode {
         Command::New { name } => cmd::new::run(&name),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),
         Command::Plan(o) => cmd::plan::run(o),
-        Command::Run(o) => cmd::run::run(o),
+        Command::Run(o) => cmd::run::run(*o),
         Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {
                 net,

@@ -12,6 +12,7 @@ pub mod mock_aac;
 pub mod new;
 pub mod plan;
 pub mod run;
+pub mod sim;
 
 use std::path::{Path, PathBuf};
 

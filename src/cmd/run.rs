@@ -32,6 +32,18 @@ pub struct Options {
     /// Play against the in-process mock vehicle.
     #[arg(long)]
     pub mock: bool,
+    /// Play against a simulated vehicle that moves in a simulated world (with --virtual-time; docs/simulator.md).
+    #[arg(long)]
+    pub sim: bool,
+    /// With --sim: the world (TOML; default: a flat seabed at 20 m, nothing else).
+    #[arg(long, value_name = "FILE")]
+    pub world: Option<PathBuf>,
+    /// With --sim: how the vehicle's primitives are simulated (TOML; default: examples/sim/vehicle-model.toml).
+    #[arg(long, value_name = "FILE")]
+    pub vehicle_model: Option<PathBuf>,
+    /// With --sim: draw the vehicle's path (plan view and depth profile) as SVG here.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
     /// Play against the AAC listening at HOST:PORT.
     #[arg(long, value_name = "HOST:PORT")]
     pub aac: Option<String>,
@@ -281,13 +293,24 @@ pub fn run(o: Options) -> u8 {
     // with 130 or 143.
     crate::interrupt::install();
     // Usage checks.
-    if o.mock == o.aac.is_some() {
-        return usage("give exactly one of --mock (in-process mock vehicle) and --aac HOST:PORT");
+    if [o.mock, o.sim, o.aac.is_some()].iter().filter(|b| **b).count() != 1 {
+        return usage(
+            "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle) and --aac HOST:PORT",
+        );
     }
-    if o.virtual_time && !o.mock {
+    if o.sim && !o.virtual_time {
+        return usage("--sim runs in virtual time only for now: add --virtual-time");
+    }
+    if o.sim && (o.journal.is_some() || o.resume.is_some()) {
+        return usage("--journal and --resume are not supported with --sim yet");
+    }
+    if !o.sim && (o.world.is_some() || o.vehicle_model.is_some() || o.trajectory.is_some()) {
+        return usage("--world, --vehicle-model and --trajectory go with --sim");
+    }
+    if o.virtual_time && !o.mock && !o.sim {
         return usage("--virtual-time needs --mock (a real AAC runs in real time)");
     }
-    if o.scenario.is_some() && !o.mock {
+    if o.scenario.is_some() && !o.mock && !o.sim {
         return usage(
             "--scenario configures the in-process mock; use it with --mock (give it to `mcl mock-aac` otherwise)",
         );
@@ -430,6 +453,14 @@ pub fn run(o: Options) -> u8 {
     };
     let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
     let mut mock_seed = scenario.seed.unwrap_or(seed);
+    // The simulated vehicle's model and world, and the symbols they give.
+    let sim_setup = match o.sim.then(|| super::sim::load(&o)).transpose() {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    if let Some(s) = &sim_setup {
+        symbols.extend(s.symbols());
+    }
     symbols.extend(scenario.symbols.clone());
     symbols.extend(sets);
     if let Some(entries) = &resume_entries {
@@ -462,7 +493,7 @@ pub fn run(o: Options) -> u8 {
     };
     let mut sink =
         RunSink { trace, live: !o.quiet, verbose: o.verbose, quiet_replay: false, records: Vec::new(), error: None };
-    if o.mock {
+    if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
         for e in &errors {
             eprintln!("error: scenario: {e}");
@@ -470,6 +501,10 @@ pub fn run(o: Options) -> u8 {
         if !errors.is_empty() {
             return 2;
         }
+    }
+    let mut sim_vehicle = sim_setup.map(|s| s.vehicle(scenario.clone()));
+    if let Some(v) = &mut sim_vehicle {
+        mcl_runtime::vehicle::VirtualVehicle::initial(v);
     }
     let mut mock = MockVehicle::from_net(&net, scenario, mock_seed);
     mock.initial();
@@ -557,7 +592,9 @@ pub fn run(o: Options) -> u8 {
         None => mcl_runtime::link::Delivered::default(),
     };
     session.delivered = delivered.clone();
-    let result: Result<End, String> = if o.virtual_time {
+    let result: Result<End, String> = if let Some(v) = &mut sim_vehicle {
+        driver::run_virtual(&mut session, v, limits)
+    } else if o.virtual_time {
         driver::run_virtual(&mut session, &mut mock, limits)
     } else {
         let rt = match tokio::runtime::Builder::new_current_thread().enable_all().build() {
@@ -615,6 +652,17 @@ pub fn run(o: Options) -> u8 {
         Err(code) => return code,
     };
     let end_time = end.driver_time().unwrap_or(player_time);
+    if let (Some(v), Some(p)) = (&sim_vehicle, &o.trajectory) {
+        let title = format!(
+            "{} — mission `{}`, {} at t={end_time:.1} s",
+            o.file.display(),
+            chosen.name,
+            end.result().to_uppercase()
+        );
+        if let Err(code) = super::sim::write_trajectory(v, p, &title) {
+            return code;
+        }
+    }
     if let Some(e) = sink.error {
         eprintln!("error: {e}");
         return 2;

@@ -1,0 +1,756 @@
+//! A simulated vehicle: the [`VirtualVehicle`] that the virtual-time driver
+//! plays a mission against, instead of the mock. Sans-IO and deterministic.
+//!
+//! * **Actions.** An action whose command is one of its primitive's
+//!   `start` commands (`enable`) starts the primitive's behaviour with the
+//!   action's parameters (restarts it if it runs); a `stop` command
+//!   (`disable`) stops it and drops any answer of it not yet taken (an
+//!   aborted primitive says nothing, `docs/aac-protocol.md` §11). A
+//!   primitive the model does not know never answers (one warning).
+//! * **Time.** The simulation advances by the model's fixed step while a
+//!   behaviour runs ([`SimVehicle::next_deadline`] is then the next step);
+//!   `pop_due(now)` integrates up to `now` and returns what the step raised,
+//!   if anything. With nothing running the vehicle rests and has no deadline.
+//! * **Answers.** A behaviour that ends raises its primitive's `ok`, `fail`
+//!   (or `lost`) event, naming the action that started it (`activation`).
+//! * **Perceptions** (names from the model): the navigation quality (in
+//!   tenths), whether the cable is in sight (while submerged), the battery
+//!   charge (every 5 %), each sent when it changes.
+//! * **Poses:** one per `pose_period` while the vehicle moves, one at every
+//!   action and every event it raises.
+//! * **A scenario** (`--scenario`) applies on top: its `[[events]]` and
+//!   `[[perceptions]]` at fixed times are sent; a task rule with an
+//!   `outcome` ends the primitive that way after its delay (`never`: the
+//!   primitive does not end on its own).
+//!
+//! Several vehicles share one [`World`] (an `Arc`): each has its own
+//! `SimVehicle` (position, battery, navigation, cable progress).
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::sync::Arc;
+
+use mcl_runtime::link::{Action, Inbound};
+use mcl_runtime::scenario::{DelaySpec, OutcomeRule, Scenario};
+use mcl_runtime::vehicle::{Pose, VirtualVehicle};
+use serde_json::Value;
+
+use crate::behaviour::{los_surge, Args, Behaviour, Command, Ctx, End, Horizontal, Kind, SURFACE};
+use crate::model::{ArgSource, Model};
+use crate::world::World;
+
+/// A pose and the task that moved the vehicle there (an index in
+/// [`Track::labels`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Track {
+    pub points: Vec<(Pose, usize)>,
+    /// Task names (the first, `-`, for no task).
+    pub labels: Vec<String>,
+    /// Way-points given to the behaviours, in order.
+    pub waypoints: Vec<(f64, f64)>,
+}
+
+#[derive(Clone, Debug)]
+struct Run {
+    seq: u64,
+    primitive: String,
+    /// The task (or the primitive) that started it: the colour of the path.
+    label: String,
+    b: Behaviour,
+    /// A scenario's rule: end this way at this time (`Never`: do not end).
+    forced: Option<(f64, OutcomeRule)>,
+}
+
+#[derive(Clone, Debug)]
+struct Pending {
+    msg: Inbound,
+    /// The primitive whose answer this is.
+    owner: Option<String>,
+}
+
+/// A simulated vehicle. See the [module documentation](self).
+#[derive(Clone, Debug)]
+pub struct SimVehicle {
+    model: Arc<Model>,
+    world: Arc<World>,
+    scenario: Scenario,
+    t: f64,
+    x: f64,
+    y: f64,
+    z: f64,
+    yaw: f64,
+    energy_wh: f64,
+    nav_err: (f64, f64),
+    progress: f64,
+    running: Vec<Run>,
+    agenda: BTreeMap<(u64, u64), Pending>,
+    next_id: u64,
+    last_seq: u64,
+    poses: Vec<Pose>,
+    last_pose: Option<Pose>,
+    track: Track,
+    warnings: Vec<String>,
+    warned: HashSet<String>,
+    activations: HashMap<String, u32>,
+    sent_quality: Option<i64>,
+    sent_cable: Option<bool>,
+    sent_battery: Option<i64>,
+    initialised: bool,
+}
+
+fn key(t: f64, id: u64) -> (u64, u64) {
+    (t.max(0.0).to_bits(), id)
+}
+
+impl SimVehicle {
+    /// A vehicle of `model` at the world's start, with `scenario` on top.
+    pub fn new(model: Arc<Model>, world: Arc<World>, scenario: Scenario) -> SimVehicle {
+        let s = world.start;
+        let energy_wh = world.battery.capacity_wh * world.battery.initial;
+        SimVehicle {
+            model,
+            scenario,
+            t: 0.0,
+            x: s.x,
+            y: s.y,
+            z: s.z,
+            yaw: s.yaw,
+            energy_wh,
+            nav_err: (0.0, 0.0),
+            progress: 0.0,
+            running: Vec::new(),
+            agenda: BTreeMap::new(),
+            next_id: 0,
+            last_seq: 0,
+            poses: Vec::new(),
+            last_pose: None,
+            track: Track { labels: vec!["-".into()], ..Track::default() },
+            warnings: Vec::new(),
+            warned: HashSet::new(),
+            activations: HashMap::new(),
+            sent_quality: None,
+            sent_cable: None,
+            sent_battery: None,
+            initialised: false,
+            world,
+        }
+    }
+
+    /// The world it moves in.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Its path so far, for [`crate::trajectory::svg`].
+    pub fn track(&self) -> &Track {
+        &self.track
+    }
+
+    /// Its true pose now.
+    pub fn pose(&self) -> Pose {
+        Pose { t: self.t, x: self.x, y: self.y, z: self.z, yaw: self.yaw }
+    }
+
+    /// Battery charge, fraction of the capacity.
+    pub fn battery(&self) -> f64 {
+        self.energy_wh / self.world.battery.capacity_wh
+    }
+
+    fn warn_once(&mut self, w: String) {
+        if self.warned.insert(w.clone()) {
+            self.warnings.push(format!("sim: {w}"));
+        }
+    }
+
+    fn schedule(&mut self, t: f64, msg: Inbound, owner: Option<String>) {
+        self.next_id += 1;
+        self.agenda.insert(key(t, self.next_id), Pending { msg, owner });
+    }
+
+    fn ctx(&self) -> Ctx<'_> {
+        self.ctx_with(&self.world, &self.model)
+    }
+
+    /// The behaviours' view, borrowing the world and model given (clones
+    /// of the vehicle's `Arc`s) instead of the vehicle.
+    fn ctx_with<'a>(&self, world: &'a World, model: &'a Model) -> Ctx<'a> {
+        Ctx {
+            t: self.t,
+            x: self.x + self.nav_err.0,
+            y: self.y + self.nav_err.1,
+            z: self.z,
+            yaw: self.yaw,
+            seabed: self.world.seabed.depth_at(self.x, self.y),
+            battery: self.battery(),
+            nav_error: self.nav_err.0.hypot(self.nav_err.1),
+            err: self.nav_err,
+            world,
+            limits: &model.limits,
+        }
+    }
+
+    /// Records the pose now (at an action or an event), or when the period
+    /// has passed and the vehicle moved (`periodic`).
+    fn record_pose(&mut self, periodic: bool) {
+        let p = self.pose();
+        if let Some(last) = self.last_pose {
+            if p.t <= last.t + 1e-12 {
+                // Same instant: nothing moved.
+                return;
+            }
+            if periodic {
+                let moved =
+                    (p.x - last.x).abs() + (p.y - last.y).abs() + (p.z - last.z).abs() + (p.yaw - last.yaw).abs()
+                        > 1e-9;
+                if p.t - last.t < self.model.limits.pose_period - 1e-9 || !moved {
+                    return;
+                }
+            }
+        }
+        let label = self.motion_label();
+        self.poses.push(p);
+        self.track.points.push((p, label));
+        self.last_pose = Some(p);
+    }
+
+    /// The task that moves the vehicle now: the owner of the horizontal
+    /// set-point, else of the vertical one.
+    fn motion_label(&mut self) -> usize {
+        let ctx = self.ctx();
+        let mut best: Option<(u8, usize, bool)> = None;
+        for (i, r) in self.running.iter().enumerate() {
+            let c = r.b.command(&ctx);
+            let cand = c.horizontal.map(|h| (h.0, true)).or(c.vertical.map(|v| (v.0, false)));
+            if let Some((p, h)) = cand {
+                let better = match best {
+                    None => true,
+                    Some((bp, _, bh)) => (h, p) >= (bh, bp),
+                };
+                if better {
+                    best = Some((p, i, h));
+                }
+            }
+        }
+        let Some((_, i, _)) = best else { return 0 };
+        let name = self.running[i].label.clone();
+        match self.track.labels.iter().position(|l| *l == name) {
+            Some(k) => k,
+            None => {
+                self.track.labels.push(name);
+                self.track.labels.len() - 1
+            }
+        }
+    }
+
+    /// Ends run `i` with `end`: raises its event now.
+    fn end_run(&mut self, i: usize, end: End) {
+        let r = self.running.remove(i);
+        let pm = &self.model.primitives[&r.primitive];
+        let (event, what) = match &end {
+            End::Ok => (pm.ok.clone(), "ok".to_string()),
+            End::Fail(why) => (pm.fail.clone(), format!("fail ({why})")),
+            End::Lost => (pm.lost.clone().or(pm.fail.clone()), "lost (the cable is out of sight)".to_string()),
+        };
+        if r.b.is_fix() && end == End::Ok {
+            self.nav_err = (0.0, 0.0);
+        }
+        match event {
+            Some(event) => {
+                self.schedule(
+                    self.t,
+                    Inbound::Event { event, activation: Some(r.seq), n: None },
+                    Some(r.primitive.clone()),
+                );
+            }
+            None => self.warn_once(format!(
+                "primitive `{}` ended {what} but the vehicle model names no event for that",
+                r.primitive
+            )),
+        }
+        self.record_pose(false);
+    }
+
+    /// One integration step of `dt` seconds, then the behaviours' checks
+    /// and the perceptions.
+    fn step(&mut self, dt: f64) {
+        let ctx = self.ctx();
+        let mut cmd = Command::default();
+        // The owner of each degree of freedom: highest priority, then the latest started.
+        for r in &self.running {
+            let c = r.b.command(&ctx);
+            if c.horizontal.is_some() && c.horizontal.map(|h| h.0) >= cmd.horizontal.map(|h| h.0) {
+                cmd.horizontal = c.horizontal;
+            }
+            if c.vertical.is_some() && c.vertical.map(|v| v.0) >= cmd.vertical.map(|v| v.0) {
+                cmd.vertical = c.vertical;
+            }
+            if c.yaw.is_some() && c.yaw.map(|v| v.0) >= cmd.yaw.map(|v| v.0) {
+                cmd.yaw = c.yaw;
+            }
+        }
+        let l = self.model.limits;
+        let (ex, ey) = self.nav_err;
+        // Set-points are in the navigation's frame: the true target is off by its error.
+        let (mut vx, mut vy) = self.world.current;
+        let mut desired_yaw = cmd.yaw.map(|y| y.1);
+        match cmd.horizontal.map(|h| h.1) {
+            Some(Horizontal::Los { x, y, speed }) => {
+                let (dx, dy) = (x - ex - self.x, y - ey - self.y);
+                let d = dx.hypot(dy);
+                if d > 1e-6 {
+                    desired_yaw = Some(dy.atan2(dx));
+                    let s = los_surge(self.yaw, dx, dy, speed).min(d / dt);
+                    vx += s * self.yaw.cos();
+                    vy += s * self.yaw.sin();
+                }
+            }
+            Some(Horizontal::Holonomic { x, y, speed }) => {
+                // The controller cancels the current.
+                let (dx, dy) = (x - ex - self.x, y - ey - self.y);
+                let d = dx.hypot(dy);
+                let s = speed.min(d / dt);
+                (vx, vy) = if d > 1e-9 { (s * dx / d, s * dy / d) } else { (0.0, 0.0) };
+            }
+            Some(Horizontal::Stop) | None => {}
+        }
+        if let Some(want) = desired_yaw {
+            let e = crate::behaviour::wrap(want - self.yaw);
+            let m = l.turn_rate * dt;
+            self.yaw = crate::behaviour::wrap(self.yaw + e.clamp(-m, m));
+        }
+        let (ox, oy, oz) = (self.x, self.y, self.z);
+        self.x += vx * dt;
+        self.y += vy * dt;
+        if let Some((_, zt, speed)) = cmd.vertical {
+            let m = speed * dt;
+            self.z += (zt - self.z).clamp(-m, m);
+        }
+        self.z = self.z.clamp(0.0, self.world.seabed.depth_at(self.x, self.y));
+        // Energy: hotel load plus distance through the water (the current's drift costs nothing).
+        let (cx, cy) = self.world.current;
+        let through_water = (self.x - ox - cx * dt).hypot(self.y - oy - cy * dt).hypot(self.z - oz);
+        let b = self.world.battery;
+        self.energy_wh = (self.energy_wh - (b.hotel_w * dt + b.per_metre_j * through_water) / 3600.0).max(0.0);
+        let n = self.world.navigation;
+        if self.z > SURFACE && n.drift > 0.0 {
+            self.nav_err.0 += n.drift * dt * n.direction.cos();
+            self.nav_err.1 += n.drift * dt * n.direction.sin();
+        }
+        self.t += dt;
+        self.check_runs();
+        self.perceptions();
+        self.record_pose(true);
+    }
+
+    fn check_runs(&mut self) {
+        let (world, model) = (Arc::clone(&self.world), Arc::clone(&self.model));
+        let mut i = 0;
+        while i < self.running.len() {
+            let ctx = self.ctx_with(&world, &model);
+            let mut progress = self.progress;
+            let forced = self.running[i].forced;
+            let end = match forced {
+                Some((at, OutcomeRule::Ok)) if self.t >= at - 1e-9 => Some(End::Ok),
+                Some((at, OutcomeRule::Fail)) if self.t >= at - 1e-9 => {
+                    Some(End::Fail("the scenario makes it fail".into()))
+                }
+                Some((_, OutcomeRule::Never)) => None,
+                _ => self.running[i].b.check(&ctx, &mut progress),
+            };
+            self.progress = progress;
+            match end {
+                Some(e) => self.end_run(i, e),
+                None => i += 1,
+            }
+        }
+    }
+
+    fn perceptions(&mut self) {
+        let (world, model) = (Arc::clone(&self.world), Arc::clone(&self.model));
+        let p = model.perceptions.clone();
+        let ctx = self.ctx_with(&world, &model);
+        let (tx, ty) = ctx.true_pos();
+        if let Some(name) = p.position_quality {
+            let q = ((1.0 - ctx.nav_error / self.world.navigation.bound).max(0.0) * 10.0).round() as i64;
+            if self.sent_quality != Some(q) {
+                self.sent_quality = Some(q);
+                self.schedule(self.t, Inbound::Perception { name, value: Value::from(q as f64 / 10.0), n: None }, None);
+            }
+        }
+        if let (Some(name), Some(c)) = (p.cable_seen, &self.world.cable) {
+            let seen = ctx.z > SURFACE && ctx.seabed - ctx.z <= c.max_altitude && c.visible_near(tx, ty, 0.0).is_some();
+            if self.sent_cable != Some(seen) && (seen || self.sent_cable.is_some()) {
+                self.sent_cable = Some(seen);
+                self.schedule(self.t, Inbound::Perception { name, value: Value::Bool(seen), n: None }, None);
+            }
+        }
+        if let Some(name) = p.battery {
+            let b = (self.battery() * 20.0).ceil() as i64;
+            if self.sent_battery != Some(b) {
+                self.sent_battery = Some(b);
+                self.schedule(self.t, Inbound::Perception { name, value: Value::from(b as f64 / 20.0), n: None }, None);
+            }
+        }
+    }
+
+    /// Integrates up to `to`, by steps; with `stop_early`, stops after a
+    /// step that raised an event or a perception.
+    fn advance(&mut self, to: f64, stop_early: bool) {
+        let step = self.model.limits.step;
+        while self.t < to - 1e-9 {
+            if self.running.is_empty() {
+                // At rest: nothing changes but the clock and the hotel load.
+                let dt = to - self.t;
+                self.energy_wh = (self.energy_wh - self.world.battery.hotel_w * dt / 3600.0).max(0.0);
+                self.t = to;
+                break;
+            }
+            let before = self.agenda.len();
+            self.step(step.min(to - self.t));
+            if stop_early && self.agenda.len() > before {
+                break;
+            }
+        }
+    }
+
+    fn start(&mut self, now: f64, a: &Action) {
+        let Some(pm) = self.model.primitives.get(&a.primitive).cloned() else {
+            self.warn_once(format!(
+                "the vehicle model has no primitive `{}`: `{}` does nothing and the primitive never answers",
+                a.primitive, a.action
+            ));
+            return;
+        };
+        let label = a.task.clone().unwrap_or_else(|| a.primitive.clone());
+        if pm.stop.contains(&a.command) {
+            self.running.retain(|r| r.primitive != a.primitive);
+            self.agenda.retain(|_, p| p.owner.as_deref() != Some(a.primitive.as_str()));
+            return;
+        }
+        if !pm.start.contains(&a.command) {
+            self.warn_once(format!(
+                "primitive `{}`: the vehicle model neither starts nor stops it on command `{}` (ignored)",
+                a.primitive, a.command
+            ));
+            return;
+        }
+        // (Re)start.
+        self.running.retain(|r| r.primitive != a.primitive);
+        self.agenda.retain(|_, p| p.owner.as_deref() != Some(a.primitive.as_str()));
+        let mut args = Args::default();
+        for (name, src) in &pm.args {
+            let v = match src {
+                ArgSource::Value(v) => Some(v.clone()),
+                ArgSource::Param(p) => match a.params.get(p) {
+                    Some(v) => Some(resolve(v, &self.model.symbols, &self.world.symbols)),
+                    None => {
+                        self.warn_once(format!(
+                            "primitive `{}`: action `{}` has no parameter `{p}` (behaviour argument `{name}`)",
+                            a.primitive, a.action
+                        ));
+                        None
+                    }
+                },
+            };
+            if let Some(v) = v {
+                args.values.insert(name.clone(), v);
+            }
+        }
+        let mut warn = Vec::new();
+        let started = Behaviour::start(pm.behaviour, &args, &self.ctx(), self.progress, &mut warn);
+        for w in warn {
+            self.warn_once(format!("primitive `{}` ({}): {w}", a.primitive, pm.behaviour.name()));
+        }
+        let forced = self.forced(&label, now);
+        match started {
+            Ok(b) => {
+                self.track.waypoints.extend(&b.waypoints);
+                self.running.push(Run { seq: a.seq, primitive: a.primitive.clone(), label, b, forced });
+            }
+            Err(end) => {
+                // Ends at once: as if it had run for no time.
+                let b = Behaviour::start(Kind::Forever, &Args::default(), &self.ctx(), 0.0, &mut Vec::new())
+                    .expect("forever always starts");
+                self.running.push(Run { seq: a.seq, primitive: a.primitive.clone(), label, b, forced: None });
+                let i = self.running.len() - 1;
+                self.end_run(i, end);
+            }
+        }
+    }
+
+    /// The scenario's rule for the next activation of `task`.
+    fn forced(&mut self, task: &str, now: f64) -> Option<(f64, OutcomeRule)> {
+        let n = self.activations.entry(task.to_string()).or_insert(0);
+        *n += 1;
+        let tr = self.scenario.tasks.get(task)?;
+        let rule = tr.activation.get(&mcl_runtime::scenario::Activation(*n)).cloned().unwrap_or_else(|| tr.base());
+        let outcome = rule.outcome.or(tr.outcome)?;
+        let delay = match rule.delay.or(tr.delay) {
+            Some(DelaySpec::Fixed(d)) => d,
+            Some(DelaySpec::Range(lo, _)) => lo,
+            None => self.scenario.default_duration.unwrap_or(mcl_runtime::mock::DEFAULT_DURATION),
+        };
+        Some((now + delay, outcome))
+    }
+}
+
+/// A parameter that names a symbol takes the symbol's value (the world's
+/// over the model's); the player has already resolved `--set` and the
+/// scenario's symbols.
+fn resolve(v: &Value, model: &BTreeMap<String, Value>, world: &BTreeMap<String, Value>) -> Value {
+    match v {
+        Value::String(s) => world.get(s).or_else(|| model.get(s)).cloned().unwrap_or_else(|| v.clone()),
+        _ => v.clone(),
+    }
+}
+
+impl VirtualVehicle for SimVehicle {
+    fn initial(&mut self) -> Vec<(f64, Inbound)> {
+        if self.initialised {
+            return Vec::new();
+        }
+        self.initialised = true;
+        self.record_pose(false);
+        let mut out: Vec<(f64, Inbound)> = Vec::new();
+        for e in &self.scenario.events {
+            out.push((e.at, Inbound::Event { event: e.event.clone(), activation: None, n: None }));
+        }
+        for p in self.scenario.perceptions.clone() {
+            match p.at {
+                Some(at) => out.push((at, Inbound::Perception { name: p.name, value: p.value, n: None })),
+                None => self.warn_once(format!(
+                    "the scenario's perception `{}` after an event is not sent in the simulator (only those `at` a time)",
+                    p.name
+                )),
+            }
+        }
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (t, m) in &out {
+            self.schedule(*t, m.clone(), None);
+        }
+        out
+    }
+
+    fn on_action(&mut self, now: f64, a: &Action) {
+        if a.seq <= self.last_seq {
+            return;
+        }
+        self.last_seq = a.seq;
+        self.advance(now, false);
+        self.start(now, a);
+        self.record_pose(false);
+    }
+
+    fn next_deadline(&self) -> Option<f64> {
+        let due = self.agenda.keys().next().map(|&(k, _)| f64::from_bits(k));
+        let step = (!self.running.is_empty()).then(|| {
+            let forced = self.running.iter().filter_map(|r| r.forced).filter(|f| f.1 != OutcomeRule::Never);
+            forced.map(|f| f.0.max(self.t)).fold(self.t + self.model.limits.step, f64::min)
+        });
+        match (due, step) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn pop_due(&mut self, now: f64) -> Option<(f64, Inbound)> {
+        let first = self.agenda.keys().next().map(|&(k, _)| f64::from_bits(k));
+        let target = match first {
+            Some(f) if f <= now => f,
+            _ => now,
+        };
+        if target > self.t {
+            self.advance(target, true);
+        }
+        let (&k, _) = self.agenda.iter().next()?;
+        let t = f64::from_bits(k.0);
+        if t > now {
+            return None;
+        }
+        let p = self.agenda.remove(&k)?;
+        Some((t, p.msg))
+    }
+
+    fn take_delivered(&mut self, msg: &Inbound) -> bool {
+        let Some(k) = self.agenda.iter().find(|(_, p)| &p.msg == msg).map(|(k, _)| *k) else { return false };
+        self.agenda.remove(&k);
+        true
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
+    }
+
+    fn take_poses(&mut self) -> Vec<Pose> {
+        std::mem::take(&mut self.poses)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::{json, Map};
+
+    fn action(seq: u64, name: &str, primitive: &str, command: &str, params: Value) -> Action {
+        let params: Map<String, Value> = serde_json::from_value(params).unwrap();
+        Action {
+            seq,
+            action: name.into(),
+            primitive: primitive.into(),
+            command: command.into(),
+            params,
+            task: None,
+            call_site: None,
+        }
+    }
+
+    /// Runs the vehicle alone until it sends something or `until`.
+    fn run_until(v: &mut SimVehicle, until: f64) -> Option<(f64, Inbound)> {
+        while let Some(d) = v.next_deadline() {
+            if d > until {
+                return None;
+            }
+            if let Some(m) = v.pop_due(d) {
+                return Some(m);
+            }
+        }
+        None
+    }
+
+    fn vehicle(world: &str) -> SimVehicle {
+        SimVehicle::new(
+            Arc::new(Model::default_model()),
+            Arc::new(World::from_toml(world, "w").unwrap()),
+            Scenario::default(),
+        )
+    }
+
+    fn event(m: Option<(f64, Inbound)>) -> (f64, String) {
+        match m {
+            Some((t, Inbound::Event { event, .. })) => (t, event),
+            other => panic!("expected an event, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn goto_takes_distance_over_speed_and_answers_its_activation() {
+        let mut v = vehicle("");
+        v.initial();
+        v.on_action(0.0, &action(1, "enableGoto", "GotoPrimitive", "enable", json!({"way-point": [50, 0]})));
+        let (t, e) = loop {
+            match run_until(&mut v, 1000.0) {
+                Some((t, Inbound::Event { event, activation, .. })) => {
+                    assert_eq!(activation, Some(1));
+                    break (t, event);
+                }
+                Some(_) => continue, // perceptions
+                None => panic!("no answer"),
+            }
+        };
+        assert_eq!(e, "eventGotoOk");
+        // 49 m (1 m tolerance) at the bundled model's 1 m/s top speed.
+        assert!((t - 49.0).abs() < 0.5, "t = {t}");
+        let poses = v.take_poses();
+        assert!(poses.len() >= 49, "{}", poses.len());
+        assert!(poses.windows(2).all(|w| w[1].t > w[0].t && w[1].t - w[0].t <= 1.0 + 1e-9));
+        assert_eq!(v.next_deadline(), None, "at rest, nothing scheduled");
+    }
+
+    #[test]
+    fn disable_stops_and_silences_the_primitive() {
+        let mut v = vehicle("");
+        v.initial();
+        v.on_action(
+            0.0,
+            &action(1, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 10, "mode": "achieve"})),
+        );
+        let _ = run_until(&mut v, 5.0);
+        v.on_action(5.0, &action(2, "disableDepth", "DepthPrimitive", "disable", json!({})));
+        let z = v.pose().z;
+        assert!(z > 0.0 && z < 10.0);
+        while let Some(m) = run_until(&mut v, 100.0) {
+            assert!(!matches!(m.1, Inbound::Event { .. }), "{m:?}");
+        }
+        assert_eq!(v.pose().z, z, "nothing moves it any more");
+    }
+
+    #[test]
+    fn unreachable_depth_fails_at_once() {
+        let mut v = vehicle("[seabed]\ndepth = 8\n");
+        v.initial();
+        v.on_action(3.0, &action(1, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 10, "mode": "keep"})));
+        assert_eq!(event(v.pop_due(3.0)), (3.0, "eventDepthFail".into()));
+    }
+
+    #[test]
+    fn battery_alarm_at_the_predicted_time() {
+        // 10 Wh, alarm at 50 %: 5 Wh at 100 W of hotel load is 180 s at rest.
+        let mut v = vehicle("[battery]\ncapacity = 10\nhotel = 100\nper_metre = 0\nalarm_below = 0.5\n");
+        v.initial();
+        v.on_action(0.0, &action(1, "enableAlarm", "AlarmPrimitive", "enable", json!({})));
+        let e = loop {
+            match run_until(&mut v, 1000.0) {
+                Some((t, Inbound::Event { event, .. })) => break (t, event),
+                Some(_) => continue,
+                None => panic!("no alarm"),
+            }
+        };
+        assert_eq!(e.1, "eventAlarmOk");
+        assert!((e.0 - 180.0).abs() < 0.11, "{}", e.0);
+    }
+
+    #[test]
+    fn unknown_primitive_warns_once() {
+        let mut v = vehicle("");
+        v.on_action(0.0, &action(1, "enableX", "XPrimitive", "enable", json!({})));
+        v.on_action(1.0, &action(2, "enableX", "XPrimitive", "enable", json!({})));
+        let w = v.take_warnings();
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("XPrimitive"));
+        assert_eq!(v.next_deadline(), None);
+    }
+
+    #[test]
+    fn navigation_drifts_and_a_fix_resets_it() {
+        let mut v = vehicle("[navigation]\ndrift = 0.1\nbound = 3\n");
+        v.initial();
+        v.on_action(0.0, &action(1, "enableInvalidPositioning", "InvalidPositioningPrimitive", "enable", json!({})));
+        v.on_action(0.0, &action(2, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 5, "mode": "keep"})));
+        let mut got = None;
+        while let Some(m) = run_until(&mut v, 1000.0) {
+            if let (t, Inbound::Event { event, .. }) = m {
+                got = Some((t, event));
+                break;
+            }
+        }
+        let (t, e) = got.expect("invalid positioning");
+        assert_eq!(e, "eventInvalidPositioningOk");
+        // Submerged after ~0.7 s (0.2 m at 0.3 m/s), then 3 m at 0.1 m/s.
+        assert!((t - 30.7).abs() < 0.3, "{t}");
+        v.on_action(t, &action(3, "disableDepth", "DepthPrimitive", "disable", json!({})));
+        v.on_action(t, &action(4, "enableSurface", "SurfacePrimitive", "enable", json!({})));
+        assert_eq!(
+            event(loop {
+                match run_until(&mut v, 1000.0) {
+                    Some(m @ (_, Inbound::Event { .. })) => break Some(m),
+                    Some(_) => continue,
+                    None => break None,
+                }
+            })
+            .1,
+            "eventSurfaceOk"
+        );
+        let t = v.pose().t;
+        v.on_action(t, &action(5, "enableGetPositionFix", "GetPositionFixPrimitive", "enable", json!({})));
+        loop {
+            match run_until(&mut v, 1000.0) {
+                Some((_, Inbound::Event { event, .. })) => {
+                    assert_eq!(event, "eventGetPositionFixOk");
+                    break;
+                }
+                Some(_) => continue,
+                None => panic!("no fix"),
+            }
+        }
+        assert_eq!(v.nav_err, (0.0, 0.0));
+    }
+}

@@ -1,0 +1,297 @@
+//! `mcl run --sim`, end to end through the binary: the seed's missions
+//! against the simulated vehicle (crate `mcl-sim`), checked on the poses
+//! and events of the trace.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mcl-sim-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn mcl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mcl")).args(args).current_dir(root()).output().expect("run mcl")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn trace(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("bad trace line {l}: {e}")))
+        .collect()
+}
+
+/// Runs `mcl run --sim --virtual-time FILE extra...` and returns (exit
+/// status, trace, output).
+fn sim(file: &str, extra: &[&str], name: &str) -> (i32, Vec<Value>, Output) {
+    let tp = tmp(&format!("{name}.jsonl"));
+    let mut args = vec!["run", "--sim", "--virtual-time", "-q", file, "--trace", tp.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = mcl(&args);
+    let code = o.status.code().unwrap_or(-1);
+    let tr = if tp.exists() { trace(&tp) } else { Vec::new() };
+    (code, tr, o)
+}
+
+#[derive(Clone, Copy, Debug)]
+struct P {
+    t: f64,
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+fn poses(tr: &[Value]) -> Vec<P> {
+    tr.iter()
+        .filter(|r| r["kind"] == "pose")
+        .map(|r| P {
+            t: r["t"].as_f64().unwrap(),
+            x: r["x"].as_f64().unwrap(),
+            y: r["y"].as_f64().unwrap(),
+            z: r["z"].as_f64().unwrap(),
+        })
+        .collect()
+}
+
+/// Times of the records of `kind` whose `field` is `value`.
+fn times(tr: &[Value], kind: &str, field: &str, value: &str) -> Vec<f64> {
+    tr.iter().filter(|r| r["kind"] == kind && r[field] == value).map(|r| r["t"].as_f64().unwrap()).collect()
+}
+
+fn outcome(tr: &[Value]) -> &Value {
+    let o: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "outcome").collect();
+    assert_eq!(o.len(), 1, "one outcome record");
+    o[0]
+}
+
+/// The pose at (or last before) `t`.
+fn pose_at(ps: &[P], t: f64) -> P {
+    *ps.iter().rev().find(|p| p.t <= t + 1e-9).expect("a pose before t")
+}
+
+const SURVEY_PATH: [(f64, f64); 10] = [
+    (0.0, 0.0),
+    (20.0, 0.0),
+    (20.0, 5.0),
+    (0.0, 5.0),
+    (0.0, 10.0),
+    (20.0, 10.0),
+    (20.0, 15.0),
+    (0.0, 15.0),
+    (0.0, 20.0),
+    (20.0, 20.0),
+];
+
+#[test]
+fn survey_passes_every_way_point_in_order_in_the_time_its_length_takes() {
+    let svg = tmp("survey.svg");
+    let (code, tr, o) = sim("examples/survey.mcl", &["--trajectory", svg.to_str().unwrap()], "survey");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    assert_eq!(outcome(&tr)["result"], "ok");
+    let ps = poses(&tr);
+    let t0 = times(&tr, "action", "action", "enableTrajectory")[0];
+    let t1 = times(&tr, "event", "event", "eventTrajectoryOk")[0];
+    // Every way-point, in order, within 2 m.
+    let mut from = ps.iter().position(|p| p.t >= t0).unwrap();
+    for (k, &(wx, wy)) in SURVEY_PATH.iter().enumerate() {
+        let i = ps[from..]
+            .iter()
+            .position(|p| p.t <= t1 + 1e-9 && (p.x - wx).hypot(p.y - wy) <= 2.0)
+            .unwrap_or_else(|| panic!("way-point {} ({wx}, {wy}) not passed within 2 m after t={}", k + 1, ps[from].t));
+        from += i;
+    }
+    // Path length over speed: 120 m at 0.5 m/s.
+    let length: f64 = SURVEY_PATH.windows(2).map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1)).sum();
+    let expected = length / 0.5;
+    assert!(((t1 - t0) - expected).abs() <= 0.1 * expected, "trajectory took {} s, expected {expected} s", t1 - t0);
+    // Kept at 2.5 m over the 20 m seabed while surveying; at the surface at the end.
+    let mid = pose_at(&ps, (t0 + t1) / 2.0);
+    assert!((mid.z - 17.5).abs() < 0.3, "{mid:?}");
+    assert!(ps.last().unwrap().z <= 0.2);
+    // At least a pose per second while moving, and one at every action and event.
+    assert!(ps.windows(2).all(|w| w[1].t > w[0].t), "poses in time order");
+    for w in ps.windows(2).filter(|w| w[0].t >= t0 && w[1].t <= t1) {
+        assert!(w[1].t - w[0].t <= 1.0 + 1e-6, "gap {} -> {}", w[0].t, w[1].t);
+    }
+    for r in tr.iter().filter(|r| r["kind"] == "action" || r["kind"] == "event") {
+        let t = r["t"].as_f64().unwrap();
+        assert!(ps.iter().any(|p| (p.t - t).abs() < 1e-6), "no pose at t={t} ({r})");
+    }
+    // The picture is well-formed XML with the task names in its legend.
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&doc);
+    assert!(doc.contains(">Trajectory<") && doc.contains(">Altitude<"), "legend");
+}
+
+fn well_formed(doc: &str) {
+    let mut r = quick_xml::Reader::from_str(doc);
+    let mut depth = 0i32;
+    loop {
+        match r.read_event() {
+            Ok(quick_xml::events::Event::Start(_)) => depth += 1,
+            Ok(quick_xml::events::Event::End(_)) => depth -= 1,
+            Ok(quick_xml::events::Event::Eof) => break,
+            Ok(_) => {}
+            Err(e) => panic!("SVG is not well-formed at {}: {e}", r.buffer_position()),
+        }
+    }
+    assert_eq!(depth, 0);
+}
+
+#[test]
+fn survey_is_deterministic() {
+    let (_, a, _) = sim("examples/survey.mcl", &["--seed", "3"], "det-a");
+    let (_, b, _) = sim("examples/survey.mcl", &["--seed", "3"], "det-b");
+    assert!(a.len() > 300);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn low_battery_ends_the_survey_through_the_emergency_surface_when_the_model_says() {
+    let (code, tr, o) = sim("examples/survey.mcl", &["--world", "examples/sim/survey-low-battery.toml"], "battery");
+    let out = outcome(&tr);
+    assert!(out["via"].as_str().is_some_and(|v| v.contains("condition")), "{out} {}", text(&o.stderr));
+    assert_eq!(code, if out["result"] == "ok" { 0 } else { 1 });
+    let alarm = times(&tr, "event", "event", "eventAlarmOk");
+    assert_eq!(alarm.len(), 1);
+    let t = alarm[0];
+    // The battery model: 50 W of hotel load plus 100 J per metre, from
+    // 10 Wh down to the alarm at 5 Wh (25 % of 20 Wh): 18 kJ.
+    let ps = poses(&tr);
+    let travelled: f64 = ps
+        .windows(2)
+        .filter(|w| w[1].t <= t + 1e-9)
+        .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y).hypot(w[1].z - w[0].z))
+        .sum();
+    let used = 50.0 * t + 100.0 * travelled;
+    assert!((used - 18_000.0).abs() < 0.01 * 18_000.0, "alarm at t={t} s after {travelled} m: {used} J used");
+    // During the trajectory, then straight up.
+    let traj = times(&tr, "action", "action", "enableTrajectory")[0];
+    assert!(t > traj && times(&tr, "event", "event", "eventTrajectoryOk").is_empty());
+    let es = times(&tr, "action", "action", "enableEmergencySurface");
+    assert_eq!(es, vec![t]);
+    let up = times(&tr, "event", "event", "eventEmergencySurfaceOk");
+    assert_eq!(up.len(), 1);
+    let before = pose_at(&ps, t);
+    assert!((up[0] - t - before.z / 1.0).abs() < 0.4, "17.5 m at 1 m/s: {} s", up[0] - t);
+    let last = ps.last().unwrap();
+    assert!(last.z <= 0.2 && (last.x - before.x).hypot(last.y - before.y) < 0.5, "{last:?} {before:?}");
+}
+
+#[test]
+fn cable_tracking_loses_the_cable_where_it_is_buried_and_finds_it_again() {
+    let svg = tmp("cable.svg");
+    let (code, tr, o) = sim(
+        "examples/cable-tracking.mcl",
+        &["--world", "examples/sim/cable.toml", "--trajectory", svg.to_str().unwrap()],
+        "cable",
+    );
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    assert_eq!(outcome(&tr)["result"], "ok");
+    // Ended through the search loop's condition (the last handler it went
+    // through), neither the catch nor the alarm.
+    let via = outcome(&tr)["via"].as_str().unwrap_or("").to_string();
+    assert!(!via.contains("catch") && times(&tr, "action", "action", "enableEmergencySurface").is_empty(), "{via}");
+    let found = times(&tr, "event", "event", "eventSearchOk");
+    let ended = times(&tr, "event", "event", "eventCableTrackingOk");
+    assert_eq!(found.len(), 2, "found twice: {found:?}");
+    assert_eq!(ended.len(), 2, "lost, then at its end: {ended:?}");
+    assert!(found[0] < ended[0] && ended[0] < found[1] && found[1] < ended[1]);
+    // Lost where the buried section starts (50 m along the cable, near (74.5, 3.2)).
+    let ps = poses(&tr);
+    let lost = pose_at(&ps, ended[0]);
+    assert!((lost.x - 74.5).hypot(lost.y - 3.2) < 3.0, "{lost:?}");
+    // Found again past its end (65 m along, near (89.4, 1.3)), ended at the cable's end (140, 10).
+    let again = pose_at(&ps, found[1]);
+    assert!(again.x > 86.0, "{again:?}");
+    let end = pose_at(&ps, ended[1]);
+    assert!((end.x - 140.0).hypot(end.y - 10.0) < 3.0, "{end:?}");
+    // The simulation told the mission when the cable came into and out of sight.
+    let seen: Vec<(f64, bool)> = tr
+        .iter()
+        .filter(|r| r["kind"] == "perception" && r["name"] == "cable.seen")
+        .map(|r| (r["t"].as_f64().unwrap(), r["value"].as_bool().unwrap()))
+        .collect();
+    assert!(seen.iter().any(|&(t, v)| !v && t >= ended[0] - 1.0 && t <= found[1]), "{seen:?}");
+    well_formed(&std::fs::read_to_string(&svg).unwrap());
+}
+
+#[test]
+fn dam_inspection_flies_the_wall_path_facing_the_wall() {
+    let (code, tr, o) = sim("examples/dam-inspection.mcl", &["--world", "examples/sim/dam.toml"], "dam");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    assert_eq!(outcome(&tr)["result"], "ok");
+    let t = times(&tr, "event", "event", "eventWallInspectionOk");
+    assert_eq!(t.len(), 1);
+    // Its last way-point: 4 m along the wall, 5 m deep, 1.5 m in front of it (y = -8.5).
+    let p = pose_at(&poses(&tr), t[0]);
+    assert!((p.x - 4.0).abs() < 0.4 && (p.y + 8.5).abs() < 0.4 && (p.z - 5.0).abs() < 0.4, "{p:?}");
+    let yaw = tr.iter().rev().find(|r| r["kind"] == "pose" && r["t"].as_f64().unwrap() <= t[0]).unwrap()["yaw"]
+        .as_f64()
+        .unwrap();
+    assert!((yaw + std::f64::consts::FRAC_PI_2).abs() < 0.05, "facing the wall: {yaw}");
+}
+
+#[test]
+fn another_vehicle_file_runs_on_its_own_model() {
+    let (code, tr, o) = sim(
+        "examples/sim/rov-inspection.mcl",
+        &["--vehicle-model", "examples/sim/rov-model.toml", "--world", "examples/sim/rov-world.toml"],
+        "rov",
+    );
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let spotted = times(&tr, "event", "event", "spotted");
+    assert_eq!(spotted.len(), 1);
+    let p = pose_at(&poses(&tr), spotted[0]);
+    assert!((p.x - 31.0).hypot(p.y - 25.0) <= 4.0 + 0.1, "{p:?}");
+    assert_eq!(times(&tr, "event", "event", "surfaced").len(), 1);
+    assert!(tr.iter().any(|r| r["kind"] == "perception" && r["name"] == "power"));
+}
+
+#[test]
+fn scenario_faults_apply_on_top_of_the_simulation() {
+    let sc = tmp("fault.toml");
+    std::fs::write(&sc, "[tasks.Trajectory]\noutcome = \"fail\"\ndelay = 30\n").unwrap();
+    let (code, tr, o) = sim("examples/survey.mcl", &["--scenario", sc.to_str().unwrap()], "fault");
+    let traj = times(&tr, "action", "action", "enableTrajectory")[0];
+    let fail = times(&tr, "event", "event", "eventTrajectoryFail");
+    assert_eq!(fail.len(), 1, "{}", text(&o.stderr));
+    assert!((fail[0] - traj - 30.0).abs() < 1e-3, "{fail:?} {traj}");
+    assert!(outcome(&tr)["via"].as_str().is_some_and(|v| v.contains("catch")));
+    assert_eq!(code, 0);
+}
+
+#[test]
+fn bad_world_and_model_files_are_located_errors() {
+    let w = tmp("bad-world.toml");
+    std::fs::write(&w, "[seabed]\ndepth = 20\n\n[cable]\npoints = [[0, 0], [10, 0]]\nburied = [[5, 40]]\n").unwrap();
+    let o = mcl(&["run", "--sim", "--virtual-time", "examples/survey.mcl", "--world", w.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = text(&o.stderr);
+    assert!(e.contains(&format!("{}:6:11:", w.display())) && e.contains("buried"), "{e}");
+
+    let m = tmp("bad-model.toml");
+    std::fs::write(&m, "[primitives.GotoPrimitive]\nbehaviour = \"goto\"\nparams = { traget = \"way-point\" }\n")
+        .unwrap();
+    let o = mcl(&["run", "--sim", "--virtual-time", "examples/survey.mcl", "--vehicle-model", m.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = text(&o.stderr);
+    assert!(e.contains(&format!("{}:3:12:", m.display())) && e.contains("traget"), "{e}");
+
+    let o = mcl(&["run", "--sim", "examples/survey.mcl"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("--virtual-time"));
+    let o = mcl(&["run", "--mock", "--virtual-time", "examples/survey.mcl", "--world", w.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+}
