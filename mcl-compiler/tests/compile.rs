@@ -73,57 +73,52 @@ fn print_state_counts() {
     }
 }
 
-/// Runs a net with the MCL rule: immediate transitions to quiescence, then
-/// deferred (zero-delay) ones, then the next scripted event. Returns the
-/// actions sent, with task parameters resolved from the current call.
+/// Runs a net on the firing engine (immediate transitions to quiescence,
+/// then deferred (zero-delay) ones, then the next scripted event). Returns
+/// the actions sent, with task parameters resolved from the current call.
 fn run(net: &mcl_net::Net, seed: u64, mut events: impl FnMut(&[String]) -> Option<String>) -> (Vec<String>, String) {
-    use mcl_net::{Delay, Executor, TransitionKind};
+    use mcl_net::engine::{Engine, Hooks, View};
     use std::collections::HashMap;
-    let mut ex = Executor::new(net, seed);
-    let mut sent: Vec<String> = Vec::new();
     // Per task: the arguments and the label of the call holding it.
     type Binding = (Vec<(String, String)>, Option<String>);
-    let mut args: HashMap<String, Binding> = HashMap::new();
-    let mut log = |t: mcl_net::TransitionId, sent: &mut Vec<String>| {
-        let tr = net.transition(t).unwrap();
-        if let Some(b) = &tr.binding {
-            args.insert(b.task.clone(), (b.args.clone(), b.label.clone()));
-        }
-        let task = tr.provenance.task.clone().unwrap_or_default();
-        for a in &tr.actions {
-            let params: Vec<String> = a
-                .params
-                .iter()
-                .map(|(name, v)| {
-                    if v.contains("\"param\"") {
-                        args[&task].0.iter().find(|(p, _)| p == name).unwrap().1.clone()
-                    } else {
-                        v.clone()
-                    }
-                })
-                .collect();
-            let label = args.get(&task).and_then(|(_, l)| l.clone()).map(|l| format!("@{l}")).unwrap_or_default();
-            sent.push(format!("{}({}){label}", a.action, params.join(",")));
-        }
-    };
-    for _ in 0..1000 {
-        for t in ex.settle(10_000).unwrap() {
-            log(t, &mut sent);
-        }
-        let deferred = ex
-            .ready()
-            .into_iter()
-            .find(|&t| matches!(&net.transition(t).unwrap().kind, TransitionKind::Timed(Delay::Fixed(d)) if *d == 0.0));
-        if let Some(t) = deferred {
-            ex.fire_timed(t).unwrap();
-            log(t, &mut sent);
-            continue;
-        }
-        let Some(e) = events(&sent) else { break };
-        if let Some(t) = ex.fire_event(&e).unwrap() {
-            log(t, &mut sent);
+    #[derive(Default)]
+    struct Log {
+        sent: Vec<String>,
+        args: HashMap<String, Binding>,
+    }
+    impl Hooks for Log {
+        fn fired(&mut self, v: View<'_>, t: mcl_net::TransitionId) {
+            let tr = v.net.transition(t).unwrap();
+            if let Some(b) = &tr.binding {
+                self.args.insert(b.task.clone(), (b.args.clone(), b.label.clone()));
+            }
+            let task = tr.provenance.task.clone().unwrap_or_default();
+            for a in &tr.actions {
+                let params: Vec<String> = a
+                    .params
+                    .iter()
+                    .map(|(name, v)| {
+                        if v.contains("\"param\"") {
+                            self.args[&task].0.iter().find(|(p, _)| p == name).unwrap().1.clone()
+                        } else {
+                            v.clone()
+                        }
+                    })
+                    .collect();
+                let label =
+                    self.args.get(&task).and_then(|(_, l)| l.clone()).map(|l| format!("@{l}")).unwrap_or_default();
+                self.sent.push(format!("{}({}){label}", a.action, params.join(",")));
+            }
         }
     }
+    let mut ex = Engine::new(net, seed).with_step_limit(10_000);
+    let mut log = Log::default();
+    ex.start(0.0, &mut log).unwrap();
+    for _ in 0..1000 {
+        let Some(e) = events(&log.sent) else { break };
+        ex.deliver(&e, &mut log).unwrap();
+    }
+    let sent = log.sent;
     let m = ex.marking();
     let ok = m.get(net.place_by_id("mission.ok").unwrap()) == 1;
     let fail = m.get(net.place_by_id("mission.fail").unwrap()) == 1;

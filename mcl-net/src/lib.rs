@@ -4,8 +4,11 @@
 //! * [`model`]: [`Net`], its builder, MCL annotations and provenance;
 //! * [`pnml`]: PNML 2009 reading and writing, with MCL data in
 //!   `<toolspecific tool="mcl">`;
-//! * [`semantics`]: the one firing rule (immediate first, random choice) and an
-//!   incremental enabled-set tracker;
+//! * [`engine`]: the one firing rule, stated in its docs, and [`Engine`], a
+//!   net played by it in mission time (immediate first, timers, events,
+//!   seeded random choice), with caller hooks;
+//! * [`semantics`]: the rule's pieces (enabledness, firing, the choice of the
+//!   ready transitions, an incremental enabled-set tracker);
 //! * [`mod@explore`]: explicit-state reachability analysis;
 //! * [`structural`]: incidence matrix, invariants, siphons and traps;
 //! * [`graph`]: strongly connected components of implicit graphs;
@@ -34,6 +37,7 @@
 #![warn(missing_docs)]
 
 pub mod coord_props;
+pub mod engine;
 pub mod explore;
 pub mod graph;
 pub mod input;
@@ -46,6 +50,7 @@ pub mod suggest;
 mod xml;
 pub mod xml_id;
 
+pub use engine::{Engine, Hooks, Livelock};
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{
     ActionRef, Arc, CallBinding, Delay, Handler, HandlerKind, Marking, Name, Net, NetBuilder, NetError, NodeId, Place,
@@ -53,4 +58,4 @@ pub use model::{
     HANDLERS_PROPERTY,
 };
 pub use pnml::{read_pnml, read_pnml_nets, write_pnml, write_pnml_to, PnmlError};
-pub use semantics::{EnabledTracker, Executor, FireError, MarkingClass};
+pub use semantics::{EnabledTracker, FireError, MarkingClass};

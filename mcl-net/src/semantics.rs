@@ -1,34 +1,29 @@
-//! The firing rule, written once for the verifier and the player.
+//! The pieces of the firing rule: enabledness, the P/T firing, the choice of
+//! the ready transitions, the incremental enabled set and the seeded uniform
+//! draw. The rule itself, with time, is stated once, in [`crate::engine`];
+//! [`crate::engine::Engine`] plays a net by it, the player of `mcl-runtime`
+//! plays missions on that engine, and [`mod@crate::explore`] (and with it the
+//! block verifier) explores the same rule.
 //!
-//! Seed, Appendix A: a transition `t` is *enabled* in marking `m` when every
-//! input place `p` holds at least `w(p, t)` tokens; firing removes `w(p, t)`
-//! from each input place and adds `w(t, p)` to each output place.
-//!
-//! MCL adds the GSPN-style rule between immediate and non-immediate transitions:
-//!
-//! * a marking in which some immediate transition is enabled is **vanishing**;
-//!   there, only the enabled immediate transitions of highest
-//!   [priority](crate::Transition::priority) are *ready*;
-//! * any other marking is **tangible**; there, if some *deferred* transition
-//!   (timed with delay 0, [`TransitionKind::is_deferred`]) is enabled, the
-//!   enabled deferred transitions of highest priority are ready: the player
-//!   fires a zero-delay timer as soon as the marking is tangible, before it
-//!   handles any event or later timer; otherwise the enabled event-driven and
-//!   timed transitions are ready (an event or a timer decides which fires);
-//! * among ready transitions one is chosen uniformly at random, with a seedable
-//!   ChaCha8 generator so that runs are reproducible.
-//!
-//! [`select_ready`] is that rule; [`mod@crate::explore`] and [`Executor`] both call it.
-//! [`EnabledTracker`] keeps the enabled set up to date after each firing by
-//! re-checking only the transitions that consume from places whose marking
-//! changed ([`Net::affected_by`]).
+//! * [`covers`] is the enabling condition (seed, Appendix A): every input
+//!   place holds at least the arc's weight; [`is_enabled`] applies it to a
+//!   [`Marking`], [`is_enabled_with`] to any marking representation;
+//! * [`fire`] removes `w(p, t)` from each input place and adds `w(t, p)` to
+//!   each output place;
+//! * [`select_ready`] keeps, of an enabled set, the transitions the rule lets
+//!   fire (immediate ones of highest priority in a vanishing marking, else
+//!   deferred ones of highest priority, else all) and classifies the marking;
+//! * [`EnabledTracker`] keeps the enabled set up to date after each firing by
+//!   re-checking only the transitions that consume from places whose marking
+//!   changed ([`Net::affected_by`]);
+//! * [`uniform_index`] is the uniform draw among ready transitions, from a
+//!   seedable ChaCha8 generator so that runs are reproducible.
 
 use std::fmt;
 
-use rand_chacha::rand_core::{RngCore, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand_chacha::rand_core::RngCore;
 
-use crate::model::{Marking, Net, PlaceId, TransitionId, TransitionKind};
+use crate::model::{Marking, Net, PlaceId, TransitionId};
 
 /// Whether immediate transitions are pending in a marking.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -91,18 +86,30 @@ impl fmt::Display for FireError {
 
 impl std::error::Error for FireError {}
 
+/// The enabling condition itself, over any marking representation: every
+/// `(place, weight)` of `pre` has `tokens(place) >= weight`.
+///
+/// This is the one enabledness test of the workspace: [`is_enabled`] applies
+/// it to a [`Marking`], the explorer to its packed states (with its own place
+/// keys: a bit field, or a word and a mask of 1-bit fields), the block
+/// verifier to the states of a state space.
+#[inline]
+pub fn covers<K, W: PartialOrd>(pre: impl IntoIterator<Item = (K, W)>, mut tokens: impl FnMut(K) -> W) -> bool {
+    pre.into_iter().all(|(k, w)| tokens(k) >= w)
+}
+
+/// True when `t` is enabled in the marking that `tokens` reads: `tokens(p)`
+/// is the number of tokens in place `p` (a verifier's compact `u8` marking,
+/// say). False for an unknown `t`.
+#[inline]
+pub fn is_enabled_with(net: &Net, t: TransitionId, tokens: impl FnMut(PlaceId) -> u32) -> bool {
+    t.index() < net.transition_count() && covers(net.pre(t).iter().copied(), tokens)
+}
+
 /// True when `t` is enabled in `m` (false for an unknown `t`).
 #[inline]
 pub fn is_enabled(net: &Net, m: &Marking, t: TransitionId) -> bool {
-    t.index() < net.transition_count() && net.pre(t).iter().all(|&(p, w)| m.get(p) >= w)
-}
-
-/// [`is_enabled`] on any marking: `tokens(p)` is the number of tokens in
-/// place `p` (a verifier's compact `u8` marking, say). False for an unknown
-/// `t`.
-#[inline]
-pub fn is_enabled_with(net: &Net, t: TransitionId, tokens: impl Fn(PlaceId) -> u32) -> bool {
-    t.index() < net.transition_count() && net.pre(t).iter().all(|&(p, w)| tokens(p) >= w)
+    is_enabled_with(net, t, |p| m.get(p))
 }
 
 /// All transitions enabled in `m`, in index order.
@@ -270,7 +277,7 @@ impl EnabledTracker {
     }
 
     /// Full scan; `m` must have one entry per place.
-    fn scan(net: &Net, m: &Marking) -> Self {
+    pub(crate) fn scan(net: &Net, m: &Marking) -> Self {
         let n = net.transition_count();
         let mut tr = EnabledTracker {
             enabled: vec![false; n],
@@ -348,171 +355,27 @@ impl EnabledTracker {
         Ok(())
     }
 
-    /// Transitions whose enabledness flipped since the last call (unordered);
-    /// the player uses it to arm and cancel timers.
+    /// Transitions whose enabledness flipped since the last call (unordered).
     pub fn take_changed(&mut self) -> Vec<TransitionId> {
-        let v = self.changed.items.clone();
-        self.changed.clear();
+        let mut v = Vec::new();
+        self.take_changed_into(&mut v);
         v
     }
-}
 
-/// Default bound on consecutive immediate firings in [`Executor::settle`].
-pub const DEFAULT_SETTLE_LIMIT: usize = 100_000;
-
-/// A net in a marking, firing by the MCL rule with reproducible random choice.
-///
-/// `N` is anything that can lend a [`Net`]: `Net`, `&Net`, `Arc<Net>`…
-#[derive(Clone, Debug)]
-pub struct Executor<N: AsRef<Net>> {
-    net: N,
-    marking: Marking,
-    tracker: EnabledTracker,
-    rng: ChaCha8Rng,
-}
-
-impl AsRef<Net> for Net {
-    fn as_ref(&self) -> &Net {
-        self
-    }
-}
-
-impl<N: AsRef<Net>> Executor<N> {
-    /// Starts in the initial marking with the given seed.
-    pub fn new(net: N, seed: u64) -> Self {
-        let marking = net.as_ref().initial_marking();
-        let tracker = EnabledTracker::scan(net.as_ref(), &marking);
-        Executor { net, marking, tracker, rng: ChaCha8Rng::seed_from_u64(seed) }
-    }
-
-    /// Starts in `marking`.
-    pub fn with_marking(net: N, marking: Marking, seed: u64) -> Result<Self, FireError> {
-        let tracker = EnabledTracker::new(net.as_ref(), &marking)?;
-        Ok(Executor { net, marking, tracker, rng: ChaCha8Rng::seed_from_u64(seed) })
-    }
-
-    /// The net.
-    pub fn net(&self) -> &Net {
-        self.net.as_ref()
-    }
-
-    /// The current marking.
-    pub fn marking(&self) -> &Marking {
-        &self.marking
-    }
-
-    /// The enabled-set tracker.
-    pub fn tracker(&self) -> &EnabledTracker {
-        &self.tracker
-    }
-
-    /// Vanishing or tangible.
-    pub fn class(&self) -> MarkingClass {
-        self.tracker.class()
-    }
-
-    /// True when `t` is enabled.
-    pub fn is_enabled(&self, t: TransitionId) -> bool {
-        self.tracker.is_enabled(t)
-    }
-
-    /// Ready transitions, sorted by index.
-    pub fn ready(&self) -> Vec<TransitionId> {
-        self.tracker.ready(self.net.as_ref())
-    }
-
-    /// Fires `t` if the rule allows it now: `t` must be ready.
-    pub fn fire(&mut self, t: TransitionId) -> Result<(), FireError> {
-        let net = self.net.as_ref();
-        if t.index() >= net.transition_count() {
-            return Err(FireError::UnknownTransition(t));
-        }
-        if !self.tracker.is_enabled(t) {
-            return Err(FireError::NotEnabled(t));
-        }
-        if self.tracker.class() == MarkingClass::Vanishing && !self.ready().contains(&t) {
-            return Err(FireError::NotReady(t));
-        }
-        self.tracker.fire(net, &mut self.marking, t)
-    }
-
-    /// In a vanishing marking, fires one ready immediate transition chosen at
-    /// random and returns it; in a tangible marking does nothing.
-    pub fn step(&mut self) -> Result<Option<TransitionId>, FireError> {
-        if self.tracker.class() == MarkingClass::Tangible {
-            return Ok(None);
-        }
-        let ready = self.ready();
-        if ready.is_empty() {
-            return Ok(None);
-        }
-        let t = ready[uniform_index(&mut self.rng, ready.len())];
-        self.tracker.fire(self.net.as_ref(), &mut self.marking, t)?;
-        Ok(Some(t))
-    }
-
-    /// Fires immediate transitions until the marking is tangible; returns them
-    /// in firing order. Fails with [`FireError::Livelock`] after `max_steps`.
-    pub fn settle(&mut self, max_steps: usize) -> Result<Vec<TransitionId>, FireError> {
-        let mut fired = Vec::new();
-        while self.tracker.class() == MarkingClass::Vanishing {
-            if fired.len() >= max_steps {
-                return Err(FireError::Livelock(fired.len()));
-            }
-            match self.step()? {
-                Some(t) => fired.push(t),
-                None => break,
-            }
-        }
-        Ok(fired)
-    }
-
-    /// Delivers `event`: in a tangible marking fires one enabled transition
-    /// waiting for it, chosen at random. `Ok(None)` means no transition was
-    /// waiting for it (the caller should report the dropped event).
-    pub fn fire_event(&mut self, event: &str) -> Result<Option<TransitionId>, FireError> {
-        if self.tracker.class() == MarkingClass::Vanishing {
-            return Err(FireError::NotTangible);
-        }
-        let net = self.net.as_ref();
-        let candidates: Vec<TransitionId> =
-            net.event_transitions(event).iter().copied().filter(|&t| self.tracker.is_enabled(t)).collect();
-        if candidates.is_empty() {
-            return Ok(None);
-        }
-        let t = candidates[uniform_index(&mut self.rng, candidates.len())];
-        self.tracker.fire(net, &mut self.marking, t)?;
-        Ok(Some(t))
-    }
-
-    /// Fires timed transition `t` whose delay expired; it must be enabled and
-    /// the marking tangible.
-    pub fn fire_timed(&mut self, t: TransitionId) -> Result<(), FireError> {
-        let net = self.net.as_ref();
-        match net.transition(t).map(|tr| &tr.kind) {
-            None => return Err(FireError::UnknownTransition(t)),
-            Some(TransitionKind::Timed(_)) => {}
-            Some(_) => return Err(FireError::NotReady(t)),
-        }
-        if self.tracker.class() == MarkingClass::Vanishing {
-            return Err(FireError::NotTangible);
-        }
-        if !self.tracker.is_enabled(t) {
-            return Err(FireError::NotEnabled(t));
-        }
-        self.tracker.fire(net, &mut self.marking, t)
-    }
-
-    /// Transitions whose enabledness flipped since the last call.
-    pub fn take_changed(&mut self) -> Vec<TransitionId> {
-        self.tracker.take_changed()
+    /// Appends to `buf` the transitions whose enabledness flipped since the
+    /// last call, in the order [`EnabledTracker::take_changed`] gives them,
+    /// without allocating; [`crate::engine::Engine`] arms and cancels timers
+    /// with it.
+    pub fn take_changed_into(&mut self, buf: &mut Vec<TransitionId>) {
+        buf.extend_from_slice(&self.changed.items);
+        self.changed.clear();
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{Delay, NetBuilder, Place, Transition};
+    use crate::model::{Delay, NetBuilder, Place, Transition, TransitionKind};
 
     /// Figure A.1 of the seed: T0, T2 immediate; T1, T3 non-immediate.
     fn figure_a1() -> Net {
@@ -531,33 +394,30 @@ mod tests {
     }
 
     #[test]
-    fn figure_a1_immediate_first() {
+    fn figure_a1_classes_and_ready_sets() {
         let net = figure_a1();
-        let mut ex = Executor::new(&net, 7);
-        assert_eq!(ex.class(), MarkingClass::Vanishing);
-        assert_eq!(ex.fire(TransitionId(1)), Err(FireError::NotEnabled(TransitionId(1))));
-        let fired = ex.settle(10).unwrap();
-        assert_eq!(fired, vec![TransitionId(0), TransitionId(2)]);
-        assert_eq!(ex.marking().0, vec![0, 1, 0, 1]);
-        assert_eq!(ex.class(), MarkingClass::Tangible);
-        assert_eq!(ex.ready(), vec![TransitionId(1), TransitionId(3)]);
-        assert_eq!(ex.fire_event("nothing"), Ok(None));
-        assert_eq!(ex.fire_event("e1"), Ok(Some(TransitionId(1))));
-        assert_eq!(ex.marking().0, vec![0, 0, 0, 1]);
-        ex.fire_timed(TransitionId(3)).unwrap();
-        assert_eq!(ex.class(), MarkingClass::Vanishing);
-        assert_eq!(ex.fire_event("e1"), Err(FireError::NotTangible));
+        let m = net.initial_marking();
+        assert_eq!(ready(&net, &m), (MarkingClass::Vanishing, vec![TransitionId(0)]));
+        // {P1, P2}: T1 is enabled but waits for the immediate T2.
+        let m = Marking(vec![0, 1, 1, 0]);
+        assert!(is_enabled(&net, &m, TransitionId(1)));
+        assert_eq!(ready(&net, &m), (MarkingClass::Vanishing, vec![TransitionId(2)]));
+        let m = Marking(vec![0, 1, 0, 1]);
+        assert_eq!(ready(&net, &m), (MarkingClass::Tangible, vec![TransitionId(1), TransitionId(3)]));
+        assert!(!is_enabled(&net, &m, TransitionId(9)), "an unknown transition is never enabled");
     }
 
     #[test]
-    fn non_immediate_waits_in_vanishing_marking() {
+    fn enabledness_is_one_test_over_any_representation() {
         let net = figure_a1();
-        let mut ex = Executor::new(&net, 1);
-        ex.fire(TransitionId(0)).unwrap(); // {P1, P2}: T1 enabled but T2 immediate
-        assert!(ex.is_enabled(TransitionId(1)));
-        assert_eq!(ex.fire(TransitionId(1)), Err(FireError::NotReady(TransitionId(1))));
-        ex.fire(TransitionId(2)).unwrap();
-        ex.fire(TransitionId(1)).unwrap();
+        let packed: u64 = 0b1010; // P1 and P3 marked, one bit per place
+        for t in net.transition_ids() {
+            let m = Marking(vec![0, 1, 0, 1]);
+            let bits = is_enabled_with(&net, t, |p| ((packed >> p.index()) & 1) as u32);
+            assert_eq!(bits, is_enabled(&net, &m, t));
+        }
+        assert!(covers([(0usize, 2u32), (1, 1)], |i| [2, 5][i]));
+        assert!(!covers([(0usize, 3u32)], |i| [2][i]));
     }
 
     #[test]
@@ -571,10 +431,6 @@ mod tests {
         let (class, r) = ready(&net, &net.initial_marking());
         assert_eq!(class, MarkingClass::Vanishing);
         assert_eq!(r, vec![hi]);
-        for seed in 0..20 {
-            let mut ex = Executor::new(&net, seed);
-            assert_eq!(ex.step(), Ok(Some(hi)));
-        }
     }
 
     #[test]
@@ -607,45 +463,15 @@ mod tests {
                 assert_eq!(tr.is_enabled(u), is_enabled(&net, &m, u));
             }
         }
-        let mut changed = tr.take_changed();
-        changed.sort();
+        let mut changed = Vec::new();
+        tr.take_changed_into(&mut changed);
         assert!(!changed.is_empty());
         assert!(tr.take_changed().is_empty());
+        assert!(matches!(EnabledTracker::new(&net, &Marking(vec![])), Err(FireError::MarkingSize { .. })));
     }
 
     #[test]
-    fn seeded_choice_is_reproducible_and_uniform_enough() {
-        let mut b = NetBuilder::new("choice");
-        let p = b.add_place(Place::new("p").with_tokens(1));
-        let ts: Vec<_> = (0..4).map(|i| b.add_transition(Transition::new(format!("t{i}")))).collect();
-        for &t in &ts {
-            b.add_input(p, t, 1).add_output(t, p, 1);
-        }
-        let net = b.build().unwrap();
-        let run = |seed| {
-            let mut ex = Executor::new(&net, seed);
-            (0..400).map(|_| ex.step().unwrap().unwrap().0).collect::<Vec<_>>()
-        };
-        assert_eq!(run(42), run(42));
-        assert_ne!(run(42), run(43));
-        let r = run(5);
-        for i in 0..4 {
-            let c = r.iter().filter(|&&x| x == i).count();
-            assert!((60..140).contains(&c), "count {c}");
-        }
-    }
-
-    #[test]
-    fn livelock_and_errors_are_reported() {
-        let mut b = NetBuilder::new("loop");
-        let p = b.add_place(Place::new("p").with_tokens(1));
-        let t = b.add_transition(Transition::new("t"));
-        b.add_input(p, t, 1).add_output(t, p, 1);
-        let net = b.build().unwrap();
-        let mut ex = Executor::new(&net, 0);
-        assert_eq!(ex.settle(50), Err(FireError::Livelock(50)));
-        assert_eq!(ex.fire(TransitionId(9)), Err(FireError::UnknownTransition(TransitionId(9))));
-        assert!(matches!(Executor::with_marking(&net, Marking(vec![]), 0), Err(FireError::MarkingSize { .. })));
+    fn overflow_leaves_the_marking_unchanged() {
         let mut m = Marking(vec![u32::MAX]);
         let mut b = NetBuilder::new("ovf");
         let p = b.add_place(Place::new("p"));
@@ -654,5 +480,6 @@ mod tests {
         let net = b.build().unwrap();
         assert_eq!(fire(&net, &mut m, t), Err(FireError::Overflow(p)));
         assert_eq!(m.0, vec![u32::MAX]);
+        assert_eq!(fire(&net, &mut m, TransitionId(4)), Err(FireError::UnknownTransition(TransitionId(4))));
     }
 }

@@ -139,7 +139,7 @@ impl<'a> Naive<'a> {
     }
 
     fn enabled(&self, t: TransitionId) -> bool {
-        self.net.pre(t).iter().all(|&(p, w)| self.m[p.index()] >= w)
+        mcl_net::semantics::is_enabled_with(self.net, t, |p| self.m[p.index()])
     }
 
     /// Extract 5.8's enabledTransitions(): every enabled transition not bound to an event.

@@ -9,30 +9,30 @@
 //!
 //! # Firing rule
 //!
-//! The one semantics of `mcl-net` (seed Appendix A):
+//! The player holds an [`Engine`] of `mcl-net`, which plays the one firing
+//! rule, stated in [`mcl_net::engine`]: immediate transitions first (by
+//! priority, then a seeded uniform draw), timers started when a timed
+//! transition is enabled in a tangible marking, zero-delay (*deferred*)
+//! timers before any event, ties among due timers by priority then draw,
+//! an event firing one enabled transition bound to it, every timer due
+//! before an input firing first at its own deadline (a time-out and an
+//! answer at the same instant resolve as "time-out first"). A cascade of
+//! immediate transitions longer than [`PlayerOptions::step_limit`], or more
+//! than `step_limit` zero-delay timers at one instant (`while ( True() ) {
+//! Void() }` with tasks that end at once), is a livelock: the mission is
+//! stuck.
 //!
-//! 1. **Immediate** transitions fire first, one chosen at random (seeded
-//!    ChaCha8, [`mcl_net::semantics::uniform_index`]) among the enabled ones,
-//!    until none is enabled: the marking is then *tangible*. A cascade longer
-//!    than [`PlayerOptions::step_limit`] is a livelock and ends the mission as
-//!    stuck; so are more than `step_limit` zero-delay timers fired at one
-//!    instant without any input (`while ( True() ) { Void() }` with tasks
-//!    that end at once: each call's `release` is a zero-delay timer).
-//! 2. **Timed** transitions: a timer starts when the transition becomes
-//!    enabled in a tangible marking and is cancelled when it is disabled (it
-//!    starts from zero the next time). A transition disabled and re-enabled
-//!    within one cascade of immediate firings restarts its timer. A delay
-//!    `Param(p)` is read, when the timer starts, from the current binding of
-//!    the transition's task (the arguments of the last call that started it):
-//!    a number of seconds, else a symbol looked up in the run's symbol table
-//!    (`--set timeout=60`, a scenario's `[symbols]`), else
-//!    [`PlayerOptions::default_delay`] with a warning. Zero-delay timed
-//!    transitions (*deferred*, used by the compiler for aborts) therefore fire
-//!    as soon as the marking is tangible, before any event is delivered. When
-//!    several timers are due at the same instant one is chosen at random, and
-//!    the net settles again after each firing.
-//! 3. **Events**: an event fires one enabled transition bound to it (random
-//!    among several). An event that enables nothing is reported as an
+//! The player adds, through the engine's [`Hooks`], what is its own:
+//!
+//! 1. **Actions and bindings**: a firing sends the transition's actions,
+//!    their parameters resolved from the current binding of its task (the
+//!    arguments of the last call that started it) and the run's symbols.
+//! 2. **Parameter delays**: a delay `Param(p)` is read, when the timer
+//!    starts, from the current binding: a number of seconds, else a symbol
+//!    looked up in the run's symbol table (`--set timeout=60`, a scenario's
+//!    `[symbols]`), else [`PlayerOptions::default_delay`] with a warning
+//!    (given once).
+//! 3. **Events**: an event that enables nothing is reported as an
 //!    [`Output::Unexpected`] and changes nothing; it is never fatal.
 //! 4. **Activations**: an event may name its *activation*, the `seq` of the
 //!    action that started the primitive run that raised it
@@ -45,26 +45,23 @@
 //!    changes nothing, so that it is never credited to a later call of the
 //!    same task.
 //!
-//! Before an event or a perception is handled, every timer due at or before
-//! its time fires (at its own deadline), so a time-out and an answer that
-//! arrive at the same instant resolve as "time-out first".
-//!
 //! The mission ends when `mission.ok` or `mission.fail` is marked and the net
 //! has settled (no immediate transition enabled, no timer due now). It is
 //! *stuck* when the marking is tangible and no event-driven or timed
 //! transition is enabled: nothing can ever fire again.
 //!
-//! Enabledness is maintained incrementally by [`EnabledTracker`]; the player
-//! never rescans the whole net after a firing (compare the seed's Extract 5.8,
-//! benchmarked in `benches/player.rs`).
+//! Enabledness is maintained incrementally by the engine's
+//! [`mcl_net::EnabledTracker`]; the player never rescans the whole net after
+//! a firing (compare the seed's Extract 5.8, benchmarked in
+//! `benches/player.rs`).
 
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::sync::Arc;
 
-use mcl_net::semantics::{select_ready, uniform_index};
-use mcl_net::{Delay, EnabledTracker, Marking, Net, PlaceId, TransitionId, TransitionKind};
-use rand_chacha::rand_core::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use std::ops::ControlFlow;
+
+use mcl_net::engine::{Engine, Hooks, Livelock, View};
+use mcl_net::{Delay, FireError, Marking, Net, PlaceId, TransitionId, TransitionKind};
 use serde_json::{Map, Value};
 
 use crate::link::Action;
@@ -259,17 +256,11 @@ struct ActionTemplate {
     params: Vec<(String, ParamSrc)>,
 }
 
-#[derive(Clone, Debug)]
-enum Kind {
-    Immediate,
-    Event,
-    Timed(Delay),
-}
-
 /// Per-transition data, precomputed once.
 #[derive(Clone, Debug)]
 struct TInfo {
-    kind: Kind,
+    /// The delay of a timed transition.
+    delay: Option<Delay>,
     task: Option<u32>,
     call_site: Option<u32>,
     /// For a call's start transition: the call's arguments, parsed.
@@ -284,33 +275,25 @@ struct TaskState {
     binding: Option<TransitionId>,
 }
 
-/// A total order key for non-negative finite deadlines.
-fn time_key(t: f64) -> u64 {
-    t.max(0.0).to_bits()
-}
-
 /// The player. See the [module documentation](self).
 #[derive(Clone, Debug)]
 pub struct Player {
-    net: Arc<Net>,
+    /// The net, its marking, timers, clock and random choices.
+    engine: Engine<Arc<Net>>,
+    /// The player's own state, and the engine's hooks.
+    layer: Layer,
+}
+
+/// What the player adds to the engine's firings: action templates,
+/// bindings, activations, the outcome, the outputs.
+#[derive(Clone, Debug)]
+struct Layer {
     opts: PlayerOptions,
-    marking: Marking,
-    tracker: EnabledTracker,
-    rng: ChaCha8Rng,
     info: Vec<TInfo>,
     tasks: Vec<TaskState>,
-    has_priorities: bool,
     ok_place: Option<PlaceId>,
     fail_place: Option<PlaceId>,
-    now: f64,
     seq: u64,
-    /// Armed timer per transition: (deadline, arm id).
-    armed: Vec<Option<(f64, u64)>>,
-    /// (deadline key, arm id, transition) of every armed timer.
-    timers: BTreeSet<(u64, u64, u32)>,
-    arm_counter: u64,
-    /// A timed transition that just fired and must be re-armed if still enabled.
-    rearm: Option<TransitionId>,
     started: bool,
     outcome: Option<Outcome>,
     fired: u64,
@@ -323,13 +306,15 @@ pub struct Player {
     stopped: Vec<bool>,
     /// Every seq of `live`.
     live_seqs: HashSet<u64>,
+    /// The activation of the event being delivered.
+    activation: Option<u64>,
+    /// Outputs of the call in progress.
+    out: Vec<Output>,
 }
 
 impl Player {
     /// A player for `net` in its initial marking. Nothing fires before [`Player::start`].
     pub fn new(net: Arc<Net>, opts: PlayerOptions) -> Self {
-        let marking = net.initial_marking();
-        let tracker = EnabledTracker::new(&net, &marking).expect("the initial marking fits the net");
         let mut tasks: Vec<TaskState> = Vec::new();
         let mut task_index: BTreeMap<String, u32> = BTreeMap::new();
         let mut info = Vec::with_capacity(net.transition_count());
@@ -341,10 +326,9 @@ impl Player {
                     tasks.len() as u32 - 1
                 })
             });
-            let kind = match &tr.kind {
-                TransitionKind::Immediate => Kind::Immediate,
-                TransitionKind::Event(_) => Kind::Event,
-                TransitionKind::Timed(d) => Kind::Timed(d.clone()),
+            let delay = match &tr.kind {
+                TransitionKind::Timed(d) => Some(d.clone()),
+                _ => None,
             };
             let args = tr.binding.as_ref().map(|b| {
                 Arc::new(
@@ -383,32 +367,19 @@ impl Player {
                 })
                 .collect();
             info.push(TInfo {
-                kind,
+                delay,
                 task,
                 call_site: tr.provenance.call_site.or(tr.binding.as_ref().map(|b| b.call_site)),
                 args,
                 actions,
             });
         }
-        let has_priorities = net.transitions().iter().any(|t| t.priority.is_some());
-        let n = net.transition_count();
-        Player {
+        let layer = Layer {
             ok_place: net.place_by_id(MISSION_OK),
             fail_place: net.place_by_id(MISSION_FAIL),
-            rng: ChaCha8Rng::seed_from_u64(opts.seed),
-            net,
-            opts,
-            marking,
-            tracker,
             info,
             tasks,
-            has_priorities,
-            now: 0.0,
             seq: 0,
-            armed: vec![None; n],
-            timers: BTreeSet::new(),
-            arm_counter: 0,
-            rearm: None,
             started: false,
             outcome: None,
             fired: 0,
@@ -416,101 +387,84 @@ impl Player {
             live: vec![Vec::new(); prims.len()],
             stopped: vec![false; prims.len()],
             live_seqs: HashSet::new(),
-        }
+            activation: None,
+            out: Vec::new(),
+            opts,
+        };
+        let engine = Engine::new(net, layer.opts.seed).with_step_limit(layer.opts.step_limit);
+        Player { engine, layer }
     }
 
     /// The net.
     pub fn net(&self) -> &Arc<Net> {
-        &self.net
+        self.engine.net_handle()
     }
 
     /// The current marking.
     pub fn marking(&self) -> &Marking {
-        &self.marking
+        self.engine.marking()
     }
 
     /// The player's current time (the latest time it was given).
     pub fn now(&self) -> f64 {
-        self.now
+        self.engine.now()
     }
 
     /// How the mission ended, once it has.
     pub fn outcome(&self) -> Option<Outcome> {
-        self.outcome
+        self.layer.outcome
     }
 
     /// Number of transitions fired so far.
     pub fn fired_count(&self) -> u64 {
-        self.fired
+        self.layer.fired
     }
 
     /// Sequence number of the last action sent (0: none yet).
     pub fn last_seq(&self) -> u64 {
-        self.seq
+        self.layer.seq
     }
 
     /// True once [`Player::start`] was called.
     pub fn is_started(&self) -> bool {
-        self.started
+        self.layer.started
     }
 
     /// The events that some enabled transition waits for, sorted.
     pub fn awaited_events(&self) -> Vec<String> {
-        let mut v: Vec<String> = self
-            .tracker
-            .enabled_non_immediate()
-            .iter()
-            .filter_map(|&t| match &self.net.transitions()[t.index()].kind {
-                TransitionKind::Event(e) => Some(e.clone()),
-                _ => None,
-            })
-            .collect();
-        v.sort();
-        v.dedup();
-        v
+        self.engine.awaited_events()
     }
 
     /// The earliest pending timer, if any.
     pub fn next_deadline(&self) -> Option<f64> {
-        if self.outcome.is_some() {
+        if self.layer.outcome.is_some() {
             return None;
         }
-        self.timers.first().map(|&(k, _, _)| f64::from_bits(k))
+        self.engine.next_deadline()
     }
 
     /// The arguments of the current call of `task` (name, JSON value).
     pub fn binding(&self, task: &str) -> Option<&[(String, Value)]> {
-        let ts = self.tasks.iter().find(|t| t.name == task)?;
+        let l = &self.layer;
+        let ts = l.tasks.iter().find(|t| t.name == task)?;
         let b = ts.binding?;
-        self.info[b.index()].args.as_deref().map(Vec::as_slice)
+        l.info[b.index()].args.as_deref().map(Vec::as_slice)
     }
 
     /// Pending timers: (transition, deadline), earliest first.
     pub fn timers(&self) -> Vec<(TransitionId, f64)> {
-        self.timers.iter().map(|&(k, _, t)| (TransitionId(t), f64::from_bits(k))).collect()
+        self.engine.timers()
     }
 
     /// Starts the mission at time `now`: fires the initial cascade.
     pub fn start(&mut self, now: f64) -> Vec<Output> {
-        let mut out = Vec::new();
-        if self.started {
-            return out;
+        if self.layer.started {
+            return Vec::new();
         }
-        self.started = true;
-        self.now = now;
-        if self.settle(&mut out) {
-            // Timed transitions enabled from the initial marking on never
-            // flipped, so `settle` did not arm them.
-            let mut initially: Vec<TransitionId> = self.tracker.enabled_non_immediate().to_vec();
-            initially.sort_unstable();
-            for t in initially {
-                if matches!(self.info[t.index()].kind, Kind::Timed(_)) && self.armed[t.index()].is_none() {
-                    self.arm(t, &mut out);
-                }
-            }
-            self.stabilize(&mut out);
-        }
-        out
+        self.layer.started = true;
+        let r = self.engine.start(now, &mut self.layer);
+        self.layer.livelocked(r);
+        std::mem::take(&mut self.layer.out)
     }
 
     /// The vehicle lost its memory at time `now` (its AAC welcomed the run
@@ -523,19 +477,19 @@ impl Player {
     /// timers are unchanged: a call's time-out still counts from its start.
     /// Timers due by `now` fire first, as before any input.
     pub fn reestablish(&mut self, now: f64) -> Vec<Output> {
-        let mut out = Vec::new();
-        self.advance_to(now, &mut out);
-        if !self.started || self.outcome.is_some() {
-            return out;
+        self.advance_to(now);
+        let l = &mut self.layer;
+        if !l.started || l.outcome.is_some() {
+            return std::mem::take(&mut l.out);
         }
-        let t = self.now;
+        let t = self.engine.now();
         let mut running: Vec<(usize, Action)> = Vec::new();
-        for (prim, live) in self.live.iter_mut().enumerate() {
-            if self.stopped[prim] || live.is_empty() {
+        for (prim, live) in l.live.iter_mut().enumerate() {
+            if l.stopped[prim] || live.is_empty() {
                 continue;
             }
             for a in live.drain(..) {
-                self.live_seqs.remove(&a.seq);
+                l.live_seqs.remove(&a.seq);
                 running.push((prim, a));
             }
         }
@@ -554,15 +508,15 @@ impl Player {
                 names.join(", ")
             )
         };
-        out.push(Output::Warning { t, message });
+        l.out.push(Output::Warning { t, message });
         for (prim, mut a) in running {
-            self.seq += 1;
-            a.seq = self.seq;
-            self.live[prim].push(a.clone());
-            self.live_seqs.insert(a.seq);
-            out.push(Output::Send { t, action: a });
+            l.seq += 1;
+            a.seq = l.seq;
+            l.live[prim].push(a.clone());
+            l.live_seqs.insert(a.seq);
+            l.out.push(Output::Send { t, action: a });
         }
-        out
+        std::mem::take(&mut l.out)
     }
 
     /// An event arrived at time `now` (without an activation).
@@ -574,7 +528,7 @@ impl Player {
     /// primitive that has not been disabled since, or the `disable` of a
     /// primitive not enabled again since.
     pub fn is_live_activation(&self, seq: u64) -> bool {
-        self.live_seqs.contains(&seq)
+        self.layer.live_seqs.contains(&seq)
     }
 
     /// An event arrived at time `now`, raised by the primitive run that the
@@ -582,40 +536,35 @@ impl Player {
     /// activation is not current is reported as [`Output::Stale`] and
     /// changes nothing.
     pub fn on_event_from(&mut self, now: f64, event: &str, activation: Option<u64>) -> Vec<Output> {
-        let mut out = Vec::new();
-        self.advance_to(now, &mut out);
-        let t = self.now;
-        if !self.started {
-            out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has not started" });
-            return out;
+        self.advance_to(now);
+        let t = self.engine.now();
+        let l = &mut self.layer;
+        if !l.started {
+            l.out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has not started" });
+            return std::mem::take(&mut l.out);
         }
-        if let Some(a) = activation.filter(|a| !self.live_seqs.contains(a)) {
-            let reason = if a == 0 || a > self.seq {
+        if let Some(a) = activation.filter(|a| !l.live_seqs.contains(a)) {
+            let reason = if a == 0 || a > l.seq {
                 format!("its activation, action #{a}, was never sent")
             } else {
                 format!("its activation, action #{a}, is over: its primitive was disabled since")
             };
-            out.push(Output::Stale { t, event: event.to_string(), activation: a, reason });
-            return out;
+            l.out.push(Output::Stale { t, event: event.to_string(), activation: a, reason });
+            return std::mem::take(&mut l.out);
         }
-        if self.outcome.is_some() {
-            out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has ended" });
-            return out;
+        if l.outcome.is_some() {
+            l.out.push(Output::Unexpected { t, event: event.to_string(), reason: "the mission has ended" });
+            return std::mem::take(&mut l.out);
         }
-        let net = self.net.clone();
-        let waiting = net.event_transitions(event);
-        let n = waiting.iter().filter(|&&c| self.tracker.is_enabled(c)).count();
-        if n == 0 {
-            out.push(Output::Unexpected { t, event: event.to_string(), reason: "no transition waits for it" });
-            return out;
+        l.activation = activation;
+        match self.engine.deliver(event, l) {
+            Ok(None) => {
+                l.out.push(Output::Unexpected { t, event: event.to_string(), reason: "no transition waits for it" })
+            }
+            r => l.livelocked(r.map(|_| ())),
         }
-        let k = uniform_index(&mut self.rng, n);
-        let tr = waiting.iter().copied().filter(|&c| self.tracker.is_enabled(c)).nth(k).expect("k < n");
-        let call_site = self.call_site_of(tr);
-        out.push(Output::Event { t, event: event.to_string(), transition: tr, call_site, activation });
-        self.fire(tr, &mut out);
-        self.stabilize(&mut out);
-        out
+        l.activation = None;
+        std::mem::take(&mut l.out)
     }
 
     /// Events that arrived together at time `now` and must all be taken
@@ -623,178 +572,135 @@ impl Player {
     /// `mcl_runtime::multi`: the firings of other vehicles that a supervisor
     /// copy must learn at once). Each fires one enabled transition bound to
     /// it, in order, in passes while some still can, with no other firing in
-    /// between; the net then settles once. Returns the outputs and the events
-    /// that enabled nothing (nothing is reported for them: the caller keeps
-    /// them for later).
+    /// between; the net then settles once ([`Engine::deliver_batch`]).
+    /// Returns the outputs and the events that enabled nothing (nothing is
+    /// reported for them: the caller keeps them for later).
     pub fn on_events(&mut self, now: f64, events: Vec<String>) -> (Vec<Output>, Vec<String>) {
-        let mut out = Vec::new();
-        self.advance_to(now, &mut out);
-        if self.outcome.is_some() || !self.started {
-            return (out, events);
+        self.advance_to(now);
+        let l = &mut self.layer;
+        if l.outcome.is_some() || !l.started {
+            return (std::mem::take(&mut l.out), events);
         }
-        let t = self.now;
-        let net = self.net.clone();
         let mut left = events;
-        let mut fired = false;
-        loop {
-            let mut next = Vec::new();
-            let before = left.len();
-            for event in left {
-                let waiting = net.event_transitions(&event);
-                let n = waiting.iter().filter(|&&c| self.tracker.is_enabled(c)).count();
-                if n == 0 {
-                    next.push(event);
-                    continue;
-                }
-                let k = uniform_index(&mut self.rng, n);
-                let tr = waiting.iter().copied().filter(|&c| self.tracker.is_enabled(c)).nth(k).expect("k < n");
-                let call_site = self.call_site_of(tr);
-                out.push(Output::Event { t, event, transition: tr, call_site, activation: None });
-                self.fire(tr, &mut out);
-                fired = true;
-            }
-            left = next;
-            if left.is_empty() || left.len() == before {
-                break;
-            }
-        }
-        if fired {
-            self.stabilize(&mut out);
-        }
-        (out, left)
+        let r = self.engine.deliver_batch(&mut left, l);
+        l.livelocked(r.map(|_| ()));
+        (std::mem::take(&mut l.out), left)
     }
 
     /// A perception arrived at time `now` (recorded; it fires nothing).
     pub fn on_perception(&mut self, now: f64, name: &str, value: Value) -> Vec<Output> {
-        let mut out = Vec::new();
-        self.advance_to(now, &mut out);
-        out.push(Output::Perception { t: self.now, name: name.to_string(), value });
-        out
+        self.advance_to(now);
+        let t = self.engine.now();
+        self.layer.out.push(Output::Perception { t, name: name.to_string(), value });
+        std::mem::take(&mut self.layer.out)
     }
 
     /// Time passed: fires every timer due at or before `now`, each at its deadline.
     pub fn on_timer(&mut self, now: f64) -> Vec<Output> {
-        let mut out = Vec::new();
-        self.advance_to(now, &mut out);
-        out
+        self.advance_to(now);
+        std::mem::take(&mut self.layer.out)
     }
 
-    fn advance_to(&mut self, now: f64, out: &mut Vec<Output>) {
-        if self.started {
-            while self.outcome.is_none() {
-                let Some(d) = self.next_deadline() else { break };
-                if d > now {
-                    break;
-                }
-                self.now = self.now.max(d);
-                if let Some(t) = self.pop_due_timer() {
-                    self.fire(t, out);
-                }
-                self.stabilize(out);
+    /// Fires the timers due by `now` (once started, until the mission ends)
+    /// and moves the clock to `now`.
+    fn advance_to(&mut self, now: f64) {
+        if self.layer.started && self.layer.outcome.is_none() {
+            let r = self.engine.advance_to(now, &mut self.layer);
+            self.layer.livelocked(r);
+        } else {
+            self.engine.set_clock(now);
+        }
+    }
+}
+
+impl Hooks for Layer {
+    #[inline]
+    fn fired(&mut self, v: View<'_>, t: TransitionId) {
+        self.fired += 1;
+        let info = &self.info[t.index()];
+        if info.args.is_some() {
+            if let Some(task) = info.task {
+                self.tasks[task as usize].binding = Some(t);
             }
         }
-        self.now = self.now.max(now);
+        let call_site = self.call_site_of(t);
+        self.out.push(Output::Fired { t: v.now, transition: t, call_site });
+        let n = self.info[t.index()].actions.len();
+        for k in 0..n {
+            let action = self.make_action(t, k, call_site, v.now);
+            self.out.push(Output::Send { t: v.now, action });
+        }
     }
 
-    /// Settles immediate transitions and fires due timers (zero-delay ones
-    /// first of all) until the marking is tangible with no timer due now;
-    /// then checks for the end of the mission.
-    fn stabilize(&mut self, out: &mut Vec<Output>) {
-        let mut timers = 0usize;
-        loop {
-            if !self.settle(out) {
-                return;
-            }
-            match self.next_deadline() {
-                Some(d) if d <= self.now => {
-                    timers += 1;
-                    if timers > self.opts.step_limit {
-                        let reason = format!(
-                            "livelock: {} zero-delay timers fired at t={} s without time advancing (a loop whose \
-                             tasks end at once?)",
-                            timers - 1,
-                            self.now
-                        );
-                        self.end(Outcome::Stuck, Some(reason), out);
-                        return;
-                    }
-                    if let Some(t) = self.pop_due_timer() {
-                        self.fire(t, out);
-                    }
-                }
-                _ => break,
-            }
-        }
-        self.check_end(out);
+    fn refused(&mut self, v: View<'_>, t: TransitionId, e: FireError) {
+        self.out.push(Output::Warning {
+            t: v.now,
+            message: format!("cannot fire {}: {e}", v.net.transitions()[t.index()].id),
+        });
     }
 
-    /// Fires immediate transitions until none is enabled, then updates the
-    /// timers. False after a livelock (the mission is then stuck).
-    fn settle(&mut self, out: &mut Vec<Output>) -> bool {
-        let mut steps = 0usize;
-        loop {
-            let imm = self.tracker.enabled_immediate();
-            if imm.is_empty() {
-                break;
-            }
-            if steps >= self.opts.step_limit {
-                let reason = format!(
-                    "livelock: immediate transitions fired {steps} times in a row without reaching a tangible marking"
-                );
-                self.end(Outcome::Stuck, Some(reason), out);
-                return false;
-            }
-            let t = if self.has_priorities {
-                let mut v = imm.to_vec();
-                v.sort_unstable();
-                select_ready(&self.net, &mut v);
-                v[uniform_index(&mut self.rng, v.len())]
-            } else {
-                imm[uniform_index(&mut self.rng, imm.len())]
-            };
-            self.fire(t, out);
-            steps += 1;
-        }
-        // The marking is tangible: start and cancel timers.
-        let changed = self.tracker.take_changed();
-        for t in changed {
-            if let Kind::Timed(_) = self.info[t.index()].kind {
-                if self.tracker.is_enabled(t) {
-                    self.arm(t, out);
-                } else {
-                    self.cancel(t);
-                }
-            }
-        }
-        if let Some(t) = self.rearm.take() {
-            if self.tracker.is_enabled(t) && self.armed[t.index()].is_none() {
-                self.arm(t, out);
-            }
-        }
-        true
+    #[inline]
+    fn delay(&mut self, v: View<'_>, t: TransitionId) -> f64 {
+        self.delay_of(v, t)
     }
 
-    fn check_end(&mut self, out: &mut Vec<Output>) {
+    #[inline]
+    fn armed(&mut self, v: View<'_>, t: TransitionId, delay: f64, deadline: f64) {
+        if delay > 0.0 {
+            self.out.push(Output::Timer { t: v.now, transition: t, deadline });
+        }
+    }
+
+    fn event(&mut self, v: View<'_>, event: &str, t: TransitionId) {
+        let call_site = self.call_site_of(t);
+        self.out.push(Output::Event {
+            t: v.now,
+            event: event.to_string(),
+            transition: t,
+            call_site,
+            activation: self.activation,
+        });
+    }
+
+    fn stable(&mut self, v: View<'_>) -> ControlFlow<()> {
+        self.check_end(v);
+        if self.outcome.is_some() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+}
+
+impl Layer {
+    /// A livelock ends the mission as stuck.
+    fn livelocked(&mut self, r: Result<(), Livelock>) {
+        if let Err(l) = r {
+            self.end(Outcome::Stuck, Some(l.to_string()), l.at());
+        }
+    }
+
+    fn check_end(&mut self, v: View<'_>) {
         if self.outcome.is_some() {
             return;
         }
-        let marked = |p: Option<PlaceId>, m: &Marking| p.is_some_and(|p| m.get(p) > 0);
-        if marked(self.ok_place, &self.marking) {
-            self.end(Outcome::Ok, None, out);
-        } else if marked(self.fail_place, &self.marking) {
-            self.end(Outcome::Fail, None, out);
-        } else if self.tracker.enabled_non_immediate().is_empty() {
+        let marked = |p: Option<PlaceId>| p.is_some_and(|p| v.marking.get(p) > 0);
+        if marked(self.ok_place) {
+            self.end(Outcome::Ok, None, v.now);
+        } else if marked(self.fail_place) {
+            self.end(Outcome::Fail, None, v.now);
+        } else if v.tracker.enabled_non_immediate().is_empty() {
             self.end(
                 Outcome::Stuck,
                 Some("no event-driven or timed transition is enabled: nothing can fire any more".into()),
-                out,
+                v.now,
             );
         }
     }
 
-    fn end(&mut self, outcome: Outcome, reason: Option<String>, out: &mut Vec<Output>) {
+    fn end(&mut self, outcome: Outcome, reason: Option<String>, t: f64) {
         self.outcome = Some(outcome);
-        out.push(Output::Outcome { t: self.now, outcome, reason });
+        self.out.push(Output::Outcome { t, outcome, reason });
     }
 
     fn call_site_of(&self, t: TransitionId) -> Option<u32> {
@@ -806,35 +712,7 @@ impl Player {
         })
     }
 
-    fn fire(&mut self, t: TransitionId, out: &mut Vec<Output>) {
-        if let Err(e) = self.tracker.fire(&self.net, &mut self.marking, t) {
-            out.push(Output::Warning {
-                t: self.now,
-                message: format!("cannot fire {}: {e}", self.net.transitions()[t.index()].id),
-            });
-            return;
-        }
-        self.fired += 1;
-        let info = &self.info[t.index()];
-        if info.args.is_some() {
-            if let Some(task) = info.task {
-                self.tasks[task as usize].binding = Some(t);
-            }
-        }
-        if let Kind::Timed(_) = info.kind {
-            self.cancel(t);
-            self.rearm = Some(t);
-        }
-        let call_site = self.call_site_of(t);
-        out.push(Output::Fired { t: self.now, transition: t, call_site });
-        let n = self.info[t.index()].actions.len();
-        for k in 0..n {
-            let action = self.make_action(t, k, call_site, out);
-            out.push(Output::Send { t: self.now, action });
-        }
-    }
-
-    fn make_action(&mut self, t: TransitionId, k: usize, call_site: Option<u32>, out: &mut Vec<Output>) -> Action {
+    fn make_action(&mut self, t: TransitionId, k: usize, call_site: Option<u32>, now: f64) -> Action {
         self.seq += 1;
         let info = &self.info[t.index()];
         let tmpl = &info.actions[k];
@@ -847,8 +725,8 @@ impl Player {
                 ParamSrc::Param(p) => match args.as_ref().and_then(|a| a.iter().find(|(n, _)| n == p)) {
                     Some((_, v)) => v.clone(),
                     None => {
-                        out.push(Output::Warning {
-                            t: self.now,
+                        self.out.push(Output::Warning {
+                            t: now,
                             message: format!("action `{}`: no value for parameter `{p}` (sent as null)", tmpl.action),
                         });
                         Value::Null
@@ -886,16 +764,16 @@ impl Player {
     }
 
     /// The delay of timed transition `t` under the current binding.
-    fn delay_of(&mut self, t: TransitionId, out: &mut Vec<Output>) -> f64 {
+    fn delay_of(&mut self, v: View<'_>, t: TransitionId) -> f64 {
         let info = &self.info[t.index()];
-        let Kind::Timed(d) = &info.kind else { return 0.0 };
+        let Some(d) = &info.delay else { return 0.0 };
         let p = match d {
             Delay::Fixed(x) => return *x,
             Delay::Param(p) => p,
         };
         let args =
             info.task.and_then(|i| self.tasks[i as usize].binding).and_then(|b| self.info[b.index()].args.clone());
-        let id = &self.net.transitions()[t.index()].id;
+        let id = &v.net.transitions()[t.index()].id;
         let value = args.as_ref().and_then(|a| a.iter().find(|(n, _)| n == p)).map(|(_, v)| v.clone());
         let resolved = match &value {
             Some(Value::Number(n)) => n.as_f64(),
@@ -918,50 +796,11 @@ impl Player {
                 };
                 let message = format!("delay of `{id}`: {why}; using {} s", self.opts.default_delay);
                 if self.warned.insert(message.clone()) {
-                    out.push(Output::Warning { t: self.now, message });
+                    self.out.push(Output::Warning { t: v.now, message });
                 }
                 self.opts.default_delay
             }
         }
-    }
-
-    fn arm(&mut self, t: TransitionId, out: &mut Vec<Output>) {
-        self.cancel(t);
-        let d = self.delay_of(t, out);
-        let deadline = self.now + d;
-        self.arm_counter += 1;
-        self.armed[t.index()] = Some((deadline, self.arm_counter));
-        self.timers.insert((time_key(deadline), self.arm_counter, t.0));
-        if d > 0.0 {
-            out.push(Output::Timer { t: self.now, transition: t, deadline });
-        }
-    }
-
-    fn cancel(&mut self, t: TransitionId) {
-        if let Some((deadline, id)) = self.armed[t.index()].take() {
-            self.timers.remove(&(time_key(deadline), id, t.0));
-        }
-    }
-
-    /// Removes and returns one of the timers with the earliest deadline,
-    /// chosen at random among ties.
-    fn pop_due_timer(&mut self) -> Option<TransitionId> {
-        let &(k, _, _) = self.timers.first()?;
-        let ties: Vec<(u64, u64, u32)> = self.timers.range((k, 0, 0)..=(k, u64::MAX, u32::MAX)).copied().collect();
-        // Among deferred transitions due now, the highest priority first
-        // (`mcl_net::semantics::select_ready`, the rule the verifier explores).
-        let ties: Vec<(u64, u64, u32)> = if ties.len() > 1 && self.has_priorities {
-            let mut ts: Vec<TransitionId> = ties.iter().map(|&(_, _, t)| TransitionId(t)).collect();
-            select_ready(&self.net, &mut ts);
-            ties.into_iter().filter(|&(_, _, t)| ts.contains(&TransitionId(t))).collect()
-        } else {
-            ties
-        };
-        let pick = if ties.len() == 1 { ties[0] } else { ties[uniform_index(&mut self.rng, ties.len())] };
-        self.timers.remove(&pick);
-        let t = TransitionId(pick.2);
-        self.armed[t.index()] = None;
-        Some(t)
     }
 }
 

@@ -622,17 +622,9 @@ pub fn task_outcome_events(db: &dyn Db, scope: &Scope, name: &str) -> (Vec<Strin
     let Ok(Some((iface, _))) = add_task_net(db, scope, &mut b, name, "") else { return (vec![], vec![]) };
     let Ok(net) = b.finish().build() else { return (vec![], vec![]) };
     let fire = |m: &[u32], t: mcl_net::TransitionId| -> Option<Vec<u32>> {
-        let mut m2 = m.to_vec();
-        for &(p, w) in net.pre(t) {
-            if m2[p.index()] < w {
-                return None;
-            }
-            m2[p.index()] -= w;
-        }
-        for &(p, w) in net.post(t) {
-            m2[p.index()] += w;
-        }
-        Some(m2)
+        let mut m2 = mcl_net::Marking(m.to_vec());
+        mcl_net::semantics::fire(&net, &mut m2, t).ok()?;
+        Some(m2.0)
     };
     let imm: Vec<_> =
         net.transition_ids().filter(|&t| net.transition(t).is_some_and(|x| x.kind.is_immediate())).collect();

@@ -560,7 +560,7 @@ impl Harness {
                 preds[d.0 as usize].push(s);
             }
         }
-        let enabled = |s: StateId, t: TransitionId| net.pre(t).iter().all(|&(p, w)| ss.tokens(s, p) >= w);
+        let enabled = |s: StateId, t: TransitionId| mcl_net::semantics::is_enabled_with(net, t, |p| ss.tokens(s, p));
         // For each event transition, the states that a cascade reaches which
         // started where it was not enabled: a cascade starts in a tangible
         // state (or the start) and goes on through vanishing states. One

@@ -409,10 +409,18 @@ impl Compiled {
         let Some(info) = self.trans.get(t) else {
             return false;
         };
+        // The one enabling condition (`semantics::covers`) on packed fields.
         if l.bits == 1 {
-            !info.never && self.pre_mask[range(info.pre_mask)].iter().all(|&(w, m)| cur[w as usize] & m == m)
+            // One bit per place, all weights 1: the input places of a word
+            // are all marked when its bits under the mask reach the mask.
+            !info.never
+                && semantics::covers(self.pre_mask[range(info.pre_mask)].iter().map(|&(w, m)| ((w, m), m)), |(w, m)| {
+                    cur[w as usize] & m
+                })
         } else {
-            self.pre[range(info.pre)].iter().all(|&(w, sh, wt)| (cur[w as usize] >> sh) & l.mask >= wt)
+            semantics::covers(self.pre[range(info.pre)].iter().map(|&(w, sh, wt)| ((w, sh), wt)), |(w, sh)| {
+                (cur[w as usize] >> sh) & l.mask
+            })
         }
     }
 }
