@@ -47,7 +47,8 @@ use crate::player::{Outcome, Output, Player, PlayerOptions};
 use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::VirtualVehicle;
 use crate::virtual_loop::{self, Discrete, Stop};
-use mcl_net::Net;
+use mcl_net::semantics::{fire, is_enabled, is_enabled_with};
+use mcl_net::{Marking, Net};
 
 /// How long virtual time waits for a message to cross the transport.
 pub const DELIVERY_TIMEOUT: Duration = Duration::from_secs(30);
@@ -196,7 +197,7 @@ struct Live<'a> {
     mutex: MutexMessages,
     /// Once the mission has ended: the marking, whose supervisor places
     /// still serve the other vehicles (a holder still lends its mutex).
-    after_end: Option<Vec<u32>>,
+    after_end: Option<Marking>,
     /// Rebuilding the state from the journal: messages are kept in
     /// `resend` instead of being sent, nothing is journaled.
     replaying: bool,
@@ -321,7 +322,7 @@ impl Live<'_> {
             let back: Vec<(String, String, u32)> = self
                 .tokens
                 .iter()
-                .map(|(k, _)| (k.holder.clone(), k.ret.clone(), std::mem::take(&mut tokens[k.place.index()])))
+                .map(|(k, _)| (k.holder.clone(), k.ret.clone(), std::mem::take(&mut tokens.0[k.place.index()])))
                 .collect();
             self.after_end = Some(tokens);
             for (to, ret, n) in back {
@@ -342,9 +343,10 @@ impl Live<'_> {
         for (i, (k, asked)) in self.tokens.iter_mut().enumerate() {
             let mut need = 0u32;
             for &(t, w) in &k.starts {
-                let ready = net.pre(t).iter().all(|&(p, pw)| match places.iter().position(|&q| q == p) {
-                    Some(j) if j >= i => true,
-                    _ => m.get(p) >= pw,
+                // Enabled once this and the later borrowed places are served.
+                let ready = is_enabled_with(&net, t, |p| match places.iter().position(|&q| q == p) {
+                    Some(j) if j >= i => u32::MAX,
+                    _ => m.get(p),
                 });
                 if ready {
                     need += w;
@@ -365,8 +367,8 @@ impl Live<'_> {
         Ok(events)
     }
 
-    fn ended_marking(&self) -> Vec<u32> {
-        self.after_end.clone().unwrap_or_else(|| self.s.player.marking().0.clone())
+    fn ended_marking(&self) -> Marking {
+        self.after_end.clone().unwrap_or_else(|| self.s.player.marking().clone())
     }
 
     /// Once the mission has ended, its supervisor places still serve the
@@ -384,7 +386,7 @@ impl Live<'_> {
             for m in std::mem::take(&mut self.inbox) {
                 let event = m.event();
                 let tr = net.event_transitions(&event).iter().copied().find(|&tr| {
-                    net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
+                    is_enabled(&net, &tokens, tr)
                         && net
                             .post(tr)
                             .iter()
@@ -393,12 +395,7 @@ impl Live<'_> {
                 });
                 match tr {
                     Some(tr) => {
-                        for &(p, w) in net.pre(tr) {
-                            tokens[p.index()] -= w;
-                        }
-                        for &(p, w) in net.post(tr) {
-                            tokens[p.index()] += w;
-                        }
+                        fire(&net, &mut tokens, tr).map_err(|e| e.to_string()).ok()?;
                         outs.push(Output::Event { t, event, transition: tr, call_site: None, activation: None });
                         outs.push(Output::Fired { t, transition: tr, call_site: None });
                     }
@@ -555,14 +552,14 @@ impl Live<'_> {
     fn start(&mut self, t: f64) -> Result<Vec<Output>, String> {
         if !self.inbox.is_empty() {
             let net = self.s.player.net().clone();
-            let mut tokens: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+            let mut tokens = net.initial_marking();
             let mut kept = VecDeque::new();
             let mut delivered = Vec::new();
             for m in std::mem::take(&mut self.inbox) {
                 let event = m.event();
                 let enabled = net.event_transitions(&event).iter().copied().find(|&tr| {
                     !self.sends.contains_key(net.transitions()[tr.index()].id.as_str())
-                        && net.pre(tr).iter().all(|&(p, w)| tokens[p.index()] >= w)
+                        && is_enabled(&net, &tokens, tr)
                         && net
                             .post(tr)
                             .iter()
@@ -571,12 +568,7 @@ impl Live<'_> {
                 });
                 match enabled {
                     Some(tr) => {
-                        for &(p, w) in net.pre(tr) {
-                            tokens[p.index()] -= w;
-                        }
-                        for &(p, w) in net.post(tr) {
-                            tokens[p.index()] += w;
-                        }
+                        fire(&net, &mut tokens, tr).map_err(|e| e.to_string())?;
                         delivered.push((event, net.transitions()[tr.index()].id.clone()));
                     }
                     None => kept.push_back(m),
@@ -587,7 +579,7 @@ impl Live<'_> {
                 let mut b = net.to_builder();
                 for p in net.place_ids() {
                     if let Some(place) = b.place_mut(p) {
-                        place.initial = tokens[p.index()];
+                        place.initial = tokens.get(p);
                     }
                 }
                 let net = b.build().map_err(|e| format!("`{}`: {e}", self.name))?;
