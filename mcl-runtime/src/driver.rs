@@ -371,7 +371,7 @@ fn number(m: &Inbound) -> Option<u64> {
     }
 }
 
-pub(crate) fn feed_mock(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), t: f64, out: &[Output]) {
+pub(crate) fn feed_mock(s: &mut Session<'_>, mock: &mut (impl VirtualVehicle + ?Sized), t: f64, out: &[Output]) {
     for a in actions(out) {
         mock.on_action(t, a);
     }
@@ -382,7 +382,7 @@ pub(crate) fn feed_mock(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Size
 }
 
 /// Traces the poses `vehicle` reached since the last call.
-pub(crate) fn drain_poses(s: &mut Session, vehicle: &mut (impl VirtualVehicle + ?Sized)) {
+pub(crate) fn drain_poses(s: &mut Session<'_>, vehicle: &mut (impl VirtualVehicle + ?Sized)) {
     for p in vehicle.take_poses() {
         let r = pose_record(s.tracer.mission(), &p);
         s.emit_record(r);
@@ -403,7 +403,11 @@ pub fn pose_record(mission: Option<&str>, p: &Pose) -> Record {
 /// Runs `s` against `mock` in virtual time until the mission ends, nothing
 /// more can happen, or the time limit passes. Starts the player if it has
 /// not started (a resumed player has). `mock.initial()` must have been called.
-pub fn run_virtual(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), limits: Limits) -> Result<End, String> {
+pub fn run_virtual(
+    s: &mut Session<'_>,
+    mock: &mut (impl VirtualVehicle + ?Sized),
+    limits: Limits,
+) -> Result<End, String> {
     if !started(s) {
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, mock, 0.0, &actions);
@@ -462,7 +466,7 @@ pub fn run_virtual(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), l
     }
 }
 
-fn started(s: &Session) -> bool {
+fn started(s: &Session<'_>) -> bool {
     s.player.is_started()
 }
 
