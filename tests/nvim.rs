@@ -10,22 +10,13 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-fn nvim_available() -> bool {
-    let ok = Command::new("nvim").arg("--version").output().map(|o| o.status.success()).unwrap_or(false);
-    if !ok && std::env::var("MCL_REQUIRE_NVIM").as_deref() == Ok("1") {
-        panic!("nvim is required (MCL_REQUIRE_NVIM=1) but `nvim --version` failed");
-    }
-    ok
-}
-
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 #[test]
 fn neovim_receives_the_servers_diagnostics() {
-    if !nvim_available() {
-        eprintln!("skipped: nvim not installed");
+    if !mcl_testutil::have_tool("nvim", mcl_testutil::runs("nvim", &["--version"]), "apt-get install neovim") {
         return;
     }
     let root = root();

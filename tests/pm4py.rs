@@ -1,22 +1,17 @@
 //! Our PNML is read by a widely used third-party reader (pm4py, from PyPI)
-//! with the same places, transitions, arcs and initial marking. CI installs
-//! pm4py and sets MCL_REQUIRE_PM4PY=1; elsewhere the test is skipped when
-//! pm4py is missing.
+//! with the same places, transitions, arcs and initial marking. Skipped when
+//! pm4py cannot be imported, unless MCL_REQUIRE_PM4PY=1 (CI installs pm4py
+//! and sets it), which makes that a failure.
 
 use mcl_compiler::compile::compile_file;
 use mcl_compiler::{Database, Db};
 use std::path::Path;
 use std::process::Command;
 
-fn pm4py_available() -> bool {
-    Command::new("python3").args(["-c", "import pm4py"]).output().is_ok_and(|o| o.status.success())
-}
-
 #[test]
 fn pm4py_reads_our_pnml() {
-    if !pm4py_available() {
-        assert!(std::env::var_os("MCL_REQUIRE_PM4PY").is_none(), "pm4py is required but cannot be imported");
-        eprintln!("note: pm4py is not installed; skipping (pip install pm4py)");
+    let found = mcl_testutil::runs("python3", &["-c", "import pm4py"]);
+    if !mcl_testutil::have_tool("pm4py", found, "python3 -m pip install pm4py") {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

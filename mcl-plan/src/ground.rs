@@ -446,7 +446,7 @@ pub fn ground_with_budget(d: &Domain, p: &Problem, budget: u64) -> Result<Task, 
     let mut actions = Vec::with_capacity(bindings.len());
     for (ai, b) in bindings {
         let a = &d.actions[ai as usize];
-        let lit_ids = |atoms: &mut dyn Iterator<Item = &Atom>, cx: &Ctx| -> Vec<u32> {
+        let lit_ids = |atoms: &mut dyn Iterator<Item = &Atom>, cx: &Ctx<'_>| -> Vec<u32> {
             let mut v: Vec<u32> = atoms.filter_map(|at| cx.lookup(at, &b)).collect();
             v.sort_unstable();
             v.dedup();

@@ -13,18 +13,11 @@ use mcl_plan::{gen, Algorithm, Heuristic, Outcome};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// Whether pyperplan can be imported; when not, the test is skipped, or
+/// fails under MCL_REQUIRE_PYPERPLAN=1 ([`mcl_testutil::have_tool`]).
 fn pyperplan_available() -> bool {
-    let ok =
-        Command::new("python3").args(["-c", "import pyperplan"]).output().map(|o| o.status.success()).unwrap_or(false);
-    if !ok {
-        if std::env::var("MCL_REQUIRE_PYPERPLAN").as_deref() == Ok("1") {
-            panic!("MCL_REQUIRE_PYPERPLAN=1 but `python3 -c 'import pyperplan'` fails: run `python3 -m pip install pyperplan`");
-        }
-        eprintln!(
-            "note: pyperplan is not importable (python3 -m pip install pyperplan): pyperplan oracle test skipped"
-        );
-    }
-    ok
+    let found = mcl_testutil::runs("python3", &["-c", "import pyperplan"]);
+    mcl_testutil::have_tool("pyperplan", found, "python3 -m pip install pyperplan")
 }
 
 fn instances() -> Vec<gen::Instance> {

@@ -339,7 +339,7 @@ fn number(m: &Inbound) -> Option<u64> {
     }
 }
 
-pub(crate) fn feed_mock(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), t: f64, out: &[Output]) {
+pub(crate) fn feed_mock(s: &mut Session<'_>, mock: &mut (impl VirtualVehicle + ?Sized), t: f64, out: &[Output]) {
     for a in actions(out) {
         mock.on_action(t, a);
     }
@@ -350,7 +350,7 @@ pub(crate) fn feed_mock(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Size
 }
 
 /// Traces the poses `vehicle` reached since the last call.
-pub(crate) fn drain_poses(s: &mut Session, vehicle: &mut (impl VirtualVehicle + ?Sized)) {
+pub(crate) fn drain_poses(s: &mut Session<'_>, vehicle: &mut (impl VirtualVehicle + ?Sized)) {
     for p in vehicle.take_poses() {
         let r = pose_record(s.tracer.mission(), &p);
         s.emit_record(r);
@@ -368,7 +368,11 @@ pub fn pose_record(mission: Option<&str>, p: &Pose) -> Record {
 /// not started (a resumed player has). `mock.initial()` must have been called.
 /// The loop is [`virtual_loop::run`]: at equal times the player's timers go
 /// before the vehicle's messages.
-pub fn run_virtual(s: &mut Session, mock: &mut (impl VirtualVehicle + ?Sized), limits: Limits) -> Result<End, String> {
+pub fn run_virtual(
+    s: &mut Session<'_>,
+    mock: &mut (impl VirtualVehicle + ?Sized),
+    limits: Limits,
+) -> Result<End, String> {
     if !started(s) {
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, mock, 0.0, &actions);
@@ -450,7 +454,7 @@ impl<V: VirtualVehicle + ?Sized> Discrete for Single<'_, '_, V> {
     }
 }
 
-fn started(s: &Session) -> bool {
+fn started(s: &Session<'_>) -> bool {
     s.player.is_started()
 }
 

@@ -315,7 +315,7 @@ impl<'de> Deserialize<'de> for DelaySpec {
         struct V;
         impl<'de> Visitor<'de> for V {
             type Value = DelaySpec;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 write!(f, "a number of seconds ≥ 0, or a range [min, max]")
             }
             fn visit_f64<E: de::Error>(self, v: f64) -> Result<DelaySpec, E> {

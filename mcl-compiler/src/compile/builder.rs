@@ -81,7 +81,7 @@ impl Builder {
 
     /// The id made of `parts`, concatenated (it reads as empty until the
     /// builder completes its text).
-    pub fn id(&mut self, parts: &[Part]) -> Name {
+    pub fn id(&mut self, parts: &[Part<'_>]) -> Name {
         if self.buf.len() >= CHUNK {
             self.flush();
         }
@@ -119,9 +119,9 @@ impl Builder {
     }
 
     /// [`Builder::iface`] with a prefix made of parts (at most seven).
-    pub fn iface_parts(&mut self, prefix: &[Part], interface: u32) -> Iface {
+    pub fn iface_parts(&mut self, prefix: &[Part<'_>], interface: u32) -> Iface {
         let mut mk = |n: &str| {
-            let mut parts: [Part; 8] = [Part::S(""); 8];
+            let mut parts: [Part<'_>; 8] = [Part::S(""); 8];
             parts[..prefix.len()].copy_from_slice(prefix);
             parts[prefix.len()] = Part::S(n);
             let id = self.id(&parts[..=prefix.len()]);

@@ -373,7 +373,7 @@ impl Composer<'_> {
 ///   while it waits for this task is cancelled, never started).
 pub fn adapter(
     b: &mut Builder,
-    prefix: &[builder::Part],
+    prefix: &[builder::Part<'_>],
     ext: Iface,
     task: Iface,
     lock: mcl_net::PlaceId,

@@ -123,22 +123,22 @@ pub fn build(b: &mut Builder, s: &Structure, ext: Iface, prefix: &str) -> (Vec<I
     let kids: Vec<Iface> = (0..s.arity()).map(|i| b.iface_parts(&[S(prefix), S("."), N(i)], i as u32 + 2)).collect();
     // Local nodes are `prefix.p_NAME` and `prefix.t_NAME`, apart from the
     // interface places `prefix.I.begin` of the children.
-    let local = |b: &mut Builder, kind: &str, name: &[Part]| {
-        let mut parts: [Part; 8] = [S(""); 8];
+    let local = |b: &mut Builder, kind: &str, name: &[Part<'_>]| {
+        let mut parts: [Part<'_>; 8] = [S(""); 8];
         parts[0] = S(prefix);
         parts[1] = S(kind);
         parts[2..2 + name.len()].copy_from_slice(name);
         b.id(&parts[..2 + name.len()])
     };
-    let p = |b: &mut Builder, name: &[Part]| {
+    let p = |b: &mut Builder, name: &[Part<'_>]| {
         let id = local(b, ".p_", name);
         b.place(id, 0)
     };
-    let ti = |b: &mut Builder, name: &[Part], inputs: &[PlaceId], outputs: &[PlaceId]| {
+    let ti = |b: &mut Builder, name: &[Part<'_>], inputs: &[PlaceId], outputs: &[PlaceId]| {
         let id = local(b, ".t_", name);
         b.imm(id, inputs, outputs)
     };
-    let td = |b: &mut Builder, name: &[Part], inputs: &[PlaceId], outputs: &[PlaceId]| {
+    let td = |b: &mut Builder, name: &[Part<'_>], inputs: &[PlaceId], outputs: &[PlaceId]| {
         let id = local(b, ".t_", name);
         b.deferred(id, inputs, outputs)
     };

@@ -17,6 +17,9 @@ extern "C" {
 }
 
 /// The tree-sitter [`LanguageFn`] of MCL.
+// SAFETY: `tree_sitter_mcl` is the generated parser's language function
+// (`src/parser.c`, compiled by build.rs): it takes nothing and returns a
+// pointer to its static `TSLanguage`, as `LanguageFn::from_raw` requires.
 pub const LANGUAGE: LanguageFn = unsafe { LanguageFn::from_raw(tree_sitter_mcl) };
 
 /// The content of `src/node-types.json`.
