@@ -215,7 +215,7 @@ fn survey_nominal_in_virtual_time() {
     assert_eq!(outcome(&tr), "ok");
     assert_eq!(ends(&tr)[0].t, 133.0);
     // The scenario's symbols are sent instead of the symbols' names.
-    let alts: Vec<Act> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
+    let alts: Vec<Act<'_>> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
     assert_eq!((alts[0].params["mode"].as_str(), alts[0].params["altitude"].as_f64()), (Some("achieve"), Some(2.5)));
     assert_eq!(alts[1].params["mode"], "keep");
     assert_eq!(act(&tr, "enableTrajectory").params["velocity"], 0.5);
@@ -257,7 +257,7 @@ fn survey_with_default_answers() {
     );
     assert_eq!(outcome(&tr), "ok");
     // Parameters are resolved from each call's arguments.
-    let alts: Vec<Act> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
+    let alts: Vec<Act<'_>> = acts(&tr).into_iter().filter(|a| a.action == "enableAltitude").collect();
     assert_eq!(alts[0].params["mode"], "achieve");
     assert_eq!(alts[1].params["mode"], "keep");
     assert_eq!(alts[1].params["altitude"], "altitude", "an unset symbol is sent as is");

@@ -295,7 +295,13 @@ fn wall_of(w: &World) -> Wall {
 impl Behaviour {
     /// Starts a behaviour at `ctx`; `Err` when it fails at once (`Fail`
     /// with why). `progress`: how far along the cable has been tracked.
-    pub fn start(kind: Kind, args: &Args, ctx: &Ctx, progress: f64, warn: &mut Vec<String>) -> Result<Behaviour, End> {
+    pub fn start(
+        kind: Kind,
+        args: &Args,
+        ctx: &Ctx<'_>,
+        progress: f64,
+        warn: &mut Vec<String>,
+    ) -> Result<Behaviour, End> {
         let l = ctx.limits;
         let keep = match args.text("mode") {
             None | Some("achieve") => false,
@@ -407,7 +413,7 @@ impl Behaviour {
     }
 
     /// The set-points it asks for at `ctx`.
-    pub fn command(&self, ctx: &Ctx) -> Command {
+    pub fn command(&self, ctx: &Ctx<'_>) -> Command {
         let l = ctx.limits;
         let mut c = Command::default();
         match &self.goal {
@@ -472,7 +478,7 @@ impl Behaviour {
 
     /// Whether it has ended at `ctx` (after the step). `progress`: how far
     /// along the cable has been tracked (a cable tracking moves it on).
-    pub fn check(&mut self, ctx: &Ctx, progress: &mut f64) -> Option<End> {
+    pub fn check(&mut self, ctx: &Ctx<'_>, progress: &mut f64) -> Option<End> {
         let end = self.goal_end(ctx, progress);
         if self.keep && end == Some(End::Ok) {
             return None;
@@ -488,7 +494,7 @@ impl Behaviour {
         }
     }
 
-    fn goal_end(&mut self, ctx: &Ctx, progress: &mut f64) -> Option<End> {
+    fn goal_end(&mut self, ctx: &Ctx<'_>, progress: &mut f64) -> Option<End> {
         let tol = self.tolerance;
         let near = |x: f64, y: f64| (x - ctx.x).hypot(y - ctx.y) <= tol;
         let ok = |b: bool| b.then_some(End::Ok);
