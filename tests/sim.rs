@@ -295,3 +295,44 @@ fn bad_world_and_model_files_are_located_errors() {
     let o = mcl(&["run", "--mock", "--virtual-time", "examples/survey.mcl", "--world", w.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// The poses of `mission` in a trace of several vehicles.
+fn poses_of(tr: &[Value], mission: &str) -> Vec<P> {
+    let mine: Vec<Value> = tr.iter().filter(|r| r["mission"] == mission).cloned().collect();
+    poses(&mine)
+}
+
+#[test]
+fn auv_and_asc_run_together_in_the_default_world() {
+    let svg = tmp("auv-asc.svg");
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &["--trajectory", svg.to_str().unwrap()], "auv-asc");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let (auv, asc) = (poses_of(&tr, "auv"), poses_of(&tr, "asc"));
+    assert!(auv.len() > 100 && asc.len() > 10, "{} {}", auv.len(), asc.len());
+    assert!(auv.iter().any(|p| p.z > 5.0), "the AUV dives");
+    assert!(asc.iter().all(|p| p.z == 0.0), "the ASC stays at the surface");
+    // The ASC reaches the deployment area before the AUV dives (order { asc:deploy_auv, auv:deploy_auv }).
+    let dive = auv.iter().find(|p| p.z > 0.1).unwrap().t;
+    let deployed = asc.iter().find(|p| (p.x - 20.0).hypot(p.y + 5.0) <= 1.0).expect("the ASC reaches deploy_area");
+    assert!(deployed.t < dive, "{} < {dive}", deployed.t);
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&doc);
+    assert!(doc.contains(">auv<") && doc.contains(">asc<") && doc.contains(">vehicle<"));
+    assert_eq!(doc.matches("<title>start</title>").count(), 2, "one path per vehicle");
+}
+
+#[test]
+fn the_asc_goes_over_the_object_the_auv_found() {
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &["--world", "examples/sim/auv-asc.toml"], "auv-asc-object");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let (auv, asc) = (poses_of(&tr, "auv"), poses_of(&tr, "asc"));
+    // Each starts where the world says.
+    assert_eq!((auv[0].x, auv[0].y), (0.0, 0.0));
+    assert_eq!((asc[0].x, asc[0].y), (0.0, -5.0));
+    let found =
+        tr.iter().find(|r| r["mission"] == "auv" && r["event"] == "eventSearchOk").expect("the AUV finds the object");
+    let over = asc.iter().find(|p| (p.x - 20.0).hypot(p.y - 10.0) <= 1.0).expect("the ASC goes over the object");
+    assert!(over.t > found["t"].as_f64().unwrap());
+    let sent: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "action" && r["action"] == "enableSendData").collect();
+    assert_eq!(sent.len(), 1, "the images are sent once: the object is found once");
+}

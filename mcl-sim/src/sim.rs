@@ -36,7 +36,7 @@ use serde_json::Value;
 
 use crate::behaviour::{los_surge, Args, Behaviour, Command, Ctx, End, Horizontal, Kind, SURFACE};
 use crate::model::{ArgSource, Model};
-use crate::world::World;
+use crate::world::{Start, World};
 
 /// A pose and the task that moved the vehicle there (an index in
 /// [`Track::labels`]).
@@ -81,6 +81,8 @@ pub struct SimVehicle {
     energy_wh: f64,
     nav_err: (f64, f64),
     progress: f64,
+    /// Objects found by its detectors ([`Ctx::found`]).
+    found: u64,
     running: Vec<Run>,
     agenda: BTreeMap<(u64, u64), Pending>,
     next_id: u64,
@@ -117,6 +119,7 @@ impl SimVehicle {
             energy_wh,
             nav_err: (0.0, 0.0),
             progress: 0.0,
+            found: 0,
             running: Vec::new(),
             agenda: BTreeMap::new(),
             next_id: 0,
@@ -133,6 +136,13 @@ impl SimVehicle {
             initialised: false,
             world,
         }
+    }
+
+    /// The same vehicle at `s` instead of the world's start (one of
+    /// several in the world, [`World::start_of`]); before it runs.
+    pub fn starting_at(mut self, s: Start) -> SimVehicle {
+        (self.x, self.y, self.z, self.yaw) = (s.x, s.y, s.z, s.yaw);
+        self
     }
 
     /// The world it moves in.
@@ -185,6 +195,7 @@ impl SimVehicle {
             err: self.nav_err,
             world,
             limits: &model.limits,
+            found: self.found,
         }
     }
 
@@ -252,6 +263,11 @@ impl SimVehicle {
         };
         if r.b.is_fix() && end == End::Ok {
             self.nav_err = (0.0, 0.0);
+        }
+        if end == End::Ok {
+            if let Some(k) = r.b.found_object(&self.ctx()).filter(|k| *k < 64) {
+                self.found |= 1 << k;
+            }
         }
         match event {
             Some(event) => {
