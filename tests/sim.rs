@@ -336,3 +336,56 @@ fn the_asc_goes_over_the_object_the_auv_found() {
     let sent: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "action" && r["action"] == "enableSendData").collect();
     assert_eq!(sent.len(), 1, "the images are sent once: the object is found once");
 }
+
+#[test]
+fn planned_cable_tracking_replans_when_the_simulated_vision_loses_the_cable() {
+    let (tp, svg) = (tmp("plan-cable.jsonl"), tmp("plan-cable.svg"));
+    let o = mcl(&[
+        "plan",
+        "examples/planning/cable/cable.mcl",
+        "--run",
+        "--sim",
+        "--virtual-time",
+        "--holding",
+        "Holding",
+        "--vehicle-model",
+        "examples/planning/cable/sim-model.toml",
+        "--sim-world",
+        "examples/planning/cable/sim-world.toml",
+        "-q",
+        "--trace",
+        tp.to_str().unwrap(),
+        "--trajectory",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let tr = trace(&tp);
+    let has = |r: &Value, field: &str, fact: &str| r[field].as_array().is_some_and(|a| a.iter().any(|f| f == fact));
+    // The first re-plan: the cable is no longer found...
+    let replan = tr.iter().find(|r| r["kind"] == "replan").expect("a re-plan");
+    let t = replan["t"].as_f64().unwrap();
+    assert!(replan["reason"].as_str().unwrap().contains("(not_found cable)"), "{replan}");
+    // ... because the simulated vision lost it: the vehicle's perception,
+    // turned into that fact by world.xml, at that instant.
+    let lost = tr
+        .iter()
+        .find(|r| r["kind"] == "facts" && r["perception"] == "cable.detected" && has(r, "deleted", "(found cable)"))
+        .expect("the cable lost");
+    assert_eq!(lost["t"], replan["t"]);
+    assert!(tr.iter().any(|r| r["kind"] == "perception"
+        && r["name"] == "cable.detected"
+        && r["value"] == 0.0
+        && r["t"] == replan["t"]));
+    // Where the cable is buried: 60 m along it from (42, 32).
+    let at = pose_at(&poses(&tr), t);
+    assert!((at.x - 102.0).abs() < 3.0 && (at.y - 32.0).abs() < 3.0, "{at:?}");
+    // Then a search finds it again and the tracking maps it (cable.tracked), and the goal is reached.
+    let after: Vec<&Value> = tr.iter().filter(|r| r["t"].as_f64().unwrap() >= t).collect();
+    assert!(after.iter().any(|r| r["kind"] == "step" && r["action"] == "(searchcableop auv cable)"));
+    assert!(after
+        .iter()
+        .any(|r| r["kind"] == "facts" && r["perception"] == "cable.tracked" && has(r, "added", "(mapped cable)")));
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&doc);
+    assert!(doc.contains(">CableTracking<") && doc.contains(">SearchPattern<"));
+}

@@ -27,11 +27,18 @@ pub struct Setup {
 /// `examples/vehicle.mcl`) and `--world` (default: [`World::default`]).
 /// Prints a located error and returns exit status 2 on a bad file.
 pub fn load(o: &Options) -> Result<Setup, u8> {
-    let model = match &o.vehicle_model {
+    load_files(o.vehicle_model.as_deref(), o.world.as_deref())
+}
+
+/// Loads a vehicle model and a world (`mcl run --sim`, `mcl plan --run
+/// --sim`), the defaults when not given; a bad file is a located error
+/// printed, and exit status 2.
+pub fn load_files(model: Option<&Path>, world: Option<&Path>) -> Result<Setup, u8> {
+    let model = match model {
         Some(p) => Model::load(p),
         None => Ok(Model::default_model()),
     };
-    let world = match &o.world {
+    let world = match world {
         Some(p) => World::load(p),
         None => Ok(World::default()),
     };
