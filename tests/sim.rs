@@ -389,3 +389,17 @@ fn planned_cable_tracking_replans_when_the_simulated_vision_loses_the_cable() {
     well_formed(&doc);
     assert!(doc.contains(">CableTracking<") && doc.contains(">SearchPattern<"));
 }
+
+#[test]
+fn eight_vehicles_survey_side_by_side() {
+    let (code, tr, o) = sim("examples/sim/fleet8.mcl", &["--world", "examples/sim/fleet8.toml"], "fleet8");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    for k in 0..8 {
+        let ps = poses_of(&tr, &format!("auv{}", k + 1));
+        let y0 = 30.0 * k as f64;
+        assert_eq!((ps[0].x, ps[0].y), (0.0, y0), "auv{} starts at its corner", k + 1);
+        // Its lawn-mower's last way-point, (20, y0 + 20).
+        assert!(ps.iter().any(|p| (p.x - 20.0).hypot(p.y - y0 - 20.0) <= 2.0), "auv{}", k + 1);
+        assert!(ps.iter().all(|p| p.y > y0 - 3.0 && p.y < y0 + 23.0), "auv{} stays in its area", k + 1);
+    }
+}
