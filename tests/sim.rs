@@ -1,6 +1,7 @@
-//! `mcl run --sim`, end to end through the binary: the seed's missions
-//! against the simulated vehicle (crate `mcl-sim`), checked on the poses
-//! and events of the trace.
+//! `mcl run --sim` and `mcl plan --run --sim`, end to end through the
+//! binary: the seed's missions against the simulated vehicle (crate
+//! `mcl-sim`), alone, several in one world, or executing a plan, checked on
+//! the poses, events, facts and re-plans of the trace.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
