@@ -159,7 +159,7 @@ enum Command {
     /// AAC in real time, and re-plans when the world differs (exit status 0 goal reached, 1 no
     /// plan, gave up or the AAC link lost, 2 bad input, 3 --time-limit, 130/143 after
     /// SIGINT/SIGTERM with the trace flushed).
-    Plan(cmd::plan::Options),
+    Plan(Box<cmd::plan::Options>),
     /// Run the language server (LSP over standard input and output), for editors.
     Lsp {
         /// Accepted for editors that pass it; standard input and output are the only transport.
@@ -231,7 +231,7 @@ fn main() -> ExitCode {
         Command::Fmt { paths, check } => cmd::fmt::run(&paths, check),
         Command::New { name } => cmd::new::run(&name),
         Command::Lsp { stdio: _ } => cmd::lsp::run(),
-        Command::Plan(o) => cmd::plan::run(o),
+        Command::Plan(o) => cmd::plan::run(*o),
         Command::Run(o) => cmd::run::run(*o),
         Command::MockAac { net, plan, scenario, listen, token, speed, state, seed, timeout, quiet } => {
             cmd::mock_aac::run(cmd::mock_aac::Options {

@@ -1,6 +1,7 @@
-//! `mcl run --sim`, end to end through the binary: the seed's missions
-//! against the simulated vehicle (crate `mcl-sim`), checked on the poses
-//! and events of the trace.
+//! `mcl run --sim` and `mcl plan --run --sim`, end to end through the
+//! binary: the seed's missions against the simulated vehicle (crate
+//! `mcl-sim`), alone, several in one world, or executing a plan, checked on
+//! the poses, events, facts and re-plans of the trace.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -294,4 +295,112 @@ fn bad_world_and_model_files_are_located_errors() {
     assert!(text(&o.stderr).contains("--virtual-time"));
     let o = mcl(&["run", "--mock", "--virtual-time", "examples/survey.mcl", "--world", w.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// The poses of `mission` in a trace of several vehicles.
+fn poses_of(tr: &[Value], mission: &str) -> Vec<P> {
+    let mine: Vec<Value> = tr.iter().filter(|r| r["mission"] == mission).cloned().collect();
+    poses(&mine)
+}
+
+#[test]
+fn auv_and_asc_run_together_in_the_default_world() {
+    let svg = tmp("auv-asc.svg");
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &["--trajectory", svg.to_str().unwrap()], "auv-asc");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let (auv, asc) = (poses_of(&tr, "auv"), poses_of(&tr, "asc"));
+    assert!(auv.len() > 100 && asc.len() > 10, "{} {}", auv.len(), asc.len());
+    assert!(auv.iter().any(|p| p.z > 5.0), "the AUV dives");
+    assert!(asc.iter().all(|p| p.z == 0.0), "the ASC stays at the surface");
+    // The ASC reaches the deployment area before the AUV dives (order { asc:deploy_auv, auv:deploy_auv }).
+    let dive = auv.iter().find(|p| p.z > 0.1).unwrap().t;
+    let deployed = asc.iter().find(|p| (p.x - 20.0).hypot(p.y + 5.0) <= 1.0).expect("the ASC reaches deploy_area");
+    assert!(deployed.t < dive, "{} < {dive}", deployed.t);
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&doc);
+    assert!(doc.contains(">auv<") && doc.contains(">asc<") && doc.contains(">vehicle<"));
+    assert_eq!(doc.matches("<title>start</title>").count(), 2, "one path per vehicle");
+}
+
+#[test]
+fn the_asc_goes_over_the_object_the_auv_found() {
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &["--world", "examples/sim/auv-asc.toml"], "auv-asc-object");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let (auv, asc) = (poses_of(&tr, "auv"), poses_of(&tr, "asc"));
+    // Each starts where the world says.
+    assert_eq!((auv[0].x, auv[0].y), (0.0, 0.0));
+    assert_eq!((asc[0].x, asc[0].y), (0.0, -5.0));
+    let found =
+        tr.iter().find(|r| r["mission"] == "auv" && r["event"] == "eventSearchOk").expect("the AUV finds the object");
+    let over = asc.iter().find(|p| (p.x - 20.0).hypot(p.y - 10.0) <= 1.0).expect("the ASC goes over the object");
+    assert!(over.t > found["t"].as_f64().unwrap());
+    let sent: Vec<&Value> = tr.iter().filter(|r| r["kind"] == "action" && r["action"] == "enableSendData").collect();
+    assert_eq!(sent.len(), 1, "the images are sent once: the object is found once");
+}
+
+#[test]
+fn planned_cable_tracking_replans_when_the_simulated_vision_loses_the_cable() {
+    let (tp, svg) = (tmp("plan-cable.jsonl"), tmp("plan-cable.svg"));
+    let o = mcl(&[
+        "plan",
+        "examples/planning/cable/cable.mcl",
+        "--run",
+        "--sim",
+        "--virtual-time",
+        "--holding",
+        "Holding",
+        "--vehicle-model",
+        "examples/planning/cable/sim-model.toml",
+        "--sim-world",
+        "examples/planning/cable/sim-world.toml",
+        "-q",
+        "--trace",
+        tp.to_str().unwrap(),
+        "--trajectory",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let tr = trace(&tp);
+    let has = |r: &Value, field: &str, fact: &str| r[field].as_array().is_some_and(|a| a.iter().any(|f| f == fact));
+    // The first re-plan: the cable is no longer found...
+    let replan = tr.iter().find(|r| r["kind"] == "replan").expect("a re-plan");
+    let t = replan["t"].as_f64().unwrap();
+    assert!(replan["reason"].as_str().unwrap().contains("(not_found cable)"), "{replan}");
+    // ... because the simulated vision lost it: the vehicle's perception,
+    // turned into that fact by world.xml, at that instant.
+    let lost = tr
+        .iter()
+        .find(|r| r["kind"] == "facts" && r["perception"] == "cable.detected" && has(r, "deleted", "(found cable)"))
+        .expect("the cable lost");
+    assert_eq!(lost["t"], replan["t"]);
+    assert!(tr.iter().any(|r| r["kind"] == "perception"
+        && r["name"] == "cable.detected"
+        && r["value"] == 0.0
+        && r["t"] == replan["t"]));
+    // Where the cable is buried: 60 m along it from (42, 32).
+    let at = pose_at(&poses(&tr), t);
+    assert!((at.x - 102.0).abs() < 3.0 && (at.y - 32.0).abs() < 3.0, "{at:?}");
+    // Then a search finds it again and the tracking maps it (cable.tracked), and the goal is reached.
+    let after: Vec<&Value> = tr.iter().filter(|r| r["t"].as_f64().unwrap() >= t).collect();
+    assert!(after.iter().any(|r| r["kind"] == "step" && r["action"] == "(searchcableop auv cable)"));
+    assert!(after
+        .iter()
+        .any(|r| r["kind"] == "facts" && r["perception"] == "cable.tracked" && has(r, "added", "(mapped cable)")));
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&doc);
+    assert!(doc.contains(">CableTracking<") && doc.contains(">SearchPattern<"));
+}
+
+#[test]
+fn eight_vehicles_survey_side_by_side() {
+    let (code, tr, o) = sim("examples/sim/fleet8.mcl", &["--world", "examples/sim/fleet8.toml"], "fleet8");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    for k in 0..8 {
+        let ps = poses_of(&tr, &format!("auv{}", k + 1));
+        let y0 = 30.0 * k as f64;
+        assert_eq!((ps[0].x, ps[0].y), (0.0, y0), "auv{} starts at its corner", k + 1);
+        // Its lawn-mower's last way-point, (20, y0 + 20).
+        assert!(ps.iter().any(|p| (p.x - 20.0).hypot(p.y - y0 - 20.0) <= 2.0), "auv{}", k + 1);
+        assert!(ps.iter().all(|p| p.y > y0 - 3.0 && p.y < y0 + 23.0), "auv{} stays in its area", k + 1);
+    }
 }

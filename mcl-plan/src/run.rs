@@ -551,6 +551,20 @@ impl Run<'_> {
         for w in warnings {
             self.emit_kind(RecordKind::Warning { message: w });
         }
+        self.drain_poses();
+    }
+
+    /// Traces the poses the vehicle reached since the last call (a
+    /// simulated vehicle's `pose` records; none from the mock or an AAC).
+    fn drain_poses(&mut self) {
+        let poses = match &mut self.vehicle {
+            Vehicle::Mock(v) => v.take_poses(),
+            Vehicle::Aac(_) => Vec::new(),
+        };
+        for p in poses {
+            let r = mcl_runtime::driver::pose_record(None, &p);
+            self.sink.record(serde_json::to_value(&r).unwrap_or_default(), None);
+        }
     }
 
     /// Starts `net` on a new player.
@@ -900,6 +914,7 @@ impl Discrete for Run<'_> {
                 } {
                     self.deliver(m);
                 }
+                self.drain_poses();
             }
         }
         Ok(())

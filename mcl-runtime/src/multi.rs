@@ -41,7 +41,7 @@ use std::time::Duration;
 
 use crate::clock::Clock;
 use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, Incoming, MutexMessages, TokenMutex};
-use crate::driver::{feed_mock, perception_or_event, End, Limits, Session, Sink};
+use crate::driver::{drain_poses, feed_mock, perception_or_event, End, Limits, Session, Sink};
 use crate::journal::{Entry, Input, JournalWriter, Replay, Step};
 use crate::player::{Outcome, Output, Player, PlayerOptions};
 use crate::trace::{Record, RecordKind, Tracer};
@@ -842,6 +842,10 @@ impl Discrete for Fleet<'_> {
                 let outs = v.s.step(input)?;
                 self.work.push_back((i, outs));
             }
+        } else {
+            // A simulated vehicle moved without a message: its poses now,
+            // in time order with the other records.
+            drain_poses(&mut v.s, &mut *v.mock);
         }
         self.settle().await
     }

@@ -142,6 +142,10 @@ pub struct Ctx<'a> {
     pub err: (f64, f64),
     pub world: &'a World,
     pub limits: &'a Limits,
+    /// The objects this vehicle's detectors have found already (bit `i`:
+    /// the world's object `i`; past the 64th none is remembered): a
+    /// detector finds each object once.
+    pub found: u64,
 }
 
 impl Ctx<'_> {
@@ -556,7 +560,7 @@ impl Behaviour {
                         ctx.seabed - ctx.z <= c.max_altitude && c.visible_near(tx, ty, *progress + 1.0).is_some();
                     ok(seen)
                 } else {
-                    ok(ctx.world.objects.iter().any(|o| &o.name == target && (o.x - tx).hypot(o.y - ty) <= o.range))
+                    ok(self.found_object(ctx).is_some())
                 }
             }
             Goal::Alarm => ok(ctx.battery <= ctx.world.battery.alarm_below),
@@ -571,6 +575,16 @@ impl Behaviour {
             }
             Goal::Timed(until) => ok(ctx.t >= *until - 1e-9),
         }
+    }
+
+    /// The object a detector sees at `ctx`: one of its target's name, in
+    /// range and not found before.
+    pub fn found_object(&self, ctx: &Ctx<'_>) -> Option<usize> {
+        let Goal::Detect(target) = &self.goal else { return None };
+        let (tx, ty) = ctx.true_pos();
+        ctx.world.objects.iter().enumerate().position(|(i, o)| {
+            &o.name == target && (o.x - tx).hypot(o.y - ty) <= o.range && (i >= 64 || ctx.found & (1 << i) == 0)
+        })
     }
 
     /// A position fix that has just ended resets the navigation.
@@ -610,6 +624,7 @@ mod tests {
             err: (0.0, 0.0),
             world,
             limits,
+            found: 0,
         }
     }
 
@@ -688,6 +703,8 @@ mod tests {
         let mut obj =
             Behaviour::start(Kind::Detector, &args(json!({"target": "red box"})), &c, 0.0, &mut warn).unwrap();
         assert_eq!(obj.check(&c, &mut p), Some(End::Ok));
+        assert_eq!(obj.found_object(&c), Some(0));
+        assert_eq!(obj.check(&Ctx { found: 1, ..c }, &mut p), None, "an object is found once");
         let mut alarm = Behaviour::start(Kind::Alarm, &Args::default(), &c, 0.0, &mut warn).unwrap();
         assert_eq!(alarm.check(&Ctx { battery: 0.3, ..c }, &mut p), None);
         assert_eq!(alarm.check(&Ctx { battery: 0.2, ..c }, &mut p), Some(End::Ok));

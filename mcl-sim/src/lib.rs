@@ -9,7 +9,8 @@
 //! * [`behaviour`]: what each behaviour does and when it ends;
 //! * [`sim`]: [`SimVehicle`], the [`mcl_runtime::vehicle::VirtualVehicle`]
 //!   the virtual-time driver plays against (one per vehicle);
-//! * [`trajectory`]: the trajectory picture (SVG).
+//! * [`shared`]: [`SharedSim`], a vehicle lent to a run and read after it;
+//! * [`trajectory`]: the trajectory picture (SVG), of one vehicle or several.
 //!
 //! Sans-IO and deterministic: the same actions at the same times give the
 //! same poses and messages. See `docs/simulator.md`.
@@ -17,10 +18,12 @@
 pub mod behaviour;
 pub mod error;
 pub mod model;
+pub mod shared;
 pub mod sim;
 pub mod trajectory;
 pub mod world;
 
 pub use model::Model;
+pub use shared::SharedSim;
 pub use sim::SimVehicle;
 pub use world::World;

@@ -44,6 +44,20 @@ pub struct Perceptions {
     pub cable_seen: Option<String>,
     /// Battery charge (a fraction of the capacity), sent at every 5 % step.
     pub battery: Option<String>,
+    /// The navigation's estimate of the position, east and north, in whole
+    /// metres, and the depth in tenths of a metre, each sent when it
+    /// changes (for a planner's world modeler; none by default).
+    pub x: Option<String>,
+    pub y: Option<String>,
+    pub depth: Option<String>,
+    /// Whether the battery is at or below the alarm level (true/false),
+    /// sent when it changes (none by default).
+    pub alarm: Option<String>,
+    /// Metres of cable tracked so far, whole metres, sent when it grows
+    /// (none by default).
+    pub cable_tracked: Option<String>,
+    /// True/false perceptions (`cable_seen`, `alarm`) are sent as 1/0.
+    pub flags_as_numbers: bool,
 }
 
 /// Where a behaviour argument comes from.
@@ -88,6 +102,9 @@ pub struct Model {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ModelFile {
+    /// `"default"`: this file overrides the bundled model.
+    #[serde(default)]
+    base: Option<toml::Spanned<String>>,
     #[serde(default)]
     vehicle: Option<VehicleFile>,
     #[serde(default)]
@@ -117,12 +134,18 @@ struct VehicleFile {
     pose_period: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PerceptionsFile {
     position_quality: Option<String>,
     cable_seen: Option<String>,
     battery: Option<String>,
+    x: Option<String>,
+    y: Option<String>,
+    depth: Option<String>,
+    alarm: Option<String>,
+    cable_tracked: Option<String>,
+    flags_as_numbers: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -159,9 +182,9 @@ fn opt_step<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
 }
 
 /// The name in `perceptions`: absent means the default, "" means none.
-fn name_or(v: Option<String>, default: &str) -> Option<String> {
+fn name_or(v: Option<String>, default: Option<&String>) -> Option<String> {
     match v {
-        None => Some(default.to_string()),
+        None => default.cloned(),
         Some(s) if s.is_empty() => None,
         Some(s) => Some(s),
     }
@@ -171,6 +194,20 @@ impl Model {
     /// Parses a vehicle model. Errors are `origin:line:col: message`.
     pub fn from_toml(text: &str, origin: &str) -> Result<Model, String> {
         let f: ModelFile = toml::from_str(text).map_err(|e| toml_error(origin, text, &e))?;
+        // What the file does not say: the bundled model's (`base`), else the defaults.
+        let base = match &f.base {
+            None => Model::builtin_defaults(),
+            Some(b) if b.get_ref() == "default" => Model::default_model(),
+            Some(b) => {
+                return Err(located(
+                    origin,
+                    text,
+                    b.span(),
+                    &format!("`base = \"{}\"`: the only base is \"default\" (the bundled model)", b.get_ref()),
+                ))
+            }
+        };
+        let d = base.limits;
         let v = f.vehicle.unwrap_or(VehicleFile {
             surge_speed: None,
             sway_speed: None,
@@ -181,21 +218,28 @@ impl Model {
             pose_period: None,
         });
         let limits = Limits {
-            surge: v.surge_speed.unwrap_or(1.0),
-            sway: v.sway_speed.unwrap_or(0.3),
-            heave: v.heave_speed.unwrap_or(0.3),
-            turn_rate: v.turn_rate.unwrap_or(30.0).to_radians(),
-            emergency_ascent: v.emergency_ascent.unwrap_or(1.0),
-            step: v.step.unwrap_or(0.1),
-            pose_period: v.pose_period.unwrap_or(1.0),
+            surge: v.surge_speed.unwrap_or(d.surge),
+            sway: v.sway_speed.unwrap_or(d.sway),
+            heave: v.heave_speed.unwrap_or(d.heave),
+            turn_rate: v.turn_rate.map_or(d.turn_rate, f64::to_radians),
+            emergency_ascent: v.emergency_ascent.unwrap_or(d.emergency_ascent),
+            step: v.step.unwrap_or(d.step),
+            pose_period: v.pose_period.unwrap_or(d.pose_period),
         };
-        let p = f.perceptions.unwrap_or(PerceptionsFile { position_quality: None, cable_seen: None, battery: None });
+        let p = f.perceptions.unwrap_or_default();
+        let b = &base.perceptions;
         let perceptions = Perceptions {
-            position_quality: name_or(p.position_quality, "nav.quality"),
-            cable_seen: name_or(p.cable_seen, "cable.seen"),
-            battery: name_or(p.battery, "battery"),
+            position_quality: name_or(p.position_quality, b.position_quality.as_ref()),
+            cable_seen: name_or(p.cable_seen, b.cable_seen.as_ref()),
+            battery: name_or(p.battery, b.battery.as_ref()),
+            x: name_or(p.x, b.x.as_ref()),
+            y: name_or(p.y, b.y.as_ref()),
+            depth: name_or(p.depth, b.depth.as_ref()),
+            alarm: name_or(p.alarm, b.alarm.as_ref()),
+            cable_tracked: name_or(p.cable_tracked, b.cable_tracked.as_ref()),
+            flags_as_numbers: p.flags_as_numbers.unwrap_or(b.flags_as_numbers),
         };
-        let mut primitives = BTreeMap::new();
+        let mut primitives = base.primitives;
         for (name, pf) in f.primitives {
             let allowed = pf.behaviour.args();
             let mut args = BTreeMap::new();
@@ -257,7 +301,34 @@ impl Model {
                 },
             );
         }
-        Ok(Model { limits, perceptions, symbols: f.symbols, primitives })
+        let mut symbols = base.symbols;
+        symbols.extend(f.symbols);
+        Ok(Model { limits, perceptions, symbols, primitives })
+    }
+
+    /// What a model file without `base` starts from: the default limits
+    /// and perception names, no symbol, no primitive.
+    fn builtin_defaults() -> Model {
+        let name = |s: &str| Some(s.to_string());
+        Model {
+            limits: Limits {
+                surge: 1.0,
+                sway: 0.3,
+                heave: 0.3,
+                turn_rate: 30f64.to_radians(),
+                emergency_ascent: 1.0,
+                step: 0.1,
+                pose_period: 1.0,
+            },
+            perceptions: Perceptions {
+                position_quality: name("nav.quality"),
+                cable_seen: name("cable.seen"),
+                battery: name("battery"),
+                ..Perceptions::default()
+            },
+            symbols: BTreeMap::new(),
+            primitives: BTreeMap::new(),
+        }
     }
 
     /// Reads and parses a vehicle model file.
@@ -284,6 +355,24 @@ mod tests {
         assert_eq!(g.ok.as_deref(), Some("eventGotoOk"));
         assert_eq!(g.args.get("target"), Some(&ArgSource::Param("way-point".into())));
         assert_eq!(m.primitives["CableTrackingPrimitive"].lost.as_deref(), Some("eventCableTrackingOk"));
+    }
+
+    #[test]
+    fn a_model_based_on_the_bundled_one_overrides_what_it_says() {
+        let text = "base = \"default\"\n[vehicle]\nsurge_speed = 2\n[perceptions]\ncable_seen = \"cable.detected\"\nx = \"auv.x\"\nflags_as_numbers = true\n[symbols]\naltitude = 1.5\n[primitives.GotoPrimitive]\nbehaviour = \"goto\"\nok = \"done\"\n";
+        let m = Model::from_toml(text, "m.toml").unwrap();
+        let d = Model::default_model();
+        assert_eq!((m.limits.surge, m.limits.heave), (2.0, d.limits.heave));
+        assert_eq!(m.perceptions.cable_seen.as_deref(), Some("cable.detected"));
+        assert_eq!(m.perceptions.position_quality, d.perceptions.position_quality);
+        assert_eq!((m.perceptions.x.as_deref(), m.perceptions.y.as_deref()), (Some("auv.x"), None));
+        assert!(m.perceptions.flags_as_numbers && !d.perceptions.flags_as_numbers);
+        assert_eq!(m.symbols["altitude"], 1.5);
+        assert_eq!(m.symbols["velocity"], d.symbols["velocity"]);
+        assert_eq!(m.primitives["GotoPrimitive"].ok.as_deref(), Some("done"));
+        assert_eq!(m.primitives["SurfacePrimitive"], d.primitives["SurfacePrimitive"]);
+        let e = Model::from_toml("base = \"rov\"\n", "m.toml").unwrap_err();
+        assert!(e.starts_with("m.toml:1:8:") && e.contains("default"), "{e}");
     }
 
     #[test]

@@ -36,7 +36,7 @@ use serde_json::Value;
 
 use crate::behaviour::{los_surge, Args, Behaviour, Command, Ctx, End, Horizontal, Kind, SURFACE};
 use crate::model::{ArgSource, Model};
-use crate::world::World;
+use crate::world::{Start, World};
 
 /// A pose and the task that moved the vehicle there (an index in
 /// [`Track::labels`]).
@@ -81,6 +81,8 @@ pub struct SimVehicle {
     energy_wh: f64,
     nav_err: (f64, f64),
     progress: f64,
+    /// Objects found by its detectors ([`Ctx::found`]).
+    found: u64,
     running: Vec<Run>,
     agenda: BTreeMap<(u64, u64), Pending>,
     next_id: u64,
@@ -94,6 +96,10 @@ pub struct SimVehicle {
     sent_quality: Option<i64>,
     sent_cable: Option<bool>,
     sent_battery: Option<i64>,
+    /// Position (m), depth (dm), alarm and cable tracked (m) last sent.
+    sent_position: (Option<i64>, Option<i64>, Option<i64>),
+    sent_alarm: Option<bool>,
+    sent_tracked: Option<i64>,
     initialised: bool,
 }
 
@@ -117,6 +123,7 @@ impl SimVehicle {
             energy_wh,
             nav_err: (0.0, 0.0),
             progress: 0.0,
+            found: 0,
             running: Vec::new(),
             agenda: BTreeMap::new(),
             next_id: 0,
@@ -130,9 +137,19 @@ impl SimVehicle {
             sent_quality: None,
             sent_cable: None,
             sent_battery: None,
+            sent_position: (None, None, None),
+            sent_alarm: None,
+            sent_tracked: None,
             initialised: false,
             world,
         }
+    }
+
+    /// The same vehicle at `s` instead of the world's start (one of
+    /// several in the world, [`World::start_of`]); before it runs.
+    pub fn starting_at(mut self, s: Start) -> SimVehicle {
+        (self.x, self.y, self.z, self.yaw) = (s.x, s.y, s.z, s.yaw);
+        self
     }
 
     /// The world it moves in.
@@ -185,6 +202,7 @@ impl SimVehicle {
             err: self.nav_err,
             world,
             limits: &model.limits,
+            found: self.found,
         }
     }
 
@@ -252,6 +270,11 @@ impl SimVehicle {
         };
         if r.b.is_fix() && end == End::Ok {
             self.nav_err = (0.0, 0.0);
+        }
+        if end == End::Ok {
+            if let Some(k) = r.b.found_object(&self.ctx()).filter(|k| *k < 64) {
+                self.found |= 1 << k;
+            }
         }
         match event {
             Some(event) => {
@@ -377,10 +400,47 @@ impl SimVehicle {
             }
         }
         if let (Some(name), Some(c)) = (p.cable_seen, &self.world.cable) {
-            let seen = ctx.z > SURFACE && ctx.seabed - ctx.z <= c.max_altitude && c.visible_near(tx, ty, 0.0).is_some();
+            let seen = ctx.z > SURFACE
+                && ctx.seabed - ctx.z <= c.max_altitude
+                && c.visible_near(tx, ty, self.progress).is_some();
             if self.sent_cable != Some(seen) && (seen || self.sent_cable.is_some()) {
                 self.sent_cable = Some(seen);
-                self.schedule(self.t, Inbound::Perception { name, value: Value::Bool(seen), n: None }, None);
+                self.schedule(
+                    self.t,
+                    Inbound::Perception { name, value: flag(seen, p.flags_as_numbers), n: None },
+                    None,
+                );
+            }
+        }
+        let (ex, ey) = (ctx.x.round() as i64, ctx.y.round() as i64);
+        let ez = (ctx.z * 10.0).round() as i64;
+        let sent = self.sent_position;
+        for (name, v, last, scale) in [(p.x, ex, sent.0, 1.0), (p.y, ey, sent.1, 1.0), (p.depth, ez, sent.2, 10.0)] {
+            if let Some(name) = name.filter(|_| last != Some(v)) {
+                self.schedule(
+                    self.t,
+                    Inbound::Perception { name, value: Value::from(v as f64 / scale), n: None },
+                    None,
+                );
+            }
+        }
+        self.sent_position = (Some(ex), Some(ey), Some(ez));
+        if let Some(name) = p.alarm {
+            let alarm = self.battery() <= self.world.battery.alarm_below;
+            if self.sent_alarm != Some(alarm) {
+                self.sent_alarm = Some(alarm);
+                self.schedule(
+                    self.t,
+                    Inbound::Perception { name, value: flag(alarm, p.flags_as_numbers), n: None },
+                    None,
+                );
+            }
+        }
+        if let (Some(name), Some(_)) = (p.cable_tracked, &self.world.cable) {
+            let m = self.progress.round() as i64;
+            if m > 0 && self.sent_tracked != Some(m) {
+                self.sent_tracked = Some(m);
+                self.schedule(self.t, Inbound::Perception { name, value: Value::from(m as f64), n: None }, None);
             }
         }
         if let Some(name) = p.battery {
@@ -500,6 +560,15 @@ fn resolve(v: &Value, model: &BTreeMap<String, Value>, world: &BTreeMap<String, 
     match v {
         Value::String(s) => world.get(s).or_else(|| model.get(s)).cloned().unwrap_or_else(|| v.clone()),
         _ => v.clone(),
+    }
+}
+
+/// A true/false perception's value: 1/0 with `numbers`.
+fn flag(b: bool, numbers: bool) -> Value {
+    if numbers {
+        Value::from(if b { 1.0 } else { 0.0 })
+    } else {
+        Value::Bool(b)
     }
 }
 
@@ -653,6 +722,42 @@ mod tests {
         assert!(poses.len() >= 49, "{}", poses.len());
         assert!(poses.windows(2).all(|w| w[1].t > w[0].t && w[1].t - w[0].t <= 1.0 + 1e-9));
         assert_eq!(v.next_deadline(), None, "at rest, nothing scheduled");
+    }
+
+    #[test]
+    fn perceptions_for_a_planner_position_depth_and_cable_tracked_as_numbers() {
+        let model = Model::from_toml(
+            "base = \"default\"\n[perceptions]\nx = \"x\"\ny = \"y\"\ndepth = \"z\"\nalarm = \"alarm\"\ncable_seen = \"seen\"\ncable_tracked = \"tracked\"\nbattery = \"\"\nflags_as_numbers = true\n",
+            "m",
+        )
+        .unwrap();
+        let world =
+            World::from_toml("[seabed]\ndepth = 5\n[cable]\npoints = [[0, 0], [30, 0]]\nburied = [[20, 25]]\n", "w")
+                .unwrap();
+        let mut v = SimVehicle::new(Arc::new(model), Arc::new(world), Scenario::default());
+        v.initial();
+        v.on_action(0.0, &action(1, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 3, "mode": "keep"})));
+        let mut got: Vec<(f64, String, Value)> = Vec::new();
+        for (until, then) in [(15.0, true), (200.0, false)] {
+            while let Some(m) = run_until(&mut v, until) {
+                if let (t, Inbound::Perception { name, value, .. }) = m {
+                    got.push((t, name, value));
+                }
+            }
+            if then {
+                let track = action(2, "enableCableTracking", "CableTrackingPrimitive", "enable", json!({}));
+                v.on_action(until, &track);
+            }
+        }
+        let last = |n: &str| got.iter().rev().find(|g| g.1 == n).map(|g| g.2.clone());
+        assert_eq!(last("z"), Some(json!(3.0)), "depth in tenths of a metre");
+        assert!(got.iter().filter(|g| g.1 == "x").count() >= 19, "x in whole metres as the vehicle moves");
+        assert_eq!(last("alarm"), Some(json!(0.0)));
+        // Seen (1), then lost (0) where the cable is buried, 20 m tracked by then.
+        let seen: Vec<&Value> = got.iter().filter(|g| g.1 == "seen").map(|g| &g.2).collect();
+        assert_eq!(seen, [&json!(1.0), &json!(0.0)]);
+        assert_eq!(last("tracked"), Some(json!(20.0)));
+        assert!(got.iter().all(|g| g.1 != "battery"));
     }
 
     #[test]

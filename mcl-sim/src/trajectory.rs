@@ -7,6 +7,8 @@
 
 use std::fmt::Write;
 
+use mcl_runtime::vehicle::Pose;
+
 use crate::sim::Track;
 use crate::world::World;
 
@@ -45,8 +47,34 @@ fn colour(label: usize) -> &'static str {
     }
 }
 
-/// The SVG document of `track` in `world`, titled `title`.
+/// The SVG document of `track` in `world`, titled `title`: the path
+/// coloured by the task that moved the vehicle.
 pub fn svg(track: &Track, world: &World, title: &str) -> String {
+    let paths = [track.points.clone()];
+    draw(&paths, &[&track.waypoints], &track.labels, "task moving the vehicle", world, title)
+}
+
+/// The SVG document of several vehicles in one `world` (`(name, track)`,
+/// in order), titled `title`: each path coloured by its vehicle.
+pub fn svg_fleet(tracks: &[(&str, &Track)], world: &World, title: &str) -> String {
+    let paths: Vec<Vec<(Pose, usize)>> =
+        tracks.iter().enumerate().map(|(k, (_, t))| t.points.iter().map(|(p, _)| (*p, k + 1)).collect()).collect();
+    let waypoints: Vec<&[(f64, f64)]> = tracks.iter().map(|(_, t)| t.waypoints.as_slice()).collect();
+    let mut labels = vec!["-".to_string()];
+    labels.extend(tracks.iter().map(|(n, _)| n.to_string()));
+    draw(&paths, &waypoints, &labels, "vehicle", world, title)
+}
+
+/// Draws `paths` (poses, each with an index in `labels` for its colour)
+/// and each path's way-points, numbered in order.
+fn draw(
+    paths: &[Vec<(Pose, usize)>],
+    waypoints: &[&[(f64, f64)]],
+    labels: &[String],
+    legend: &str,
+    world: &World,
+    title: &str,
+) -> String {
     let (w, h) = (980.0, 900.0);
     // Plan view box.
     let (px, py, ps) = (60.0, 60.0, 560.0);
@@ -54,11 +82,11 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
     let (qx, qy, qw, qh) = (60.0, 680.0, 880.0, 170.0);
     let mut xs: Vec<f64> = Vec::new();
     let mut ys: Vec<f64> = Vec::new();
-    for (p, _) in &track.points {
+    for (p, _) in paths.iter().flatten() {
         xs.push(p.x);
         ys.push(p.y);
     }
-    for &(x, y) in &track.waypoints {
+    for &(x, y) in waypoints.iter().copied().flatten() {
         xs.push(x);
         ys.push(y);
     }
@@ -182,27 +210,19 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             esc(&o.name)
         );
     }
-    // The path, one polyline per stretch of one task.
-    let mut i = 0;
-    while i < track.points.len() {
-        let label = track.points[i].1;
-        let mut j = i;
-        while j + 1 < track.points.len() && track.points[j + 1].1 == label {
-            j += 1;
+    // Each path, one polyline per stretch of one label.
+    for points in paths {
+        for (label, stretch) in stretches(points) {
+            let pts: Vec<String> = stretch.iter().map(|(p, _)| format!("{:.2},{:.2}", sx(p.x), sy(p.y))).collect();
+            let _ = writeln!(
+                s,
+                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="2" stroke-linejoin="round"/>"#,
+                pts.join(" "),
+                colour(label)
+            );
         }
-        // Join with the next stretch's first point so that the path is continuous.
-        let end = (j + 1).min(track.points.len() - 1);
-        let pts: Vec<String> =
-            track.points[i..=end].iter().map(|(p, _)| format!("{:.2},{:.2}", sx(p.x), sy(p.y))).collect();
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="2" stroke-linejoin="round"/>"#,
-            pts.join(" "),
-            colour(label)
-        );
-        i = j + 1;
     }
-    for (k, &(x, y)) in track.waypoints.iter().enumerate() {
+    for (k, &(x, y)) in waypoints.iter().flat_map(|w| w.iter().enumerate()) {
         let _ = writeln!(
             s,
             r##"<circle cx="{:.1}" cy="{:.1}" r="4" fill="none" stroke="#000"/><text x="{:.1}" y="{:.1}" font-size="10" fill="#000">{}</text>"##,
@@ -213,7 +233,7 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
             k + 1
         );
     }
-    if let (Some(first), Some(last)) = (track.points.first(), track.points.last()) {
+    for (first, last) in paths.iter().filter_map(|p| Some((p.first()?, p.last()?))) {
         let _ = writeln!(
             s,
             r##"<circle cx="{:.1}" cy="{:.1}" r="6" fill="#2ca02c"><title>start</title></circle><rect x="{:.1}" y="{:.1}" width="10" height="10" fill="#d62728"><title>end</title></rect>"##,
@@ -226,20 +246,16 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
     let _ = writeln!(s, "</g>");
     // Legend.
     let lx = px + ps + 30.0;
-    let _ = writeln!(
-        s,
-        r#"<g id="legend"><text x="{lx}" y="{}" font-weight="bold">task moving the vehicle</text>"#,
-        py + 10.0
-    );
+    let _ = writeln!(s, r#"<g id="legend"><text x="{lx}" y="{}" font-weight="bold">{}</text>"#, py + 10.0, esc(legend));
     let mut ly = py + 32.0;
     let used: Vec<usize> = {
-        let mut u: Vec<usize> = track.points.iter().map(|p| p.1).collect();
+        let mut u: Vec<usize> = paths.iter().flatten().map(|p| p.1).collect();
         u.sort_unstable();
         u.dedup();
         u
     };
     for &k in &used {
-        let name = if k == 0 { "(none)" } else { track.labels[k].as_str() };
+        let name = if k == 0 { "(none)" } else { labels.get(k).map_or("?", String::as_str) };
         let _ = writeln!(
             s,
             r#"<rect x="{lx}" y="{:.1}" width="24" height="6" fill="{}"/><text x="{}" y="{:.1}">{}</text>"#,
@@ -264,8 +280,9 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
     }
     let _ = writeln!(s, "</g>");
     // Depth profile.
-    let tmax = track.points.last().map_or(1.0, |p| p.0.t).max(1.0);
-    let zmax = track.points.iter().map(|(p, _)| p.z.max(world.seabed.depth_at(p.x, p.y))).fold(1.0f64, f64::max) * 1.1;
+    let tmax = paths.iter().filter_map(|p| p.last()).map(|p| p.0.t).fold(1.0f64, f64::max);
+    let zmax =
+        paths.iter().flatten().map(|(p, _)| p.z.max(world.seabed.depth_at(p.x, p.y))).fold(1.0f64, f64::max) * 1.1;
     let tx = |t: f64| qx + t / tmax * qw;
     let tz = |z: f64| qy + z / zmax * qh;
     let _ = writeln!(
@@ -300,41 +317,47 @@ pub fn svg(track: &Track, world: &World, title: &str) -> String {
         qx + qw / 2.0,
         qy + qh + 30.0
     );
-    if !track.points.is_empty() {
-        let bed: Vec<String> = track
-            .points
-            .iter()
-            .map(|(p, _)| format!("{:.2},{:.2}", tx(p.t), tz(world.seabed.depth_at(p.x, p.y))))
-            .collect();
+    for points in paths.iter().filter(|p| !p.is_empty()) {
+        let bed: Vec<String> =
+            points.iter().map(|(p, _)| format!("{:.2},{:.2}", tx(p.t), tz(world.seabed.depth_at(p.x, p.y)))).collect();
         let _ =
             writeln!(s, r##"<polyline points="{}" fill="none" stroke="#8b7355" stroke-width="1.5"/>"##, bed.join(" "));
     }
-    let mut i = 0;
-    while i < track.points.len() {
-        let label = track.points[i].1;
-        let mut j = i;
-        while j + 1 < track.points.len() && track.points[j + 1].1 == label {
-            j += 1;
+    for points in paths {
+        for (label, stretch) in stretches(points) {
+            let pts: Vec<String> = stretch.iter().map(|(p, _)| format!("{:.2},{:.2}", tx(p.t), tz(p.z))).collect();
+            let _ = writeln!(
+                s,
+                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="2"/>"#,
+                pts.join(" "),
+                colour(label)
+            );
         }
-        let end = (j + 1).min(track.points.len() - 1);
-        let pts: Vec<String> =
-            track.points[i..=end].iter().map(|(p, _)| format!("{:.2},{:.2}", tx(p.t), tz(p.z))).collect();
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="2"/>"#,
-            pts.join(" "),
-            colour(label)
-        );
-        i = j + 1;
     }
     let _ = writeln!(s, "</g>\n</svg>");
     s
 }
 
+/// The stretches of one label of a path, each with the next stretch's
+/// first point so that the path is drawn continuous.
+fn stretches(points: &[(Pose, usize)]) -> Vec<(usize, &[(Pose, usize)])> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < points.len() {
+        let label = points[i].1;
+        let mut j = i;
+        while j + 1 < points.len() && points[j + 1].1 == label {
+            j += 1;
+        }
+        out.push((label, &points[i..=(j + 1).min(points.len() - 1)]));
+        i = j + 1;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mcl_runtime::vehicle::Pose;
 
     #[test]
     fn draws_path_waypoints_cable_and_legend() {
@@ -350,6 +373,25 @@ mod tests {
         assert!(s.contains("a &amp; b") && s.contains("Cable&lt;Tracking&gt;") && s.contains(">Goto<"));
         assert_eq!(s.matches("stroke-dasharray").count(), 1, "one buried section");
         assert_eq!(s.matches("<polyline").count(), 1 + 3 + 3, "seabed + 3 stretches in each view");
+    }
+
+    #[test]
+    fn a_fleet_is_one_path_per_vehicle_in_its_colour() {
+        let world = World::default();
+        let p = |t: f64, x: f64, y: f64| Pose { t, x, y, z: 1.0, yaw: 0.0 };
+        let track = |y: f64| Track {
+            points: vec![(p(0.0, 0.0, y), 0), (p(1.0, 1.0, y), 1), (p(2.0, 2.0, y), 2)],
+            labels: vec!["-".into(), "Goto".into(), "Surface".into()],
+            waypoints: vec![(2.0, y)],
+        };
+        let (a, b) = (track(0.0), track(10.0));
+        let s = svg_fleet(&[("auv", &a), ("asc", &b)], &world, "fleet");
+        assert!(s.contains(">vehicle<") && s.contains(">auv<") && s.contains(">asc<") && !s.contains(">Goto<"));
+        assert_eq!(s.matches("<polyline").count(), 2 + 2 + 2, "per vehicle: a seabed line and one stretch per view");
+        assert_eq!(s.matches("<title>start</title>").count(), 2);
+        assert!(
+            s.contains(&format!(r#"stroke="{}""#, PALETTE[0])) && s.contains(&format!(r#"stroke="{}""#, PALETTE[1]))
+        );
     }
 
     #[test]

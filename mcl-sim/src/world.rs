@@ -224,6 +224,9 @@ pub struct Navigation {
 #[derive(Clone, Debug, PartialEq)]
 pub struct World {
     pub start: Start,
+    /// Where each named vehicle (mission) starts, when several run in this
+    /// world (`[starts.NAME]`); the others start at [`World::start`].
+    pub starts: BTreeMap<String, Start>,
     pub seabed: Seabed,
     /// Water current, m/s east and north.
     pub current: (f64, f64),
@@ -244,6 +247,7 @@ impl Default for World {
     fn default() -> Self {
         World {
             start: Start { x: 0.0, y: 0.0, z: 0.0, yaw: 0.0 },
+            starts: BTreeMap::new(),
             seabed: Seabed::Plane { depth: DEFAULT_SEABED_DEPTH, slope: (0.0, 0.0) },
             current: (0.0, 0.0),
             cable: None,
@@ -263,6 +267,8 @@ impl Default for World {
 struct WorldFile {
     #[serde(default)]
     start: Option<StartFile>,
+    #[serde(default)]
+    starts: BTreeMap<String, StartFile>,
     #[serde(default)]
     seabed: Option<SeabedFile>,
     #[serde(default, deserialize_with = "opt_vec2")]
@@ -290,6 +296,13 @@ struct StartFile {
     depth: Option<f64>,
     #[serde(default, deserialize_with = "opt_finite")]
     heading: Option<f64>,
+}
+
+impl StartFile {
+    fn start(self) -> Start {
+        let (x, y) = self.position.unwrap_or((0.0, 0.0));
+        Start { x, y, z: self.depth.unwrap_or(0.0), yaw: self.heading.unwrap_or(0.0).to_radians() }
+    }
 }
 
 #[derive(Deserialize)]
@@ -457,13 +470,8 @@ impl World {
     pub fn from_toml(text: &str, origin: &str) -> Result<World, String> {
         let f: WorldFile = toml::from_str(text).map_err(|e| toml_error(origin, text, &e))?;
         let d = World::default();
-        let start = match f.start {
-            Some(s) => {
-                let (x, y) = s.position.unwrap_or((0.0, 0.0));
-                Start { x, y, z: s.depth.unwrap_or(0.0), yaw: s.heading.unwrap_or(0.0).to_radians() }
-            }
-            None => d.start,
-        };
+        let start = f.start.map_or(d.start, StartFile::start);
+        let starts = f.starts.into_iter().map(|(k, s)| (k, s.start())).collect();
         let seabed = match f.seabed {
             None => d.seabed,
             Some(SeabedFile { grid: Some(g), .. }) => {
@@ -531,6 +539,7 @@ impl World {
         };
         Ok(World {
             start,
+            starts,
             seabed,
             current: f.current.unwrap_or((0.0, 0.0)),
             cable,
@@ -540,6 +549,12 @@ impl World {
             navigation,
             symbols: f.symbols,
         })
+    }
+
+    /// Where the vehicle of `mission` starts: its `[starts.NAME]`, else
+    /// `[start]`.
+    pub fn start_of(&self, mission: &str) -> Start {
+        self.starts.get(mission).copied().unwrap_or(self.start)
     }
 
     /// Reads and parses a world file.
@@ -552,6 +567,18 @@ impl World {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn named_vehicles_start_where_the_world_says() {
+        let w = World::from_toml("[start]\nposition = [1, 2]\n[starts.asc]\nposition = [5, 0]\nheading = 90\n", "w")
+            .unwrap();
+        assert_eq!((w.start_of("auv").x, w.start_of("auv").y), (1.0, 2.0));
+        let asc = w.start_of("asc");
+        assert_eq!((asc.x, asc.y, asc.z), (5.0, 0.0, 0.0));
+        assert!((asc.yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        let e = World::from_toml("[starts.asc]\npositon = [5, 0]\n", "w").unwrap_err();
+        assert!(e.starts_with("w:2:1:"), "{e}");
+    }
 
     #[test]
     fn seabed_plane_and_grid() {

@@ -92,6 +92,19 @@ pub struct Execute {
     /// `mcl mock-aac --plan FILE.mcl`).
     #[arg(long, value_name = "HOST:PORT", requires = "run", conflicts_with = "mock")]
     pub aac: Option<String>,
+    /// With --run: against a simulated vehicle in a simulated world, in virtual time
+    /// (docs/simulator.md); its perceptions go to the world modeler.
+    #[arg(long, requires = "run", conflicts_with_all = ["mock", "aac"])]
+    pub sim: bool,
+    /// With --sim: the simulated world (TOML; --world is the fact-provider scripts).
+    #[arg(long, value_name = "W.toml", requires = "sim")]
+    pub sim_world: Option<PathBuf>,
+    /// With --sim: how the vehicle's primitives are simulated (TOML; default: the bundled model).
+    #[arg(long, value_name = "M.toml", requires = "sim")]
+    pub vehicle_model: Option<PathBuf>,
+    /// With --sim: draw the vehicle's path (plan view and depth profile) as SVG here.
+    #[arg(long, value_name = "OUT.svg", requires = "sim")]
+    pub trajectory: Option<PathBuf>,
     /// With --aac: shared secret for the AAC.
     #[arg(long, requires = "aac")]
     pub token: Option<String>,
@@ -496,8 +509,12 @@ fn execute(
     use mcl_plan::executor::Executor;
     use mcl_runtime::scenario::Scenario;
     crate::interrupt::install();
-    if x.mock == x.aac.is_some() {
-        eprintln!("error: --run needs --mock (the in-process mock vehicle) or --aac HOST:PORT (a vehicle's AAC)");
+    if [x.mock, x.sim, x.aac.is_some()].iter().filter(|b| **b).count() != 1 {
+        eprintln!("error: --run needs --mock (the in-process mock vehicle), --sim (a simulated vehicle) or --aac HOST:PORT (a vehicle's AAC)");
+        return 2;
+    }
+    if x.sim && !x.virtual_time {
+        eprintln!("error: --sim runs in virtual time only for now: add --virtual-time");
         return 2;
     }
     if x.aac.is_some() && x.virtual_time {
@@ -549,6 +566,11 @@ fn execute(
         None => Scenario::default(),
     };
     let seed = x.seed.or(scenario.seed).unwrap_or(0);
+    let sim =
+        match x.sim.then(|| super::sim::load_files(x.vehicle_model.as_deref(), x.sim_world.as_deref())).transpose() {
+            Ok(s) => s,
+            Err(code) => return code,
+        };
     let mut ex = match Executor::new(domain, problem, alg) {
         Ok(ex) => ex,
         Err(e) => {
@@ -572,7 +594,10 @@ fn execute(
         max_plans: x.max_plans.max(1),
     };
     let report = match &x.aac {
-        None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
+        None => match &sim {
+            Some(s) => run_sim(s, ex, world, ops, scenario, opts, &mut sink, x.trajectory.as_deref(), file),
+            None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
+        },
         Some(addr) => {
             let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
             let mut aac = match connect_aac(addr, x.token.clone(), format!("plan:{stem}"), AAC_CONNECT_WAIT) {
@@ -612,4 +637,33 @@ fn execute(
         report.reason.as_ref().map(|r| format!(": {r}")).unwrap_or_default()
     );
     report.exit_code()
+}
+
+/// `--run --sim`: the plan's steps played against a simulated vehicle of
+/// `setup` (`mcl_plan::run::run_planned_on`), whose perceptions (cable in
+/// sight, position, navigation quality...) go to the world modeler; the
+/// path drawn to `trajectory` at the end.
+#[allow(clippy::too_many_arguments)]
+fn run_sim(
+    setup: &super::sim::Setup,
+    ex: mcl_plan::executor::Executor,
+    world: mcl_plan::world::WorldModeler,
+    ops: &Path,
+    scenario: mcl_runtime::scenario::Scenario,
+    opts: mcl_plan::run::RunOptions,
+    sink: &mut RunSink,
+    trajectory: Option<&Path>,
+    file: &Path,
+) -> Result<mcl_plan::run::Report, String> {
+    let missions = mcl_plan::run::Missions::load(ops)?;
+    let vehicle = mcl_sim::SharedSim::new(setup.vehicle(scenario));
+    let report = mcl_plan::run::run_planned_on(ex, world, missions, Box::new(vehicle.clone()), opts, sink)?;
+    if let Some(p) = trajectory {
+        let title =
+            format!("{} — planned mission, {} at t={:.1} s", file.display(), report.result.to_uppercase(), report.t);
+        let v = vehicle.lock();
+        let svg = mcl_sim::trajectory::svg(v.track(), v.world(), &title);
+        std::fs::write(p, svg).map_err(|e| format!("cannot write `{}`: {e}", p.display()))?;
+    }
+    Ok(report)
 }

@@ -4,7 +4,7 @@
 //! Exit status: 0 mission ok, 1 mission fail, 2 usage, compile or I/O error,
 //! 3 mission stuck or time limit passed.
 //!
-//! With `--mock` and no `--mission`, a file with several missions runs every
+//! With `--mock` or `--sim` and no `--mission`, a file with several missions runs every
 //! vehicle at once, coordinated by its constraints ([`run_coordinated`]).
 
 use mcl_compiler::compile::{compile_file, compile_file_unverified, CompileError};
@@ -369,7 +369,7 @@ pub fn run(o: Options) -> u8 {
             return usage("--vehicle runs in real time (virtual time needs every vehicle in one process)");
         }
     }
-    if several && o.mission.is_none() && o.mock && is_mcl {
+    if several && o.mission.is_none() && (o.mock || o.sim) && is_mcl {
         return run_coordinated(&o, sets);
     }
     let chosen = match &o.mission {
@@ -841,7 +841,8 @@ impl Counts {
 /// once, each with its own mock vehicle, exchanging the coordination
 /// messages of its vehicle net over `o.transport`
 /// (`mcl_runtime::multi`). The scenario applies to every vehicle, its
-/// `[missions.NAME]` tables to one.
+/// `[missions.NAME]` tables to one. With `--sim` each vehicle is simulated
+/// in one shared world instead (`super::sim`, docs/simulator.md).
 pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     if (o.journal.is_some() || o.resume.is_some()) && o.vehicle.is_none() {
         return usage(
@@ -962,6 +963,11 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         return 2;
     }
 
+    let sim_setup = match o.sim.then(|| super::sim::load(o)).transpose() {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let mut simulated: Vec<(String, mcl_sim::SharedSim)> = Vec::new();
     let trace = match open_trace(&o.trace) {
         Ok(t) => t,
         Err(code) => return code,
@@ -981,7 +987,8 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     for (v, scenario) in vehicles.into_iter().zip(scenarios) {
         let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
         let mut mock_seed = scenario.seed.unwrap_or(seed);
-        let mut symbols: BTreeMap<String, Value> = scenario.symbols.clone();
+        let mut symbols: BTreeMap<String, Value> = sim_setup.as_ref().map(|s| s.symbols()).unwrap_or_default();
+        symbols.extend(scenario.symbols.clone());
         symbols.extend(sets.iter().cloned());
         let net = Arc::new(v.net);
         if o.vehicle.is_some() {
@@ -1004,7 +1011,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         }
         let opts = PlayerOptions { seed, symbols, ..Default::default() };
         let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut sources);
-        let mock = MockVehicle::from_net(&net, scenario.clone(), mock_seed);
+        let mock = fleet_vehicle(&sim_setup, &v.mission, &net, scenario.clone(), mock_seed, &mut simulated);
         kept_nets.push((v.mission.clone(), net.clone()));
         parts.push((v.mission, net, opts, tracer, mock));
     }
@@ -1076,6 +1083,12 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(end) => end,
         Err(code) => return code,
     };
+    if let Some(p) = &o.trajectory {
+        let title = format!("{} — {} vehicles, {}", o.file.display(), simulated.len(), end.result().to_uppercase());
+        if let Err(code) = super::sim::write_fleet_trajectory(&simulated, p, &title) {
+            return code;
+        }
+    }
     if let Some(e) = sink.error.take() {
         eprintln!("error: {e}");
         return 2;
@@ -1121,4 +1134,24 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         say_reproduced(expected, &nets, &sink.records, &stuck);
     }
     end.exit_code()
+}
+
+/// The vehicle of `mission` in a coordinated run: simulated in the world of
+/// `sim` (kept in `simulated` for the trajectory), else the mock of `net`.
+fn fleet_vehicle(
+    sim: &Option<super::sim::Setup>,
+    mission: &str,
+    net: &Net,
+    scenario: Scenario,
+    mock_seed: u64,
+    simulated: &mut Vec<(String, mcl_sim::SharedSim)>,
+) -> super::sim::FleetVehicle {
+    match sim {
+        Some(s) => {
+            let v = s.vehicle_of(mission, scenario);
+            simulated.push((mission.to_string(), v.clone()));
+            super::sim::FleetVehicle::Sim(v)
+        }
+        None => super::sim::FleetVehicle::Mock(Box::new(MockVehicle::from_net(net, scenario, mock_seed))),
+    }
 }
