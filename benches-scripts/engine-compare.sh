@@ -7,7 +7,9 @@
 #   NEW_REV defaults to the work tree. Environment: ROUNDS (alternations,
 #   default 5), MCC_DIR (default tests/data/mcc, a copy of shared/data/mcc),
 #   BASE_DIR (a checkout of BASE_REV with its release builds, reused if
-#   given; else a git worktree is made in $TMPDIR).
+#   given; else a git worktree is made in $TMPDIR). BASE_PLAYER, BASE_ANALYZE,
+#   NEW_PLAYER, NEW_ANALYZE: prebuilt binaries (the player bench executable
+#   and the `analyze` example), which skip checkouts and builds.
 #
 # Player: `cargo bench -p mcl-runtime --bench player` restricted to
 # `player/virtual`, whose summary prints the firings per second of a whole
@@ -35,17 +37,22 @@ build() { # DIR -> prints the player bench binary
     sed -n 's/.*"executable":"\([^"]*player-[^"]*\)".*/\1/p' | tail -1)
 }
 
-BASE="${BASE_DIR:-$TMP/base}"
-checkout "$BASE_REV" "$BASE"
-NEW="$ROOT"
-if [ -n "$NEW_REV" ]; then NEW="$TMP/new"; checkout "$NEW_REV" "$NEW"; fi
 declare -A PLAYER ANALYZE
-for side in base new; do
-  dir=$([ $side = base ] && echo "$BASE" || echo "$NEW")
-  PLAYER[$side]="$(build "$dir")"
-  ANALYZE[$side]="$dir/target/release/examples/analyze"
-  echo "$side: $(git -C "$dir" rev-parse --short HEAD)$(git -C "$dir" diff --quiet HEAD || echo ' (+ work tree)')" >&2
-done
+if [ -n "${BASE_PLAYER:-}" ]; then
+  PLAYER[base]="$BASE_PLAYER"; ANALYZE[base]="$BASE_ANALYZE"
+  PLAYER[new]="$NEW_PLAYER"; ANALYZE[new]="$NEW_ANALYZE"
+else
+  BASE="${BASE_DIR:-$TMP/base}"
+  checkout "$BASE_REV" "$BASE"
+  NEW="$ROOT"
+  if [ -n "$NEW_REV" ]; then NEW="$TMP/new"; checkout "$NEW_REV" "$NEW"; fi
+  for side in base new; do
+    dir=$([ $side = base ] && echo "$BASE" || echo "$NEW")
+    PLAYER[$side]="$(build "$dir")"
+    ANALYZE[$side]="$dir/target/release/examples/analyze"
+    echo "$side: $(git -C "$dir" rev-parse --short HEAD)$(git -C "$dir" diff --quiet HEAD || echo ' (+ work tree)')" >&2
+  done
+fi
 
 OUT="$TMP/results.tsv"
 : > "$OUT"
