@@ -3,6 +3,7 @@
 //! actions and events in the trace.
 
 use mcl_runtime::trace::{Call, Ends, Record, RecordKind};
+use mcl_testutil::browser;
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -1124,43 +1125,6 @@ fn the_mission_starts_when_the_vehicle_is_connected() {
     assert!(tr.iter().any(|r| matches!(&r.kind, RecordKind::Link { message } if message == "link to the AAC up")));
 }
 
-fn png_size(path: &Path) -> Option<(u32, u32, u64)> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() < 24 || &bytes[..8] != b"\x89PNG\r\n\x1a\n" || &bytes[12..16] != b"IHDR" {
-        return None;
-    }
-    let w = u32::from_be_bytes(bytes[16..20].try_into().ok()?);
-    let h = u32::from_be_bytes(bytes[20..24].try_into().ok()?);
-    Some((w, h, bytes.len() as u64))
-}
-
-/// The browser: `MCL_CHROMIUM`, else Debian's `/usr/bin/chromium`.
-fn chromium() -> PathBuf {
-    std::env::var_os("MCL_CHROMIUM").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("/usr/bin/chromium"))
-}
-
-fn screenshot(svg: &Path, png: &Path) -> bool {
-    let profile = tmp(&format!("chromium-{}", png.file_stem().unwrap().to_string_lossy()));
-    let status = Command::new(chromium())
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            &format!("--user-data-dir={}", profile.display()),
-            &format!("--screenshot={}", png.display()),
-            "--window-size=1600,900",
-            &format!("file://{}", svg.display()),
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status();
-    status.is_ok_and(|s| s.success())
-}
-
 /// The chronogram of the dam inspection renders in a real browser.
 #[test]
 fn chronogram_renders_in_a_browser() {
@@ -1204,19 +1168,13 @@ fn chronogram_renders_in_a_browser() {
     assert_eq!(std::fs::read_to_string(&svg2).unwrap(), text);
 
     // CI sets MCL_REQUIRE_CHROMIUM=1 (.ci/run): there, no browser is a failure.
-    let install = format!("apt-get install chromium, or set MCL_CHROMIUM; {} is absent", chromium().display());
-    if !mcl_testutil::have_tool("chromium", chromium().exists(), &install) {
+    if !browser::have_chromium() {
         return;
     }
     let png = tmp("dam.png");
-    assert!(screenshot(&svg, &png), "chromium failed");
-    let (w, h, size) = png_size(&png).expect("a PNG");
+    assert!(browser::screenshot(&svg, &png, &tmp("chromium-dam"), (1600, 900)), "chromium failed");
+    let (w, h, size) = browser::png_size(&png).expect("a PNG");
     assert_eq!((w, h), (1600, 900));
-    // A blank page of the same size, for comparison.
-    let blank = tmp("blank.svg");
-    std::fs::write(&blank, r##"<svg xmlns="http://www.w3.org/2000/svg" width="1600" height="900"><rect width="1600" height="900" fill="#fff"/></svg>"##).unwrap();
-    let blank_png = tmp("blank.png");
-    assert!(screenshot(&blank, &blank_png));
-    let (_, _, blank_size) = png_size(&blank_png).expect("a PNG");
+    let blank_size = browser::blank_png_size(&tmp("blank"), (1600, 900)).expect("a blank page renders");
     assert!(size > 4 * blank_size, "the screenshot looks blank: {size} bytes vs {blank_size} for a blank page");
 }

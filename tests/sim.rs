@@ -3,6 +3,7 @@
 //! `mcl-sim`), alone, several in one world, or executing a plan, checked on
 //! the poses, events, facts and re-plans of the trace.
 
+use mcl_testutil::browser;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -402,5 +403,45 @@ fn eight_vehicles_survey_side_by_side() {
         // Its lawn-mower's last way-point, (20, y0 + 20).
         assert!(ps.iter().any(|p| (p.x - 20.0).hypot(p.y - y0 - 20.0) <= 2.0), "auv{}", k + 1);
         assert!(ps.iter().all(|p| p.y > y0 - 3.0 && p.y < y0 + 23.0), "auv{} stays in its area", k + 1);
+    }
+}
+
+/// The width and height an SVG says it has.
+fn svg_size(doc: &str) -> (u32, u32) {
+    let attr = |name: &str| -> u32 {
+        let i = doc.find(&format!(" {name}=\"")).unwrap_or_else(|| panic!("no {name}")) + name.len() + 3;
+        let j = doc[i..].find('"').unwrap() + i;
+        doc[i..j].parse::<f64>().unwrap().ceil() as u32
+    };
+    (attr("width"), attr("height"))
+}
+
+/// The survey's and the cable tracking's trajectories render in a real
+/// browser (headless Chromium), at the size they declare, and are not blank.
+#[test]
+fn trajectories_render_in_a_browser() {
+    let survey = tmp("browser-survey.svg");
+    let (code, _, o) = sim("examples/survey.mcl", &["--trajectory", survey.to_str().unwrap()], "browser-survey");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let cable = tmp("browser-cable.svg");
+    let (code, _, o) = sim(
+        "examples/cable-tracking.mcl",
+        &["--world", "examples/sim/cable.toml", "--trajectory", cable.to_str().unwrap()],
+        "browser-cable",
+    );
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    // CI sets MCL_REQUIRE_CHROMIUM=1 (.ci/run): there, no browser is a failure.
+    if !browser::have_chromium() {
+        return;
+    }
+    for svg in [survey, cable] {
+        let size = svg_size(&std::fs::read_to_string(&svg).unwrap());
+        let png = svg.with_extension("png");
+        let profile = svg.with_extension("chromium");
+        assert!(browser::screenshot(&svg, &png, &profile, size), "chromium failed on {}", svg.display());
+        let (w, h, bytes) = browser::png_size(&png).expect("a PNG");
+        assert_eq!((w, h), size, "{}", svg.display());
+        let blank = browser::blank_png_size(&svg.with_extension("blank"), size).expect("a blank page renders");
+        assert!(bytes > 4 * blank, "{} looks blank: {bytes} bytes vs {blank} for a blank page", svg.display());
     }
 }

@@ -15,6 +15,8 @@
 //! }
 //! ```
 
+pub mod browser;
+
 use std::ffi::OsStr;
 use std::process::{Command, Stdio};
 
