@@ -606,21 +606,7 @@ mod tests {
         v.iter().map(|&i| TransitionId(i)).collect()
     }
 
-    /// Figure A.1 of the seed: T0, T2 immediate; T1 event `e1`; T3 timed 1 s.
-    fn figure_a1() -> Net {
-        let mut b = NetBuilder::new("a1");
-        let p: Vec<_> =
-            (0..4).map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0)))).collect();
-        let t0 = b.add_transition(Transition::new("T0"));
-        let t1 = b.add_transition(Transition::new("T1").with_kind(TransitionKind::Event("e1".into())));
-        let t2 = b.add_transition(Transition::new("T2"));
-        let t3 = b.add_transition(Transition::new("T3").with_kind(TransitionKind::Timed(Delay::Fixed(1.0))));
-        b.add_input(p[0], t0, 1).add_output(t0, p[1], 1).add_output(t0, p[2], 1);
-        b.add_input(p[1], t1, 1);
-        b.add_input(p[2], t2, 1).add_output(t2, p[3], 1);
-        b.add_input(p[3], t3, 1).add_output(t3, p[0], 1);
-        b.build().unwrap()
-    }
+    use crate::semantics::tests::figure_a1;
 
     #[test]
     fn figure_a1_immediate_first_then_events_and_timers() {

@@ -373,12 +373,13 @@ impl EnabledTracker {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{Delay, NetBuilder, Place, Transition, TransitionKind};
 
-    /// Figure A.1 of the seed: T0, T2 immediate; T1, T3 non-immediate.
-    fn figure_a1() -> Net {
+    /// Figure A.1 of the seed: T0, T2 immediate; T1 event `e1`; T3 timed 1 s
+    /// (also the engine's tests' net).
+    pub(crate) fn figure_a1() -> Net {
         let mut b = NetBuilder::new("a1");
         let p: Vec<_> =
             (0..4).map(|i| b.add_place(Place::new(format!("P{i}")).with_tokens(u32::from(i == 0)))).collect();
