@@ -81,7 +81,49 @@ mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0],
     assert!(md.contains("| `start` | `goThere` | `target`, `speed` |"), "{md}");
     assert!(md.contains("| `navReady` | ends the task ok | `Nav` |"), "{md}");
     assert!(md.contains("Watched as a monitor's condition"), "{md}");
+
+    // The player announces the same roles in its `hello` (docs/aac-protocol.md §3).
+    let hello = first_hello(&file);
+    assert_eq!(hello["type"], "hello");
+    let ends = hello["events"].as_array().expect("hello.events");
+    for p in i["primitives"].as_array().unwrap() {
+        for e in p["events"].as_array().unwrap() {
+            let said = ends.iter().find(|x| x["event"] == e["event"]);
+            match e["role"].as_str().unwrap() {
+                "ends_ok" | "ends_fail" => {
+                    let said = said.unwrap_or_else(|| panic!("{} not in hello: {hello}", e["event"]));
+                    assert_eq!(said["role"], if e["role"] == "ends_ok" { "ok" } else { "fail" }, "{hello}");
+                    assert_eq!(said["primitive"], p["primitive"], "{hello}");
+                }
+                _ => assert!(said.is_none(), "{} ends nothing but hello lists it: {hello}", e["event"]),
+            }
+        }
+    }
+    let nav = ends.iter().find(|x| x["event"] == "navReady").unwrap();
+    assert_eq!(nav["task"], "Nav");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The first message `mcl run --aac` sends for `file`, read by a listener
+/// that answers nothing (the player is then stopped).
+fn first_hello(file: &std::path::Path) -> Value {
+    use std::io::BufRead;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--aac", &addr, "-q", file.to_str().unwrap()])
+        .current_dir(root())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("run mcl");
+    let (stream, _) = listener.accept().expect("the player connects");
+    stream.set_read_timeout(Some(std::time::Duration::from_secs(30))).unwrap();
+    let mut line = String::new();
+    std::io::BufReader::new(stream).read_line(&mut line).expect("a hello line");
+    let _ = child.kill();
+    let _ = child.wait();
+    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
 }
 
 #[test]

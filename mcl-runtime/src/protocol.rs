@@ -55,6 +55,62 @@ pub struct Hello {
     /// `session` names another session). Absent: re-send nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub last_event: Option<u64>,
+    /// The events that end a task of the mission, with their role, from
+    /// the compiled net (never from their names): an AAC learns from them
+    /// which answer of a primitive ends its run ok or fail; an event not
+    /// listed ends nothing (a detector's or a keep-mode primitive's).
+    /// Absent or empty: the player does not say.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<EventEnd>,
+}
+
+/// What an event ends, as the compiled mission uses it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventRole {
+    /// It ends its task's run ok.
+    Ok,
+    /// It ends its task's run in failure.
+    Fail,
+}
+
+/// One event that ends a task (an entry of `hello.events`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EventEnd {
+    /// The event's name.
+    pub event: String,
+    /// `ok` or `fail`.
+    pub role: EventRole,
+    /// The task whose run it ends.
+    pub task: String,
+    /// The primitive that task drives (the one that raises the event).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub primitive: Option<String>,
+}
+
+impl EventEnd {
+    /// Every event that ends a task of `net` (its `task_events` properties),
+    /// with the primitive each task's actions drive; sorted by task, then
+    /// ok before fail.
+    pub fn of_net(net: &mcl_net::Net) -> Vec<EventEnd> {
+        let primitive = |task: &str| {
+            net.transitions()
+                .iter()
+                .filter(|t| t.provenance.task.as_deref() == Some(task))
+                .find_map(|t| t.actions.first().map(|a| a.primitive.clone()))
+        };
+        let mut tasks: Vec<(&str, mcl_net::TaskEvents)> = net.task_events().collect();
+        tasks.sort_by(|a, b| a.0.cmp(b.0));
+        let mut out = Vec::new();
+        for (task, ev) in tasks {
+            let prim = primitive(task);
+            let roles = ev.ok.iter().map(|e| (e, EventRole::Ok)).chain(ev.fail.iter().map(|e| (e, EventRole::Fail)));
+            for (event, role) in roles {
+                out.push(EventEnd { event: event.clone(), role, task: task.to_string(), primitive: prim.clone() });
+            }
+        }
+        out
+    }
 }
 
 /// `welcome`: the AAC accepted the `hello`.
@@ -459,6 +515,12 @@ mod tests {
                 run: Some("r1".into()),
                 session: None,
                 last_event: None,
+                events: vec![EventEnd {
+                    event: "eventGotoOk".into(),
+                    role: EventRole::Ok,
+                    task: "Goto".into(),
+                    primitive: Some("GotoPrimitive".into()),
+                }],
             }),
             Message::Welcome(Welcome { version: 1, last_seq: 4, last_event: 2, session: "s1".into(), aac: None }),
             Message::Action(ActionMsg {

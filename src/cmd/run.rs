@@ -625,6 +625,7 @@ pub fn run(o: Options) -> u8 {
                         // resumes without a resume point.
                         delivered: (o.resume.is_none() || resume_point.is_some()).then_some(delivered),
                         reestablish: true,
+                        events: mcl_runtime::protocol::EventEnd::of_net(session.player.net()),
                         ..Default::default()
                     };
                     let (mut link, handle) = mcl_runtime::tcp::connect_with_handle(addr, opts);

@@ -65,6 +65,9 @@ pub struct ConnectOptions {
     pub max_line: usize,
     /// Logging on standard error.
     pub log: LogLevel,
+    /// The events that end the mission's tasks, announced in `hello`
+    /// ([`crate::protocol::EventEnd::of_net`]).
+    pub events: Vec<crate::protocol::EventEnd>,
 }
 
 impl Default for ConnectOptions {
@@ -83,6 +86,7 @@ impl Default for ConnectOptions {
             linger: Duration::from_secs(10),
             max_line: MAX_LINE,
             log: LogLevel::Off,
+            events: Vec::new(),
         }
     }
 }
@@ -395,6 +399,7 @@ impl Player {
             run: Some(self.stats.run.clone()),
             session: self.session.clone(),
             last_event: self.resumed.then(|| self.confirmed()),
+            events: self.opts.events.clone(),
         });
         if let Err(e) = self.write(&mut wr, &hello).await {
             return lost(format!("cannot send hello to {peer}: {e}"));
