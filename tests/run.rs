@@ -1178,29 +1178,3 @@ fn chronogram_renders_in_a_browser() {
     let blank_size = browser::blank_png_size(&tmp("blank"), (1600, 900)).expect("a blank page renders");
     assert!(size > 4 * blank_size, "the screenshot looks blank: {size} bytes vs {blank_size} for a blank page");
 }
-
-/// Action parameters keep the order the action declares them, in the trace
-/// file, in the trace as read back and in the live log (`enableTrajectory =
-/// TrajectoryPrimitive( c: enable, v: velocity, v: path )`: velocity first).
-#[test]
-fn action_parameters_keep_their_declaration_order() {
-    let (code, tr, _) = run_virtual("examples/survey.mcl", &[], "param-order.jsonl");
-    assert_eq!(code, 0);
-    let text = std::fs::read_to_string(tmp("param-order.jsonl")).unwrap();
-    let line = text.lines().find(|l| l.contains(r#""action":"enableTrajectory""#)).expect("enableTrajectory sent");
-    assert!(line.contains(r#""params":{"velocity":"#), "{line}");
-    let keys: Vec<&str> = tr
-        .iter()
-        .find_map(|r| match &r.kind {
-            RecordKind::Action { action, params, .. } if action == "enableTrajectory" => {
-                Some(params.keys().map(String::as_str).collect())
-            }
-            _ => None,
-        })
-        .unwrap();
-    assert_eq!(keys, ["velocity", "path"]);
-    let live = mcl(&["run", "--mock", "--virtual-time", "examples/survey.mcl"]);
-    let log = String::from_utf8_lossy(&live.stdout).into_owned() + &String::from_utf8_lossy(&live.stderr);
-    let l = log.lines().find(|l| l.contains("TrajectoryPrimitive enable(")).expect("live line");
-    assert!(l.contains("enable(velocity="), "{l}");
-}
