@@ -29,16 +29,7 @@ pub(super) fn hunt(
     let mut over = false;
     let mut tried = 0;
     while used < budget {
-        let mut g = ProductGraph {
-            width: init.len(),
-            states: init.clone(),
-            parent: vec![(u32::MAX, 0, 0)],
-            dead: Vec::new(),
-            pess_off: vec![0],
-            pess: Vec::new(),
-            over: false,
-            complete: true,
-        };
+        let mut g = ProductGraph::rooted(&init);
         let mut cur = init.clone();
         crate::interrupt::poll();
         for step in 0..depth {

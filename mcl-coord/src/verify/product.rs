@@ -151,6 +151,20 @@ pub(super) struct ProductGraph {
 }
 
 impl ProductGraph {
+    /// A graph holding only the initial state `init`.
+    pub(super) fn rooted(init: &[u32]) -> Self {
+        ProductGraph {
+            width: init.len(),
+            states: init.to_vec(),
+            parent: vec![(u32::MAX, 0, 0)],
+            dead: Vec::new(),
+            pess_off: vec![0],
+            pess: Vec::new(),
+            over: false,
+            complete: true,
+        }
+    }
+
     /// State `i` (vehicle classes, then supervisor counts).
     pub(super) fn state(&self, i: u32) -> &[u32] {
         &self.states[i as usize * self.width..(i as usize + 1) * self.width]
@@ -159,18 +173,8 @@ impl ProductGraph {
 
 /// Explores the product breadth-first from `init`, up to `max` states.
 pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph {
-    let width = init.len();
     let mut index: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
-    let mut g = ProductGraph {
-        width,
-        states: init.clone(),
-        parent: vec![(u32::MAX, 0, 0)],
-        dead: Vec::new(),
-        pess_off: vec![0],
-        pess: Vec::new(),
-        over: false,
-        complete: true,
-    };
+    let mut g = ProductGraph::rooted(&init);
     index.insert(init, 0);
     let mut i = 0usize;
     let mut succ = Vec::new();
