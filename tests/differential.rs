@@ -35,25 +35,6 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// The vehicle of the random missions (as in mcl-compiler's property test):
-/// tasks that end ok or fail, a timed one, an instantaneous one.
-const VEHICLE: &str = r#"
-actions {
-    enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
-    enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable );
-    enableT = TPrimitive( c: enable, v: timeout ); disableT = TPrimitive( c: disable );
-    enableW = WPrimitive( c: enable ); disableW = WPrimitive( c: disable );
-}
-events { aOk; aFail; bOk; bFail; tOk; tFail; wOk; wFail; }
-tasks {
-    A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
-    B(): AchieveOneGoal { a: enableB -> T0; a: disableB -> T1, T6, T7; e: bOk -> T2; e: bFail -> T3; }
-    Timed( timeout ): AchieveOneGoalTimed { a: enableT -> T0; a: disableT -> T1, T6, T7; e: tOk -> T2; e: tFail -> T3; }
-    Void(): Instant { }
-    W(): AchieveOneGoal { a: enableW -> T0; a: disableW -> T1, T6, T7; e: wOk -> T2; e: wFail -> T3; }
-}
-"#;
-
 /// States explored per net at most; a larger space is skipped (counted).
 const MAX_STATES: usize = 60_000;
 
@@ -244,7 +225,7 @@ fn mission_scenario(r: &mut Rng) -> String {
 fn compile_mission(body: &str) -> Net {
     let mut db = Database::new();
     let dir = Path::new("/virtual/differential");
-    db.set_text(&dir.join("vehicle.mcl"), VEHICLE);
+    db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
     let file = db.set_text(&dir.join("m.mcl"), format!("import \"vehicle.mcl\";\nmission {{ {body} }}\n"));
     let diags = check_file(&db, file);
     assert!(!mcl_compiler::has_errors(diags), "generated program has errors: {diags:?}\n{body}");
@@ -398,7 +379,7 @@ fn constraint(r: &mut Rng) -> String {
 fn vehicle_nets(text: &str) -> Result<Vec<mcl_coord::VehicleNet>, String> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/differential");
-    db.set_text(&dir.join("vehicle.mcl"), VEHICLE);
+    db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
     let file = db.set_text(&dir.join("pair.mcl"), text);
     let diags = check_file(&db, file);
     assert!(!mcl_compiler::has_errors(diags), "generated program has errors: {diags:?}\n{text}");

@@ -11,23 +11,6 @@ use proptest::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-const VEHICLE: &str = r#"
-actions {
-    enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
-    enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable );
-    enableT = TPrimitive( c: enable, v: timeout ); disableT = TPrimitive( c: disable );
-    enableW = WPrimitive( c: enable ); disableW = WPrimitive( c: disable );
-}
-events { aOk; aFail; bOk; bFail; tOk; tFail; wOk; wFail; }
-tasks {
-    A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
-    B(): AchieveOneGoal { a: enableB -> T0; a: disableB -> T1, T6, T7; e: bOk -> T2; e: bFail -> T3; }
-    Timed( timeout ): AchieveOneGoalTimed { a: enableT -> T0; a: disableT -> T1, T6, T7; e: tOk -> T2; e: tFail -> T3; }
-    Void(): Instant { }
-    W(): AchieveOneGoal { a: enableW -> T0; a: disableW -> T1, T6, T7; e: wOk -> T2; e: wFail -> T3; }
-}
-"#;
-
 /// A random statement, as MCL text.
 fn stmt() -> impl Strategy<Value = String> {
     let call = prop_oneof![
@@ -63,7 +46,7 @@ fn stmt() -> impl Strategy<Value = String> {
 fn check_mission(body: &str) -> Result<(), TestCaseError> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/property");
-    db.set_text(&dir.join("vehicle.mcl"), VEHICLE);
+    db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
     let file = db.set_text(&dir.join("m.mcl"), format!("import \"vehicle.mcl\";\nmission {{ {body} }}\n"));
     let diags = check_file(&db, file);
     prop_assert!(!mcl_compiler::has_errors(diags), "generated program has errors: {diags:?}\n{body}");

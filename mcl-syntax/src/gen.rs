@@ -509,6 +509,26 @@ pub fn program(lines: usize, seed: u64) -> String {
     w.out
 }
 
+/// A small vehicle for generated missions (the random-mission property
+/// tests): tasks `A(x)`, `B()`, `W()` that end ok or fail, `Timed(timeout)`
+/// with a time-out, and the instantaneous `Void()`.
+pub const TEST_VEHICLE: &str = r#"
+actions {
+    enableA = APrimitive( c: enable, v: x ); disableA = APrimitive( c: disable );
+    enableB = BPrimitive( c: enable ); disableB = BPrimitive( c: disable );
+    enableT = TPrimitive( c: enable, v: timeout ); disableT = TPrimitive( c: disable );
+    enableW = WPrimitive( c: enable ); disableW = WPrimitive( c: disable );
+}
+events { aOk; aFail; bOk; bFail; tOk; tFail; wOk; wFail; }
+tasks {
+    A( x ): AchieveOneGoal { a: enableA -> T0; a: disableA -> T1, T6, T7; e: aOk -> T2; e: aFail -> T3; }
+    B(): AchieveOneGoal { a: enableB -> T0; a: disableB -> T1, T6, T7; e: bOk -> T2; e: bFail -> T3; }
+    Timed( timeout ): AchieveOneGoalTimed { a: enableT -> T0; a: disableT -> T1, T6, T7; e: tOk -> T2; e: tFail -> T3; }
+    Void(): Instant { }
+    W(): AchieveOneGoal { a: enableW -> T0; a: disableW -> T1, T6, T7; e: wOk -> T2; e: wFail -> T3; }
+}
+"#;
+
 /// Text that matters to the parser (delimiters, keywords, quotes, comment
 /// markers, whole small items): what random edits insert in the tests of
 /// incremental parsing and of the language server.
