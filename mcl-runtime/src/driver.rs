@@ -379,8 +379,31 @@ pub fn run_virtual(
     }
     let mut one = Single { s, vehicle: mock };
     let stop = virtual_loop::run_now(&mut one, &limits)?;
-    let s = one.s;
-    Ok(match stop {
+    Ok(single_end(one.s, stop, &limits))
+}
+
+/// [`run_virtual`] paced by `clock` (`mcl run --sim --speed X`): the same
+/// inputs at the same mission times, each taken once the clock reaches its
+/// time ([`virtual_loop::run_paced`]). A resumed player's clock goes on from
+/// its last journaled input.
+pub async fn run_paced(
+    s: &mut Session<'_>,
+    vehicle: &mut (impl VirtualVehicle + ?Sized),
+    limits: Limits,
+    clock: Clock,
+) -> Result<End, String> {
+    if !started(s) {
+        let actions = s.step(Input::Start(0.0))?;
+        feed_mock(s, vehicle, 0.0, &actions);
+    }
+    let mut one = Single { s, vehicle };
+    let stop = virtual_loop::run_paced(&mut one, &limits, Some(clock)).await?;
+    Ok(single_end(one.s, stop, &limits))
+}
+
+/// How a single run that the loop stopped with `stop` ended (recorded).
+fn single_end(s: &mut Session<'_>, stop: Stop, limits: &Limits) -> End {
+    match stop {
         Stop::Over => End::Outcome(s.player.outcome().unwrap_or(Outcome::Stuck)),
         Stop::Quiescent => {
             let awaited = s.player.awaited_events();
@@ -403,7 +426,7 @@ pub fn run_virtual(
             s.end_by_driver(t, "stuck", virtual_loop::zero_time_message(t));
             End::ZeroTimeLoop(t)
         }
-    })
+    }
 }
 
 /// Where the next input of a single run comes from.

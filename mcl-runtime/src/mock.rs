@@ -272,27 +272,9 @@ impl MockVehicle {
         (self.rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
 
-    /// The rule of activation `n` of `task` (called with `label`): the most
-    /// specific level first, field by field.
+    /// The rule of activation `n` of `task` (called with `label`).
     fn rule_for(&self, task: &str, label: Option<&str>, n: u32) -> Rule {
-        let Some(tr) = self.scenario.tasks.get(task) else { return Rule::default() };
-        let mut levels: Vec<Rule> = Vec::new();
-        if let Some(r) = tr.activation.get(&crate::scenario::Activation(n)) {
-            levels.push(r.clone());
-        }
-        if let Some(r) = label.and_then(|l| tr.label.get(l)) {
-            levels.push(r.clone());
-        }
-        levels.push(tr.base());
-        let mut r = Rule::default();
-        // The outcome and the probabilities come together from the most specific level that has either.
-        if let Some(l) = levels.iter().find(|l| l.outcome.is_some() || l.probabilities.is_some()) {
-            r.outcome = l.outcome;
-            r.probabilities = l.probabilities;
-        }
-        r.delay = levels.iter().find_map(|l| l.delay);
-        r.event = levels.iter().find_map(|l| l.event.clone());
-        r
+        self.scenario.rule_for(task, label, n)
     }
 
     /// The time of the next scheduled message.

@@ -715,6 +715,18 @@ fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
 /// writing records to `sink`. Runs inside a tokio runtime (the transport's).
 /// The loop is [`virtual_loop::run`].
 pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limits) -> Result<MultiEnd, String> {
+    run_virtual_paced(vehicles, sink, limits, None).await
+}
+
+/// [`run_virtual`], each input taken once `pace` reaches its time
+/// ([`virtual_loop::run_paced`]: `mcl run --sim --speed X` with several
+/// vehicles): the same run, at the speed of the clock.
+pub async fn run_virtual_paced(
+    vehicles: Vec<Vehicle>,
+    sink: SharedSink,
+    limits: Limits,
+    pace: Option<Clock>,
+) -> Result<MultiEnd, String> {
     let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
     let vs = live(vehicles, &mut handles);
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
@@ -727,7 +739,7 @@ pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limit
         fleet.work.push_back((i, outs));
         fleet.settle().await?;
     }
-    let stop = virtual_loop::run(&mut fleet, &limits).await?;
+    let stop = virtual_loop::run_paced(&mut fleet, &limits, pace).await?;
     let running = fleet.vs.iter_mut().filter(|v| v.end.is_none());
     match stop {
         Stop::Over => {}

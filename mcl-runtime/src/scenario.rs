@@ -348,6 +348,31 @@ impl<'de> Deserialize<'de> for DelaySpec {
 }
 
 impl Scenario {
+    /// The rule of activation `n` (1 is the first) of `task`, called with
+    /// `label`: the most specific level first (activation, label, task),
+    /// field by field, the outcome and the probabilities together from the
+    /// most specific level that gives either. Used by the mock vehicle and
+    /// the simulator (`mcl-sim`).
+    pub fn rule_for(&self, task: &str, label: Option<&str>, n: u32) -> Rule {
+        let Some(tr) = self.tasks.get(task) else { return Rule::default() };
+        let mut levels: Vec<Rule> = Vec::new();
+        if let Some(r) = tr.activation.get(&Activation(n)) {
+            levels.push(r.clone());
+        }
+        if let Some(r) = label.and_then(|l| tr.label.get(l)) {
+            levels.push(r.clone());
+        }
+        levels.push(tr.base());
+        let mut r = Rule::default();
+        if let Some(l) = levels.iter().find(|l| l.outcome.is_some() || l.probabilities.is_some()) {
+            r.outcome = l.outcome;
+            r.probabilities = l.probabilities;
+        }
+        r.delay = levels.iter().find_map(|l| l.delay);
+        r.event = levels.iter().find_map(|l| l.event.clone());
+        r
+    }
+
     /// Parses a scenario. Errors name the line and column (and `origin`, a
     /// file name for messages).
     pub fn from_toml(text: &str, origin: &str) -> Result<Scenario, String> {

@@ -50,3 +50,78 @@ pub trait VirtualVehicle {
         Vec::new()
     }
 }
+
+/// Brings `vehicle` to where it stood when the virtual-time loop
+/// ([`crate::virtual_loop`], [`crate::driver::run_virtual`]) fed the player
+/// the journaled `input`: resuming a run against a vehicle whose state
+/// follows from time and not only from the actions it received (a
+/// simulated one), the vehicle is re-derived by replaying the loop. Before
+/// a timer or the start, the vehicle takes every step due strictly earlier
+/// (at equal times the player's timers go first); before one of its own
+/// messages, it steps until it sends that message, which must be the one
+/// journaled (else the journal was written against another vehicle or
+/// world). `poses` gets the poses of the steps that sent nothing, in the
+/// order the loop traced them. The caller then gives the vehicle the
+/// input's actions, as the loop did.
+pub fn catch_up(
+    vehicle: &mut (impl VirtualVehicle + ?Sized),
+    input: &crate::journal::Input,
+    mut poses: impl FnMut(Vec<Pose>),
+) -> Result<(), String> {
+    let t = input.time();
+    // Journaled times are read back from decimal text: equal within this.
+    let eps = 1e-9 * t.abs().max(1.0);
+    let want = input.message();
+    while let Some(d) = vehicle.next_deadline() {
+        let due = if want.is_some() { d <= t + eps } else { d < t - eps };
+        if !due {
+            break;
+        }
+        let Some((tm, m)) = vehicle.pop_due(d) else {
+            poses(vehicle.take_poses());
+            continue;
+        };
+        return match &want {
+            Some(w) if same_message(w, &m) && (tm - t).abs() <= eps => Ok(()),
+            _ => Err(format!(
+                "the vehicle sends {} at t={tm} where the journal has {} at t={t} (was the run journaled against another vehicle model, world or scenario?)",
+                describe(&m),
+                want.as_ref().map_or("its next input".to_string(), describe)
+            )),
+        };
+    }
+    match want {
+        Some(w) => Err(format!(
+            "the vehicle does not send {} at t={t} as the journal says (was the run journaled against another vehicle model, world or scenario?)",
+            describe(&w)
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The same event (name and activation) or perception (name and value,
+/// numbers within 1e-9), whatever their numbers `n`.
+fn same_message(a: &Inbound, b: &Inbound) -> bool {
+    match (a, b) {
+        (Inbound::Event { event: e1, activation: a1, .. }, Inbound::Event { event: e2, activation: a2, .. }) => {
+            e1 == e2 && a1 == a2
+        }
+        (Inbound::Perception { name: n1, value: v1, .. }, Inbound::Perception { name: n2, value: v2, .. }) => {
+            n1 == n2
+                && match (v1.as_f64(), v2.as_f64()) {
+                    (Some(x), Some(y)) => (x - y).abs() <= 1e-9 * x.abs().max(1.0),
+                    _ => v1 == v2,
+                }
+        }
+        _ => false,
+    }
+}
+
+/// `event E` or `perception P = V`.
+fn describe(m: &Inbound) -> String {
+    match m {
+        Inbound::Event { event, .. } => format!("event `{event}`"),
+        Inbound::Perception { name, value, .. } => format!("perception `{name}` = {value}"),
+        other => format!("{other:?}"),
+    }
+}

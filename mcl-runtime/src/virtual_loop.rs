@@ -15,6 +15,7 @@ use std::future::Future;
 use std::pin::pin;
 use std::task::{Context, Poll, Waker};
 
+use crate::clock::Clock;
 use crate::driver::Limits;
 
 /// Inputs in a row at one instant of virtual time after which a run is
@@ -55,6 +56,14 @@ pub enum Stop {
 /// Steps `d` input after input until it is over, stuck, past the time limit
 /// of `limits`, or looping in zero time.
 pub async fn run<D: Discrete>(d: &mut D, limits: &Limits) -> Result<Stop, String> {
+    run_paced(d, limits, None).await
+}
+
+/// [`run`], each input taken no earlier than the instant `pace` gives its
+/// time (`mcl run --sim --speed X`: the simulated run stepped against the
+/// wall clock scaled by X). The inputs, their order and their times are
+/// those of [`run`]: only when they happen changes.
+pub async fn run_paced<D: Discrete>(d: &mut D, limits: &Limits, pace: Option<Clock>) -> Result<Stop, String> {
     let mut same = SameInstant::default();
     let mut next = Vec::new();
     loop {
@@ -79,6 +88,12 @@ pub async fn run<D: Discrete>(d: &mut D, limits: &Limits) -> Result<Stop, String
         }
         if same.tick(t) {
             return Ok(Stop::ZeroTimeLoop(t));
+        }
+        if let Some(at) = pace.map(|c| c.instant_at(t)) {
+            // Behind the clock (the timer's resolution is a millisecond): no wait.
+            if at > tokio::time::Instant::now() {
+                tokio::time::sleep_until(at).await;
+            }
         }
         d.step(t, source).await?;
     }
