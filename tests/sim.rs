@@ -6,7 +6,8 @@
 use mcl_testutil::browser;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -291,9 +292,9 @@ fn bad_world_and_model_files_are_located_errors() {
     let e = text(&o.stderr);
     assert!(e.contains(&format!("{}:3:12:", m.display())) && e.contains("traget"), "{e}");
 
-    let o = mcl(&["run", "--sim", "examples/survey.mcl"]);
+    let o = mcl(&["run", "--sim", "--speed", "0", "examples/survey.mcl"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o.stderr).contains("--virtual-time"));
+    assert!(text(&o.stderr).contains("--speed"));
     let o = mcl(&["run", "--mock", "--virtual-time", "examples/survey.mcl", "--world", w.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
 }
@@ -444,4 +445,227 @@ fn trajectories_render_in_a_browser() {
         let blank = browser::blank_png_size(&svg.with_extension("blank"), size).expect("a blank page renders");
         assert!(bytes > 4 * blank, "{} looks blank: {bytes} bytes vs {blank} for a blank page", svg.display());
     }
+}
+
+/// Top horizontal speed between consecutive poses.
+fn top_speed(ps: &[P]) -> f64 {
+    ps.windows(2)
+        .filter(|w| w[1].t > w[0].t)
+        .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y) / (w[1].t - w[0].t))
+        .fold(0.0, f64::max)
+}
+
+/// `--speed` instead of `--virtual-time`: the same run, paced by the wall
+/// clock; one vehicle and several.
+#[test]
+fn real_time_gives_the_run_of_virtual_time() {
+    for (file, extra, several) in [
+        ("examples/survey.mcl", vec![], false),
+        ("examples/auv-asc.mcl", vec!["--world", "examples/sim/auv-asc.toml"], true),
+    ] {
+        let (code, reference, _) = sim(file, &extra, "rt-reference");
+        assert_eq!(code, 0);
+        let tp = tmp("rt.jsonl");
+        let mut args = vec!["run", "--sim", "--speed", "500", "-q", file, "--trace", tp.to_str().unwrap()];
+        args.extend_from_slice(&extra);
+        let o = mcl(&args);
+        assert_eq!(o.status.code(), Some(0), "{file}: {}", text(&o.stderr));
+        let tr = trace(&tp);
+        let missions: Vec<&str> = if several { vec!["auv", "asc"] } else { vec![""] };
+        for m in missions {
+            let (ps, want) =
+                if several { (poses_of(&tr, m), poses_of(&reference, m)) } else { (poses(&tr), poses(&reference)) };
+            assert!(ps.len() > 50, "{file} {m}: {} poses", ps.len());
+            assert_eq!(ps.len(), want.len(), "{file} {m}");
+            for (p, q) in ps.iter().zip(&want) {
+                assert!(
+                    (p.t - q.t).abs() < 1e-6 && (p.x - q.x).hypot(p.y - q.y) < 0.01 && (p.z - q.z).abs() < 0.01,
+                    "{p:?} {q:?}"
+                );
+            }
+            // A pose at least every simulated second while moving.
+            assert!(ps
+                .windows(2)
+                .all(|w| w[1].t - w[0].t <= 1.0 + 1e-6 || w[0].x == w[1].x && w[0].y == w[1].y && w[0].z == w[1].z));
+        }
+        let outcomes = |tr: &[Value]| -> Vec<String> {
+            tr.iter().filter(|r| r["kind"] == "outcome").map(|r| format!("{} {}", r["mission"], r["result"])).collect()
+        };
+        assert_eq!(outcomes(&tr), outcomes(&reference), "{file}");
+        assert!(outcomes(&tr).iter().all(|o| o.ends_with("\"ok\"")), "{:?}", outcomes(&tr));
+    }
+}
+
+fn run_sim(args: &[&str]) -> Output {
+    let mut all = vec!["run", "--sim", "-q"];
+    all.extend_from_slice(args);
+    mcl(&all)
+}
+
+/// A simulated run that crashes (abort right after a journal sync) resumes
+/// with the vehicle re-derived from the journal: the trace is the
+/// uninterrupted run's, byte for byte, wherever it crashed; a resume
+/// against another world is refused where the simulation differs.
+#[test]
+fn a_crashed_simulated_run_resumes_where_it_was() {
+    let base = ["examples/survey.mcl", "--world", "examples/sim/survey-low-battery.toml"];
+    let whole = tmp("sim-whole.jsonl");
+    let mut args = vec!["--virtual-time"];
+    args.extend_from_slice(&base);
+    args.extend_from_slice(&["--trace", whole.to_str().unwrap()]);
+    assert_eq!(run_sim(&args).status.code(), Some(0));
+    let whole = std::fs::read(&whole).unwrap();
+    assert!(String::from_utf8_lossy(&whole).contains("eventEmergencySurfaceOk"), "the battery alarm path");
+    for n in [1, 3, 6, 9, 12] {
+        let j = tmp(&format!("sim-crash{n}.journal"));
+        let _ = std::fs::remove_file(&j);
+        let mut args = vec!["--virtual-time"];
+        args.extend_from_slice(&base);
+        let crash = n.to_string();
+        args.extend_from_slice(&["--journal", j.to_str().unwrap(), "--crash-after", &crash]);
+        let o = run_sim(&args);
+        assert!(o.status.code().is_none(), "crash after {n}: the process was killed by a signal");
+        let resumed = tmp(&format!("sim-resumed{n}.jsonl"));
+        let mut args = vec!["--virtual-time"];
+        args.extend_from_slice(&base);
+        args.extend_from_slice(&["--resume", j.to_str().unwrap(), "--trace", resumed.to_str().unwrap()]);
+        let o = run_sim(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+        assert!(std::fs::read(&resumed).unwrap() == whole, "crash after {n} inputs: the resumed trace differs");
+    }
+    // Another world: the vehicle would not have sent what the journal says.
+    let j = tmp("sim-crash9.journal");
+    let o = run_sim(&["--virtual-time", "examples/survey.mcl", "--resume", j.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("the simulated vehicle differs from the journal"), "{}", text(&o.stderr));
+}
+
+/// kill -9 of a real-time simulated run, then resume (real time again):
+/// the trace of the virtual-time run.
+#[test]
+fn kill_9_of_a_real_time_simulated_run_and_resume() {
+    let (code, _, _) = sim("examples/survey.mcl", &[], "kill-reference");
+    assert_eq!(code, 0);
+    let reference = std::fs::read(tmp("kill-reference.jsonl")).unwrap();
+    let j = tmp("sim-rt.journal");
+    let _ = std::fs::remove_file(&j);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--sim", "--speed", "100", "-q", "examples/survey.mcl", "--journal", j.to_str().unwrap()])
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Killed once the trajectory has started (t = 58 s of 359: 0.6 s of real time).
+    let started = Instant::now();
+    loop {
+        if std::fs::read_to_string(&j).unwrap_or_default().contains("\"event\":\"eventAltitudeOk\"") {
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(30), "the run did not progress");
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be killed");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let resumed = tmp("sim-rt-resumed.jsonl");
+    let o = run_sim(&[
+        "--speed",
+        "100",
+        "examples/survey.mcl",
+        "--resume",
+        j.to_str().unwrap(),
+        "--trace",
+        resumed.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    assert!(std::fs::read(&resumed).unwrap() == reference, "the resumed trace differs from the uninterrupted run's");
+}
+
+/// `--vehicle-model asc=FILE`: the ASC has the bundled surface model
+/// (faster, depth fixed at 0), the AUV the default one.
+#[test]
+fn each_vehicle_of_a_world_has_its_own_model() {
+    let extra = ["--world", "examples/sim/auv-asc.toml", "--vehicle-model", "asc=examples/sim/asc-model.toml"];
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &extra, "auv-asc-models");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let (auv, asc) = (poses_of(&tr, "auv"), poses_of(&tr, "asc"));
+    assert!(asc.iter().all(|p| p.z == 0.0) && auv.iter().any(|p| p.z > 5.0));
+    let (va, vs) = (top_speed(&auv), top_speed(&asc));
+    assert!(va <= 1.0 + 1e-6, "the AUV's top speed is the bundled model's 1 m/s: {va}");
+    assert!(vs > 1.2 && vs <= 1.5 + 1e-6, "the ASC's top speed is its model's 1.5 m/s: {vs}");
+    // The ASC's over the object sooner than with the AUV's model.
+    let (_, slow, _) = sim("examples/auv-asc.mcl", &extra[..2], "auv-asc-one-model");
+    let over = |tr: &[Value]| poses_of(tr, "asc").iter().find(|p| (p.x - 20.0).hypot(p.y - 10.0) <= 1.0).map(|p| p.t);
+    assert!(over(&tr).unwrap() < over(&slow).unwrap());
+    // A surface vehicle does not dive: a depth fails at once.
+    let (_, tr, o) = sim("examples/survey.mcl", &["--vehicle-model", "examples/sim/asc-model.toml"], "surface-survey");
+    let init = times(&tr, "event", "event", "eventInitializeVehicleOk");
+    assert_eq!(times(&tr, "event", "event", "eventAltitudeFail"), init, "{}", text(&o.stderr));
+    assert!(poses(&tr).iter().all(|p| p.z == 0.0));
+    // A model for a mission the file does not have.
+    let o = mcl(&[
+        "run",
+        "--sim",
+        "--virtual-time",
+        "-q",
+        "examples/auv-asc.mcl",
+        "--vehicle-model",
+        "rov=examples/sim/asc-model.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("has no mission `rov`"), "{}", text(&o.stderr));
+}
+
+/// A scenario's perceptions `after` an event, its rules per call label and
+/// its probabilities apply on top of the simulation.
+#[test]
+fn scenario_rules_after_labels_and_probabilities() {
+    // A perception 2 s after the altitude is reached.
+    let sc = tmp("after.toml");
+    std::fs::write(&sc, "[[perceptions]]\nafter = \"eventAltitudeOk\"\ndelay = 2\nname = \"sonar\"\nvalue = 3\n")
+        .unwrap();
+    let (code, tr, o) = sim("examples/survey.mcl", &["--scenario", sc.to_str().unwrap()], "after");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    assert!(!text(&o.stderr).contains("not sent"), "{}", text(&o.stderr));
+    let reached = times(&tr, "event", "event", "eventAltitudeOk");
+    let sonar = times(&tr, "perception", "name", "sonar");
+    assert_eq!(reached.len(), 1);
+    assert_eq!(sonar.len(), 1, "once, after the one eventAltitudeOk");
+    assert!((sonar[0] - reached[0] - 2.0).abs() < 1e-6, "{sonar:?} {reached:?}");
+    // The labelled Deploy of the ASC (`Deploy() : deploy_auv`) takes 30 s instead of its model's 10 s.
+    let sc = tmp("label.toml");
+    std::fs::write(&sc, "[tasks.Deploy.label.deploy_auv]\noutcome = \"ok\"\ndelay = 30\n").unwrap();
+    let (code, tr, o) = sim("examples/auv-asc.mcl", &["--scenario", sc.to_str().unwrap()], "label");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let start = times(&tr, "action", "action", "enableDeploy");
+    let done = times(&tr, "event", "event", "eventDeployOk");
+    assert_eq!((start.len(), done.len()), (1, 1));
+    assert!((done[0] - start[0] - 30.0).abs() < 1e-6, "{start:?} {done:?}");
+    // Probabilities and delay ranges are drawn from the seed: both outcomes
+    // over a few seeds, each at its drawn delay, the same for the same seed.
+    let sc = tmp("probabilities.toml");
+    std::fs::write(&sc, "[tasks.Trajectory]\nprobabilities = { ok = 0.5, fail = 0.5 }\ndelay = [20, 40]\n").unwrap();
+    let mut outcomes = Vec::new();
+    for seed in 0..8 {
+        let seed = seed.to_string();
+        let (code, tr, o) = sim("examples/survey.mcl", &["--scenario", sc.to_str().unwrap(), "--seed", &seed], "prob");
+        assert_eq!(code, 0, "{}", text(&o.stderr));
+        let start = times(&tr, "action", "action", "enableTrajectory")[0];
+        let ok = times(&tr, "event", "event", "eventTrajectoryOk");
+        let fail = times(&tr, "event", "event", "eventTrajectoryFail");
+        let (t, good) = match (ok.as_slice(), fail.as_slice()) {
+            ([t], []) => (*t, true),
+            ([], [t]) => (*t, false),
+            other => panic!("seed {seed}: {other:?}"),
+        };
+        assert!((20.0 - 1e-6..=40.0 + 1e-6).contains(&(t - start)), "seed {seed}: after {} s", t - start);
+        let (_, again, _) = sim("examples/survey.mcl", &["--scenario", sc.to_str().unwrap(), "--seed", &seed], "prob");
+        assert_eq!(
+            times(&again, "event", "event", if good { "eventTrajectoryOk" } else { "eventTrajectoryFail" }),
+            [t]
+        );
+        outcomes.push(good);
+    }
+    assert!(outcomes.contains(&true) && outcomes.contains(&false), "{outcomes:?}");
 }

@@ -33,6 +33,9 @@ pub struct Limits {
     pub step: f64,
     /// Seconds between two poses while the vehicle moves.
     pub pose_period: f64,
+    /// A surface vehicle (an ASC): its depth stays 0, and the behaviours
+    /// that would take it down (depth, altitude, wall inspection) fail at once.
+    pub surface: bool,
 }
 
 /// Names of the perceptions the simulation sends (none when absent).
@@ -132,6 +135,7 @@ struct VehicleFile {
     step: Option<f64>,
     #[serde(default, deserialize_with = "opt_positive")]
     pose_period: Option<f64>,
+    surface: Option<bool>,
 }
 
 #[derive(Default, Deserialize)]
@@ -216,6 +220,7 @@ impl Model {
             emergency_ascent: None,
             step: None,
             pose_period: None,
+            surface: None,
         });
         let limits = Limits {
             surge: v.surge_speed.unwrap_or(d.surge),
@@ -225,6 +230,7 @@ impl Model {
             emergency_ascent: v.emergency_ascent.unwrap_or(d.emergency_ascent),
             step: v.step.unwrap_or(d.step),
             pose_period: v.pose_period.unwrap_or(d.pose_period),
+            surface: v.surface.unwrap_or(d.surface),
         };
         let p = f.perceptions.unwrap_or_default();
         let b = &base.perceptions;
@@ -319,6 +325,7 @@ impl Model {
                 emergency_ascent: 1.0,
                 step: 0.1,
                 pose_period: 1.0,
+                surface: false,
             },
             perceptions: Perceptions {
                 position_quality: name("nav.quality"),

@@ -19,9 +19,12 @@
 //! * **Poses:** one per `pose_period` while the vehicle moves, one at every
 //!   action and every event it raises.
 //! * **A scenario** (`--scenario`) applies on top: its `[[events]]` and
-//!   `[[perceptions]]` at fixed times are sent; a task rule with an
-//!   `outcome` ends the primitive that way after its delay (`never`: the
-//!   primitive does not end on its own).
+//!   `[[perceptions]]` at fixed times are sent, and its perceptions `after`
+//!   an event once the vehicle sends that event; a task rule that gives an
+//!   outcome (or `probabilities` to draw it from), most specific first
+//!   (activation, call label, task: [`Scenario::rule_for`]), ends the
+//!   primitive that way after its delay (`never`: the primitive does not
+//!   end on its own), whatever the behaviour does meanwhile.
 //!
 //! Several vehicles share one [`World`] (an `Arc`): each has its own
 //! `SimVehicle` (position, battery, navigation, cable progress).
@@ -30,6 +33,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
 use mcl_runtime::link::{Action, Inbound};
+use mcl_runtime::mock::CallInfo;
 use mcl_runtime::scenario::{DelaySpec, OutcomeRule, Scenario};
 use mcl_runtime::vehicle::{Pose, VirtualVehicle};
 use serde_json::Value;
@@ -57,7 +61,16 @@ struct Run {
     label: String,
     b: Behaviour,
     /// A scenario's rule: end this way at this time (`Never`: do not end).
-    forced: Option<(f64, OutcomeRule)>,
+    forced: Option<Forced>,
+}
+
+/// How a scenario's rule ends a primitive, whatever its behaviour does.
+#[derive(Clone, Debug, PartialEq)]
+struct Forced {
+    at: f64,
+    outcome: OutcomeRule,
+    /// The rule's `event`, raised instead of the primitive's.
+    event: Option<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -101,6 +114,12 @@ pub struct SimVehicle {
     sent_alarm: Option<bool>,
     sent_tracked: Option<i64>,
     initialised: bool,
+    /// The calls of the mission (labels of the scenario's rules), by call site.
+    calls: HashMap<u32, CallInfo>,
+    /// State of the scenario's random draws (probabilities, delay ranges).
+    rng: u64,
+    /// Times each event was sent (perceptions scripted `after` an event).
+    sent_events: HashMap<String, u32>,
 }
 
 fn key(t: f64, id: u64) -> (u64, u64) {
@@ -141,7 +160,51 @@ impl SimVehicle {
             sent_alarm: None,
             sent_tracked: None,
             initialised: false,
+            calls: HashMap::new(),
+            rng: 0x73_696d,
+            sent_events: HashMap::new(),
             world,
+        }
+    }
+
+    /// The same vehicle knowing the calls of the mission `net` (so that the
+    /// scenario's `[tasks.T.label.L]` rules apply), its scenario's random
+    /// draws seeded by the scenario's seed, else `seed` (as the mock's).
+    pub fn with_program(mut self, net: &mcl_net::Net, seed: u64) -> SimVehicle {
+        self.calls = mcl_runtime::mock::tables_of(net).1;
+        self.rng = self.scenario.seed.unwrap_or(seed) ^ 0x73_696d; // "sim"
+        self
+    }
+
+    /// A uniform draw in [0, 1) (splitmix64).
+    fn uniform(&mut self) -> f64 {
+        self.rng = self.rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.rng;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Schedules the perceptions the scenario scripts `after` the event of
+    /// `msg` (sent at `t`), if it is one.
+    fn sent(&mut self, t: f64, msg: &Inbound) {
+        let Inbound::Event { event, .. } = msg else { return };
+        let n = self.sent_events.entry(event.clone()).or_insert(0);
+        *n += 1;
+        let n = *n;
+        let due: Vec<(f64, Inbound)> = self
+            .scenario
+            .perceptions
+            .iter()
+            .filter(|p| p.after.as_deref() == Some(event.as_str()) && p.occurrence.is_none_or(|o| o == n))
+            .map(|p| {
+                let at = t + p.delay.unwrap_or(0.0);
+                (at, Inbound::Perception { name: p.name.clone(), value: p.value.clone(), n: None })
+            })
+            .collect();
+        for (at, m) in due {
+            self.schedule(at, m, None);
         }
     }
 
@@ -259,15 +322,16 @@ impl SimVehicle {
         }
     }
 
-    /// Ends run `i` with `end`: raises its event now.
-    fn end_run(&mut self, i: usize, end: End) {
+    /// Ends run `i` with `end`: raises its event now (`event`, a scenario's, instead of the model's).
+    fn end_run(&mut self, i: usize, end: End, event: Option<String>) {
         let r = self.running.remove(i);
         let pm = &self.model.primitives[&r.primitive];
-        let (event, what) = match &end {
+        let (model_event, what) = match &end {
             End::Ok => (pm.ok.clone(), "ok".to_string()),
             End::Fail(why) => (pm.fail.clone(), format!("fail ({why})")),
             End::Lost => (pm.lost.clone().or(pm.fail.clone()), "lost (the cable is out of sight)".to_string()),
         };
+        let event = event.or(model_event);
         if r.b.is_fix() && end == End::Ok {
             self.nav_err = (0.0, 0.0);
         }
@@ -347,7 +411,7 @@ impl SimVehicle {
             let m = speed * dt;
             self.z += (zt - self.z).clamp(-m, m);
         }
-        self.z = self.z.clamp(0.0, self.world.seabed.depth_at(self.x, self.y));
+        self.z = if l.surface { 0.0 } else { self.z.clamp(0.0, self.world.seabed.depth_at(self.x, self.y)) };
         // Energy: hotel load plus distance through the water (the current's drift costs nothing).
         let (cx, cy) = self.world.current;
         let through_water = (self.x - ox - cx * dt).hypot(self.y - oy - cy * dt).hypot(self.z - oz);
@@ -370,18 +434,20 @@ impl SimVehicle {
         while i < self.running.len() {
             let ctx = self.ctx_with(&world, &model);
             let mut progress = self.progress;
-            let forced = self.running[i].forced;
-            let end = match forced {
-                Some((at, OutcomeRule::Ok)) if self.t >= at - 1e-9 => Some(End::Ok),
-                Some((at, OutcomeRule::Fail)) if self.t >= at - 1e-9 => {
-                    Some(End::Fail("the scenario makes it fail".into()))
+            let forced = self.running[i].forced.clone();
+            let due = forced.as_ref().is_some_and(|f| self.t >= f.at - 1e-9);
+            let (end, event) = match forced {
+                Some(f) if f.outcome == OutcomeRule::Ok && due => (Some(End::Ok), f.event),
+                Some(f) if f.outcome == OutcomeRule::Fail && due => {
+                    (Some(End::Fail("the scenario makes it fail".into())), f.event)
                 }
-                Some((_, OutcomeRule::Never)) => None,
-                _ => self.running[i].b.check(&ctx, &mut progress),
+                // Not yet due, or never: the behaviour does not end it meanwhile.
+                Some(_) => (None, None),
+                None => (self.running[i].b.check(&ctx, &mut progress), None),
             };
             self.progress = progress;
             match end {
-                Some(e) => self.end_run(i, e),
+                Some(e) => self.end_run(i, e, event),
                 None => i += 1,
             }
         }
@@ -520,7 +586,16 @@ impl SimVehicle {
         for w in warn {
             self.warn_once(format!("primitive `{}` ({}): {w}", a.primitive, pm.behaviour.name()));
         }
-        let forced = self.forced(&label, now);
+        let forced = self.forced(&label, a.call_site, now);
+        let started = match started {
+            Ok(_)
+                if self.model.limits.surface
+                    && matches!(pm.behaviour, Kind::Depth | Kind::Altitude | Kind::WallInspection) =>
+            {
+                Err(End::Fail("a surface vehicle does not dive".into()))
+            }
+            s => s,
+        };
         match started {
             Ok(b) => {
                 self.track.waypoints.extend(&b.waypoints);
@@ -532,24 +607,41 @@ impl SimVehicle {
                     .expect("forever always starts");
                 self.running.push(Run { seq: a.seq, primitive: a.primitive.clone(), label, b, forced: None });
                 let i = self.running.len() - 1;
-                self.end_run(i, end);
+                self.end_run(i, end, None);
             }
         }
     }
 
-    /// The scenario's rule for the next activation of `task`.
-    fn forced(&mut self, task: &str, now: f64) -> Option<(f64, OutcomeRule)> {
+    /// The scenario's rule for the next activation of `task` (called at
+    /// `call_site`): its outcome (given, or drawn from its probabilities)
+    /// and when (its delay, drawn from a range); none when the rule leaves
+    /// the outcome to the behaviour.
+    fn forced(&mut self, task: &str, call_site: Option<u32>, now: f64) -> Option<Forced> {
         let n = self.activations.entry(task.to_string()).or_insert(0);
         *n += 1;
-        let tr = self.scenario.tasks.get(task)?;
-        let rule = tr.activation.get(&mcl_runtime::scenario::Activation(*n)).cloned().unwrap_or_else(|| tr.base());
-        let outcome = rule.outcome.or(tr.outcome)?;
-        let delay = match rule.delay.or(tr.delay) {
+        let n = *n;
+        let label = call_site.and_then(|c| self.calls.get(&c)).and_then(|c| c.label.clone());
+        let rule = self.scenario.rule_for(task, label.as_deref(), n);
+        let outcome = match (rule.outcome, rule.probabilities) {
+            (Some(o), _) => o,
+            (None, Some(p)) => {
+                let u = self.uniform() * (p.ok + p.fail + p.never);
+                if u < p.ok {
+                    OutcomeRule::Ok
+                } else if u < p.ok + p.fail {
+                    OutcomeRule::Fail
+                } else {
+                    OutcomeRule::Never
+                }
+            }
+            (None, None) => return None,
+        };
+        let delay = match rule.delay {
             Some(DelaySpec::Fixed(d)) => d,
-            Some(DelaySpec::Range(lo, _)) => lo,
+            Some(DelaySpec::Range(lo, hi)) => lo + (hi - lo) * self.uniform(),
             None => self.scenario.default_duration.unwrap_or(mcl_runtime::mock::DEFAULT_DURATION),
         };
-        Some((now + delay, outcome))
+        Some(Forced { at: now + delay, outcome, event: rule.event })
     }
 }
 
@@ -583,13 +675,10 @@ impl VirtualVehicle for SimVehicle {
         for e in &self.scenario.events {
             out.push((e.at, Inbound::Event { event: e.event.clone(), activation: None, n: None }));
         }
-        for p in self.scenario.perceptions.clone() {
-            match p.at {
-                Some(at) => out.push((at, Inbound::Perception { name: p.name, value: p.value, n: None })),
-                None => self.warn_once(format!(
-                    "the scenario's perception `{}` after an event is not sent in the simulator (only those `at` a time)",
-                    p.name
-                )),
+        for p in &self.scenario.perceptions {
+            // Those `after` an event are scheduled when the vehicle sends it.
+            if let Some(at) = p.at {
+                out.push((at, Inbound::Perception { name: p.name.clone(), value: p.value.clone(), n: None }));
             }
         }
         out.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -612,8 +701,9 @@ impl VirtualVehicle for SimVehicle {
     fn next_deadline(&self) -> Option<f64> {
         let due = self.agenda.keys().next().map(|&(k, _)| f64::from_bits(k));
         let step = (!self.running.is_empty()).then(|| {
-            let forced = self.running.iter().filter_map(|r| r.forced).filter(|f| f.1 != OutcomeRule::Never);
-            forced.map(|f| f.0.max(self.t)).fold(self.t + self.model.limits.step, f64::min)
+            let forced =
+                self.running.iter().filter_map(|r| r.forced.as_ref()).filter(|f| f.outcome != OutcomeRule::Never);
+            forced.map(|f| f.at.max(self.t)).fold(self.t + self.model.limits.step, f64::min)
         });
         match (due, step) {
             (Some(a), Some(b)) => Some(a.min(b)),
@@ -636,12 +726,15 @@ impl VirtualVehicle for SimVehicle {
             return None;
         }
         let p = self.agenda.remove(&k)?;
+        self.sent(t, &p.msg);
         Some((t, p.msg))
     }
 
     fn take_delivered(&mut self, msg: &Inbound) -> bool {
         let Some(k) = self.agenda.iter().find(|(_, p)| &p.msg == msg).map(|(k, _)| *k) else { return false };
-        self.agenda.remove(&k);
+        if let Some(p) = self.agenda.remove(&k) {
+            self.sent(f64::from_bits(k.0), &p.msg);
+        }
         true
     }
 
@@ -784,6 +877,23 @@ mod tests {
         v.initial();
         v.on_action(3.0, &action(1, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 10, "mode": "keep"})));
         assert_eq!(event(v.pop_due(3.0)), (3.0, "eventDepthFail".into()));
+    }
+
+    #[test]
+    fn a_surface_vehicle_does_not_dive() {
+        let model = Model::from_toml("base = \"default\"\n[vehicle]\nsurface = true\n", "m").unwrap();
+        let mut v = SimVehicle::new(Arc::new(model), Arc::new(World::default()), Scenario::default());
+        v.initial();
+        v.on_action(1.0, &action(1, "enableDepth", "DepthPrimitive", "enable", json!({"depth": 5, "mode": "keep"})));
+        assert_eq!(event(v.pop_due(1.0)), (1.0, "eventDepthFail".into()));
+        v.on_action(1.0, &action(2, "enableGoto", "GotoPrimitive", "enable", json!({"way-point": [10, 0]})));
+        while let Some(m) = run_until(&mut v, 100.0) {
+            if matches!(m.1, Inbound::Event { .. }) {
+                break;
+            }
+        }
+        let p = v.pose();
+        assert!((p.x - 9.0).abs() < 0.2 && p.z == 0.0, "{p:?}");
     }
 
     #[test]

@@ -32,15 +32,17 @@ pub struct Options {
     /// Play against the in-process mock vehicle.
     #[arg(long)]
     pub mock: bool,
-    /// Play against a simulated vehicle that moves in a simulated world (with --virtual-time; docs/simulator.md).
+    /// Play against a simulated vehicle that moves in a simulated world (docs/simulator.md): with
+    /// --virtual-time as fast as it goes, else paced by the wall clock times --speed.
     #[arg(long)]
     pub sim: bool,
     /// With --sim: the world (TOML; default: a flat seabed at 20 m, nothing else).
     #[arg(long, value_name = "FILE")]
     pub world: Option<PathBuf>,
-    /// With --sim: how the vehicle's primitives are simulated (TOML; default: examples/sim/vehicle-model.toml).
-    #[arg(long, value_name = "FILE")]
-    pub vehicle_model: Option<PathBuf>,
+    /// With --sim: how the vehicle's primitives are simulated (TOML; default: examples/sim/vehicle-model.toml);
+    /// NAME=FILE for the vehicle of mission NAME only (repeatable).
+    #[arg(long, value_name = "[NAME=]FILE")]
+    pub vehicle_model: Vec<String>,
     /// With --sim: draw the vehicle's path (plan view and depth profile) as SVG here.
     #[arg(long, value_name = "FILE")]
     pub trajectory: Option<PathBuf>,
@@ -59,7 +61,7 @@ pub struct Options {
     /// Seed of the random choices (default: the scenario's seed, else 0).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Run in virtual time: deterministic and instantaneous (needs --mock).
+    /// Run in virtual time: deterministic and instantaneous (needs --mock or --sim).
     #[arg(long)]
     pub virtual_time: bool,
     /// Mission time runs FACTOR times faster than real time (with --aac, only for a mock AAC run with the same --speed).
@@ -298,17 +300,11 @@ pub fn run(o: Options) -> u8 {
             "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle) and --aac HOST:PORT",
         );
     }
-    if o.sim && !o.virtual_time {
-        return usage("--sim runs in virtual time only for now: add --virtual-time");
-    }
-    if o.sim && (o.journal.is_some() || o.resume.is_some()) {
-        return usage("--journal and --resume are not supported with --sim yet");
-    }
-    if !o.sim && (o.world.is_some() || o.vehicle_model.is_some() || o.trajectory.is_some()) {
+    if !o.sim && (o.world.is_some() || !o.vehicle_model.is_empty() || o.trajectory.is_some()) {
         return usage("--world, --vehicle-model and --trajectory go with --sim");
     }
     if o.virtual_time && !o.mock && !o.sim {
-        return usage("--virtual-time needs --mock (a real AAC runs in real time)");
+        return usage("--virtual-time needs --mock or --sim (a real AAC runs in real time)");
     }
     if o.scenario.is_some() && !o.mock && !o.sim {
         return usage(
@@ -454,12 +450,12 @@ pub fn run(o: Options) -> u8 {
     let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
     let mut mock_seed = scenario.seed.unwrap_or(seed);
     // The simulated vehicle's model and world, and the symbols they give.
-    let sim_setup = match o.sim.then(|| super::sim::load(&o)).transpose() {
+    let sim_setup = match o.sim.then(|| super::sim::load(&o, &names)).transpose() {
         Ok(s) => s,
         Err(code) => return code,
     };
     if let Some(s) = &sim_setup {
-        symbols.extend(s.symbols());
+        symbols.extend(s.symbols_of(&chosen.name));
     }
     symbols.extend(scenario.symbols.clone());
     symbols.extend(sets);
@@ -502,7 +498,7 @@ pub fn run(o: Options) -> u8 {
             return 2;
         }
     }
-    let mut sim_vehicle = sim_setup.map(|s| s.vehicle(scenario.clone()));
+    let mut sim_vehicle = sim_setup.map(|s| s.single(&chosen.name, &net, scenario.clone(), mock_seed));
     if let Some(v) = &mut sim_vehicle {
         mcl_runtime::vehicle::VirtualVehicle::initial(v);
     }
@@ -519,7 +515,13 @@ pub fn run(o: Options) -> u8 {
     let mut resume_point = None;
     if let (Some(entries), Some(path)) = (&resume_entries, &o.resume) {
         sink.quiet_replay = true;
+        // A simulated vehicle is re-derived: the loop replayed against it (docs/simulator.md).
+        let mut sim_error = None;
         let replayed = journal::replay(&mut player, entries, |input, outs| {
+            if let Some(v) = &mut sim_vehicle {
+                super::sim::replay_input(v, input, outs, &tracer, &mut sink, &mut sim_error);
+                return;
+            }
             if let Some(m) = input.message() {
                 mock.take_delivered(&m);
             }
@@ -531,7 +533,7 @@ pub fn run(o: Options) -> u8 {
             }
         });
         sink.quiet_replay = false;
-        let replayed = match replayed {
+        let replayed = match replayed.and_then(|r| sim_error.map_or(Ok(r), Err)) {
             Ok(r) => r,
             Err(e) => return usage(&format!("cannot resume from `{}`: {e}", path.display())),
         };
@@ -564,8 +566,8 @@ pub fn run(o: Options) -> u8 {
             seed,
             fingerprint: fingerprint.clone(),
             symbols: symbols.clone(),
-            scenario: if o.mock { scenario_text.clone().or(Some(String::new())) } else { None },
-            mock_seed: o.mock.then_some(mock_seed),
+            scenario: if o.mock || o.sim { scenario_text.clone().or(Some(String::new())) } else { None },
+            mock_seed: (o.mock || o.sim).then_some(mock_seed),
             run: run_id.clone(),
             unix_start: std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
@@ -592,8 +594,13 @@ pub fn run(o: Options) -> u8 {
         None => mcl_runtime::link::Delivered::default(),
     };
     session.delivered = delivered.clone();
-    let result: Result<End, String> = if let Some(v) = &mut sim_vehicle {
+    let result: Result<End, String> = if let (Some(v), true) = (&mut sim_vehicle, o.virtual_time) {
         driver::run_virtual(&mut session, v, limits)
+    } else if let Some(v) = &mut sim_vehicle {
+        match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+            Ok(rt) => rt.block_on(driver::run_paced(&mut session, v, limits, Clock::new(o.speed, offset))),
+            Err(e) => return usage(&format!("cannot start the runtime: {e}")),
+        }
     } else if o.virtual_time {
         driver::run_virtual(&mut session, &mut mock, limits)
     } else {
@@ -874,6 +881,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Err(code) => return code,
     };
     let mut names: Vec<String> = vehicles.iter().map(|v| v.mission.clone()).collect();
+    let file_missions = names.clone();
     if let Some(dup) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)).map(|(_, n)| n) {
         return usage(&format!(
             "`{}` has two missions named `{dup}`: name every mission (`mission : name {{ ... }}`) to run them together",
@@ -964,7 +972,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         return 2;
     }
 
-    let sim_setup = match o.sim.then(|| super::sim::load(o)).transpose() {
+    let sim_setup = match o.sim.then(|| super::sim::load(o, &file_missions)).transpose() {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -988,7 +996,8 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     for (v, scenario) in vehicles.into_iter().zip(scenarios) {
         let mut seed = o.seed.or(scenario.seed).unwrap_or(0);
         let mut mock_seed = scenario.seed.unwrap_or(seed);
-        let mut symbols: BTreeMap<String, Value> = sim_setup.as_ref().map(|s| s.symbols()).unwrap_or_default();
+        let mut symbols: BTreeMap<String, Value> =
+            sim_setup.as_ref().map(|s| s.symbols_of(&v.mission)).unwrap_or_default();
         symbols.extend(scenario.symbols.clone());
         symbols.extend(sets.iter().cloned());
         let net = Arc::new(v.net);
@@ -1066,6 +1075,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         }
         if o.virtual_time {
             mcl_runtime::multi::run_virtual(vs, shared, limits).await
+        } else if o.sim {
+            // Simulated vehicles: the virtual-time run, paced by the clock.
+            mcl_runtime::multi::run_virtual_paced(vs, shared, limits, Some(Clock::new(o.speed, 0.0))).await
         } else {
             let peers: Vec<String> = peers.iter().map(|(n, _)| n.clone()).collect();
             // A resumed vehicle's clock goes on from its last journaled input.
@@ -1149,7 +1161,7 @@ fn fleet_vehicle(
 ) -> super::sim::FleetVehicle {
     match sim {
         Some(s) => {
-            let v = s.vehicle_of(mission, scenario);
+            let v = s.vehicle_of(mission, net, scenario, mock_seed);
             simulated.push((mission.to_string(), v.clone()));
             super::sim::FleetVehicle::Sim(v)
         }
