@@ -642,6 +642,14 @@ fn scenario_rules_after_labels_and_probabilities() {
     let done = times(&tr, "event", "event", "eventDeployOk");
     assert_eq!((start.len(), done.len()), (1, 1));
     assert!((done[0] - start[0] - 30.0).abs() < 1e-6, "{start:?} {done:?}");
+    // A rule's explicit event is raised instead of the model's, at the rule's time.
+    let sc = tmp("event.toml");
+    std::fs::write(&sc, "[tasks.Trajectory]\noutcome = \"fail\"\ndelay = 12\nevent = \"eventTrajectoryOk\"\n").unwrap();
+    let (code, tr, o) = sim("examples/survey.mcl", &["--scenario", sc.to_str().unwrap()], "explicit-event");
+    assert_eq!(code, 0, "{}", text(&o.stderr));
+    let start = times(&tr, "action", "action", "enableTrajectory");
+    assert_eq!(times(&tr, "event", "event", "eventTrajectoryOk"), [start[0] + 12.0]);
+    assert!(times(&tr, "event", "event", "eventTrajectoryFail").is_empty());
     // Probabilities and delay ranges are drawn from the seed: both outcomes
     // over a few seeds, each at its drawn delay, the same for the same seed.
     let sc = tmp("probabilities.toml");
