@@ -26,8 +26,10 @@ use mcl_net::TransitionKind;
 use mcl_syntax::{Diagnostic, Span};
 use serde::Serialize;
 
+use crate::analysis::{AnalyzeOptions, Verdict};
 use crate::decentral::VehicleNet;
 use crate::model::{Constraint, Mission};
+use mcl_compiler::{Db, SourceFile};
 
 /// States of a mission's state space explored at most for the counts.
 pub const MAX_STATES: usize = 200_000;
@@ -380,7 +382,38 @@ pub fn link_report(missions: &[Mission], constraints: &[Constraint], vehicles: &
     }
 }
 
+/// The link report of `file` for the editor's hover (a salsa query: kept
+/// while the file and its imports are unchanged); none while the program
+/// has errors or no constraints, or its constraints deadlock.
+#[salsa::tracked(returns(ref))]
+pub fn link_report_of(db: &dyn Db, file: SourceFile) -> Option<LinkReport> {
+    let (missions, constraints) = crate::source::load(db, file).ok()?;
+    if constraints.is_empty() {
+        return None;
+    }
+    let opts = AnalyzeOptions { structure: false, ..AnalyzeOptions::default() };
+    let report = crate::analyze_with(&missions, &constraints, &opts).ok()?;
+    if report.verdict == Verdict::Deadlock {
+        return None;
+    }
+    let vehicles = crate::decentralize(&missions, &report.supervisors).ok()?;
+    Some(link_report(&missions, &constraints, &vehicles))
+}
+
 impl LinkReport {
+    /// Markdown for the hover on constraint `number` (from 1).
+    pub fn hover_text(&self, number: usize) -> Option<String> {
+        let c = self.constraints.iter().find(|c| c.number == number)?;
+        let bytes = |b: &Count| b.max().map_or("-".to_string(), |b| b.to_string());
+        Some(format!(
+            "**Link**: a run sends at most {} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message.",
+            c.messages.describe(),
+            self.frame_bytes,
+            bytes(&c.compact_bytes),
+            bytes(&c.json_bytes),
+        ))
+    }
+
     /// E0410 at every constraint with messages when a frame does not fit
     /// `frame_bytes` bytes.
     pub fn frame_diagnostics(&self, frame_bytes: u64) -> Vec<Diagnostic> {
