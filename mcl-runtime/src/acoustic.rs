@@ -225,8 +225,7 @@ impl Channel {
     fn transmit(
         &mut self,
         now: f64,
-        from: usize,
-        to: usize,
+        (from, to): (usize, usize),
         frame: &Frame,
         t_msg: f64,
         attempt: u32,
@@ -273,7 +272,7 @@ impl Channel {
             Frame { from: m.from.clone(), to: m.to.clone(), body: self.book.body_of(&m.transition), seq: m.seq };
         let json = if attempt == 1 { serde_json::to_string(m).map(|s| s.len() as u64).unwrap_or(0) } else { 0 };
         self.stats.json_bytes += json;
-        let (start, rto) = self.transmit(now, from, to, &frame, m.t, attempt, json)?;
+        let (start, rto) = self.transmit(now, (from, to), &frame, m.t, attempt, json)?;
         let backoff = 2f64.powi(attempt.saturating_sub(1).min(5) as i32).min(MAX_BACKOFF);
         self.push(start + rto * backoff, Event::Timeout { from, to, seq: m.seq });
         Ok(())
@@ -398,7 +397,7 @@ impl Channel {
         let kind = RecordKind::LinkDeliver { from: names[from].clone(), seq, what: transition, status: status.into() };
         self.record(t, &names[to], kind);
         let ack = Frame { from: names[to].clone(), to: names[from].clone(), body: Body::Ack, seq: acked };
-        self.transmit(t, to, from, &ack, t, 1, 0)?;
+        self.transmit(t, (to, from), &ack, t, 1, 0)?;
         Ok(out)
     }
 }
