@@ -9,6 +9,12 @@
 //! constraints (seed 6.1: `μ_c = μ_c0 + D_c·v ≥ 0`), no supervisor place
 //! ever goes negative. The cases come from a fixed proptest seed (CI runs
 //! the same ones).
+//!
+//! Through the binary: `mcl compile --link-report` on the seed's AUV/ASC
+//! mission (every message fits a 32-byte frame; E0410 at one byte), `mcl
+//! run --link` (every message handed over once, in order, over a lossy
+//! link; the same seed gives the same trace), frames lost beyond `range` in
+//! a simulated world, and the usage errors of `--link`.
 
 use mcl_compiler::{check_file, Database};
 use mcl_runtime::acoustic::{AcousticLink, LinkSpec};
@@ -262,4 +268,159 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     assert!(runnable >= 8, "only {runnable} of 12 generated pairs pass the analysis");
     assert!(with_messages >= 4, "only {with_messages} runs lost frames");
     assert!(caught >= 2, "the checker caught only {caught} forged violations");
+}
+
+// ---------------------------------------------------------------------------
+// Through the binary
+// ---------------------------------------------------------------------------
+
+fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn mcl(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_mcl")).current_dir(root()).args(args).output().expect("mcl runs")
+}
+
+fn read_trace(path: &Path) -> Vec<Record> {
+    std::fs::read_to_string(path)
+        .expect("a trace")
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+#[test]
+fn link_report_of_the_auv_asc_mission_fits_32_bytes_and_refuses_one() {
+    let out = mcl(&["compile", "--link-report", "examples/auv-asc.mcl", "--frame-bytes", "32", "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert!(v["frame_bytes"].as_u64().is_some_and(|b| b <= 32), "{v}");
+    assert_eq!(v["diagnostics"].as_array().map(Vec::len), Some(0));
+    assert_eq!(v["constraints"][0]["messages"], serde_json::json!({"bound": "bounded", "max": 1}));
+    assert_eq!(v["constraints"][1]["messages"]["bound"], "unbounded");
+    let out = mcl(&["compile", "--link-report", "examples/auv-asc.mcl", "--frame-bytes", "1"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("[E0410]").count(), 7, "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("compact encoding: 10 bits per frame, 2 bytes"));
+}
+
+#[test]
+fn a_lossy_link_run_delivers_every_message_once_in_order_and_is_deterministic() {
+    let dir = std::env::temp_dir().join(format!("mcl-acoustic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |name: &str| {
+        let trace = dir.join(name);
+        let out = mcl(&[
+            "run",
+            "--mock",
+            "--virtual-time",
+            "-q",
+            "examples/auv-asc.mcl",
+            "--scenario",
+            "examples/scenarios/auv-asc.toml",
+            "--link",
+            "acoustic:bitrate=80,loss=0.4,delay=2",
+            "--seed",
+            "3",
+            "--trace",
+            trace.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        trace
+    };
+    let (a, b) = (run("a.jsonl"), run("b.jsonl"));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "the same seed gives the same run");
+    let records = read_trace(&a);
+    let lost = records.iter().filter(|r| matches!(r.kind, RecordKind::LinkLost { .. })).count();
+    let resent =
+        records.iter().filter(|r| matches!(r.kind, RecordKind::LinkSend { attempt, .. } if attempt > 1)).count();
+    assert!(lost > 0 && resent > 0, "{lost} lost, {resent} resent");
+    // Per link, the messages handed over (`new`) are 1, 2, 3... and each is
+    // received once, as a `coord_receive` with the same number.
+    let mut next: HashMap<(String, String), u64> = HashMap::new();
+    for r in &records {
+        match &r.kind {
+            RecordKind::LinkDeliver { from, seq, status, .. } if status == "new" => {
+                let n = next.entry((from.clone(), r.mission.clone().unwrap())).or_insert(1);
+                assert_eq!(*seq, *n, "in order");
+                *n += 1;
+            }
+            RecordKind::CoordReceive { from, seq, .. } => {
+                let n = next.get(&(from.clone(), r.mission.clone().unwrap())).copied().unwrap_or(1);
+                assert_eq!(*seq + 1, n, "received right after it was handed over");
+            }
+            _ => {}
+        }
+    }
+    let sent = records.iter().filter(|r| matches!(r.kind, RecordKind::CoordSend { .. })).count() as u64;
+    let handed: u64 = next.values().map(|n| n - 1).sum();
+    assert!(
+        handed + 1 >= sent && handed > 0,
+        "{handed} handed over of {sent} sent (the last may be in flight at the end)"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn in_a_simulated_world_frames_beyond_range_are_lost() {
+    // The simulated AUV and ASC are more than 10 m apart: nothing gets
+    // through, the order on the AUV's dive waits until the time limit.
+    let dir = std::env::temp_dir().join(format!("mcl-acoustic-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let trace = dir.join("t.jsonl");
+    let args = [
+        "run",
+        "--sim",
+        "--virtual-time",
+        "-q",
+        "examples/auv-asc.mcl",
+        "--time-limit",
+        "2000",
+        "--trace",
+        trace.to_str().unwrap(),
+    ];
+    let mut near = args.to_vec();
+    near.extend(["--link", "acoustic:bitrate=80,loss=0,delay=0,range=10"]);
+    let out = mcl(&near);
+    assert_eq!(out.status.code(), Some(3), "{}", String::from_utf8_lossy(&out.stderr));
+    let records = read_trace(&trace);
+    let reasons: Vec<&str> = records
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::LinkLost { reason, .. } => Some(reason.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert!(!reasons.is_empty() && reasons.iter().all(|r| *r == "range"), "{reasons:?}");
+    // In range, the delay comes from the distance (not the 0 s given).
+    let mut far = args.to_vec();
+    far.extend(["--link", "acoustic:bitrate=8000,loss=0,delay=0,range=100000"]);
+    let out = mcl(&far);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let records = read_trace(&trace);
+    let sent = records.iter().find(|r| matches!(r.kind, RecordKind::LinkSend { .. })).expect("a frame");
+    let got = records.iter().find(|r| matches!(r.kind, RecordKind::LinkDeliver { .. })).expect("a delivery");
+    assert!(got.t - sent.t > 0.01, "sent at {}, delivered at {}", sent.t, got.t);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_link_option_is_refused_where_it_cannot_apply() {
+    let out = mcl(&["run", "--mock", "examples/auv-asc.mcl", "--link", "acoustic:bitrate=80,loss=0,delay=0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--virtual-time"));
+    let out = mcl(&["run", "--mock", "--virtual-time", "examples/auv-asc.mcl", "--link", "acoustic:bitrate=80"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing `loss=`"));
+    let out = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        "examples/survey.mcl",
+        "--link",
+        "acoustic:bitrate=80,loss=0,delay=0",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
 }
