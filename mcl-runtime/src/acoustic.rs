@@ -406,6 +406,81 @@ impl Channel {
 mod tests {
     use super::*;
 
+    /// A channel between `a` and `b` (`a` tells `b` its `t`), its records collected.
+    fn channel(spec: LinkSpec, seed: u64) -> (Channel, Arc<std::sync::Mutex<crate::driver::Collect>>) {
+        let net = |send: &str| {
+            let mut b = mcl_net::NetBuilder::new("v");
+            b.add_transition(mcl_net::Transition::new("t"));
+            let props =
+                mcl_net::coord_props::CoordProps { send: serde_json::from_str(send).unwrap(), ..Default::default() };
+            props.write(&mut b);
+            b.build().unwrap()
+        };
+        let (na, nb) = (net(r#"[{"to":"b","transition":"t"}]"#), net("[]"));
+        let book = Codebook::of_nets([("a", &na), ("b", &nb)], mcl_net::wire::DEFAULT_SEQ_BITS).unwrap();
+        let sink = Arc::new(std::sync::Mutex::new(crate::driver::Collect::default()));
+        let link = AcousticLink { spec, seed, positions: None };
+        (Channel::new(link, book, sink.clone()), sink)
+    }
+
+    fn message(seq: u64) -> CoordMessage {
+        CoordMessage { from: "a".into(), to: "b".into(), transition: "t".into(), seq, t: 0.0 }
+    }
+
+    /// Offers `n` messages at 0 and runs the channel until it has nothing
+    /// left to do; the messages handed over, with their times.
+    fn drain(c: &mut Channel, n: u64) -> Vec<(f64, u64)> {
+        for seq in 1..=n {
+            c.offer(0.0, message(seq)).unwrap();
+        }
+        let mut out = Vec::new();
+        let mut steps = 0;
+        while let Some(t) = c.next_deadline() {
+            out.extend(c.step(t).unwrap().into_iter().map(|m| (t, m.seq)));
+            steps += 1;
+            assert!(steps < 100_000, "the channel never settles");
+        }
+        out
+    }
+
+    #[test]
+    fn every_message_arrives_once_in_order_across_sequence_wraps_and_losses() {
+        for (loss, seed) in [(0.0, 1), (0.5, 2), (0.5, 3), (0.8, 4)] {
+            let spec = LinkSpec { bitrate: 80.0, loss, delay: 2.0, range: None };
+            let (mut c, sink) = channel(spec, seed);
+            // 30 messages: the 3-bit sequence number wraps three times.
+            let got = drain(&mut c, 30);
+            let seqs: Vec<u64> = got.iter().map(|(_, s)| *s).collect();
+            assert_eq!(seqs, (1..=30).collect::<Vec<_>>(), "loss {loss}");
+            let s = c.stats();
+            assert_eq!((s.messages, s.json_bytes > 0), (30, true));
+            // Each frame is 1 byte: 2 + 1 + 1 + 1 (index: `t` or ended) + 3 bits.
+            assert_eq!(s.bytes, s.frames);
+            if loss > 0.0 {
+                assert!(s.lost > 0 && s.retransmissions > 0, "{s:?}");
+            } else {
+                // 30 data frames and 30 acknowledgements, nothing sent twice.
+                assert_eq!((s.frames, s.lost, s.retransmissions), (60, 0, 0));
+            }
+            let records = sink.lock().unwrap().0.clone();
+            let lost = records.iter().filter(|r| matches!(r.kind, RecordKind::LinkLost { .. })).count() as u64;
+            assert_eq!(lost, s.lost);
+        }
+    }
+
+    #[test]
+    fn frames_take_modem_time_and_the_delay_and_wait_for_the_window() {
+        // 8 bits at 80 bit/s: 0.1 s per frame, then 2 s of delay. Four
+        // frames leave at once (the window), the fifth after the first ack.
+        let spec = LinkSpec { bitrate: 80.0, loss: 0.0, delay: 2.0, range: None };
+        let (mut c, _) = channel(spec, 0);
+        let got = drain(&mut c, 5);
+        let times: Vec<f64> = got.iter().map(|(t, _)| (t * 10.0).round() / 10.0).collect();
+        // b's acknowledgement of 1 leaves at 2.1 and arrives at 4.2; frame 5
+        // leaves then (a's modem is free) and arrives at 4.2 + 0.1 + 2.
+        assert_eq!(times, [2.1, 2.2, 2.3, 2.4, 6.3]);
+    }
+
     #[test]
     fn the_link_option_is_read_strictly() {
         let s = LinkSpec::parse("acoustic:bitrate=80,loss=0.3,delay=2").unwrap();
