@@ -169,6 +169,7 @@ fn max_firings(mission: &Mission, held: &[String], ids: &[String]) -> HashMap<St
             return ids.iter().map(|id| (id.clone(), Count::Unknown { reason: reason.clone() })).collect();
         }
     };
+    let labelled = mission;
     let (net, mission) = (&net, mission.name.as_str());
     let opts = Options { semantics: Semantics::Mcl, max_states: MAX_STATES, record_edges: true, ..Options::default() };
     let ss = explore(net, &opts);
@@ -222,9 +223,17 @@ fn max_firings(mission: &Mission, held: &[String], ids: &[String]) -> HashMap<St
         }
         let count = match val[comp[0] as usize] {
             Some(max) => Count::Bounded { max },
-            None => Count::Unbounded {
-                reason: format!("`{id}` of `{mission}` is in a loop: it can fire again after it fired"),
-            },
+            None => {
+                // The labelled call it belongs to, when it is one's.
+                let call = labelled
+                    .activities
+                    .iter()
+                    .find(|a| [&a.arrived, &a.withdrawn, &a.started, &a.ended].iter().any(|ts| ts.contains(&t)));
+                let of = call.map_or(String::new(), |a| format!(" (call `{mission}:{}`)", a.label));
+                Count::Unbounded {
+                    reason: format!("`{id}`{of} of `{mission}` is in a loop: it can fire again after it fired"),
+                }
+            }
         };
         out.insert(id.clone(), count);
     }
@@ -406,8 +415,11 @@ impl LinkReport {
         let c = self.constraints.iter().find(|c| c.number == number)?;
         let bytes = |b: &Count| b.max().map_or("-".to_string(), |b| b.to_string());
         Some(format!(
-            "**Link**: a run sends at most {} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message.",
-            c.messages.describe(),
+            "**Link**: a run sends {} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message.",
+            match &c.messages {
+                Count::Bounded { max } => format!("at most {max}"),
+                other => other.describe(),
+            },
             self.frame_bytes,
             bytes(&c.compact_bytes),
             bytes(&c.json_bytes),
@@ -450,10 +462,10 @@ impl LinkReport {
             self.frame_bytes,
             1u32 << self.seq_bits
         );
-        s.push_str("\nper constraint (messages a run sends at most; bytes compact / JSON):\n");
+        s.push_str("\nper constraint (the most messages a run sends; their bytes compact / JSON):\n");
         for c in &self.constraints {
             s.push_str(&format!(
-                "  {}. {}: {} messages, {} / {} bytes\n",
+                "  {}. {}: messages {}, bytes {} / {}\n",
                 c.number,
                 c.text,
                 c.messages.describe(),
@@ -461,10 +473,10 @@ impl LinkReport {
                 c.json_bytes.max().map_or("-".into(), |b| b.to_string()),
             ));
         }
-        s.push_str("\nper mission (messages it sends at most; bytes compact / JSON):\n");
+        s.push_str("\nper mission (the most messages it sends; their bytes compact / JSON):\n");
         for m in &self.missions {
             s.push_str(&format!(
-                "  {}: {} messages, {} / {} bytes\n",
+                "  {}: messages {}, bytes {} / {}\n",
                 m.mission,
                 m.messages.describe(),
                 m.compact_bytes.max().map_or("-".into(), |b| b.to_string()),

@@ -49,7 +49,7 @@ fn every_message_of_the_auv_asc_mission_fits_a_32_byte_frame() {
         assert!(json > 20 * r.frame_bytes, "JSON takes {json} bytes");
     }
     let text = r.to_text();
-    assert!(text.contains("1. order { asc:deploy_auv, auv:deploy_auv }: 1 messages, 2 / 70 bytes"), "{text}");
+    assert!(text.contains("1. order { asc:deploy_auv, auv:deploy_auv }: messages 1, bytes 2 / 70"), "{text}");
     // A frame of the report's size is an error below it, at every constraint with messages.
     let d = r.frame_diagnostics(r.frame_bytes - 1);
     assert_eq!(d.len(), 7);
