@@ -243,6 +243,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     let mut runnable = 0;
     let mut with_messages = 0;
     let mut caught = 0;
+    let mut token_requests = 0;
     for seed in 0..12u64 {
         let c = case(seed * 7919);
         let Ok((nets, sups)) = coordinate(&c.text) else { continue };
@@ -251,6 +252,11 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
         let (_, records) = run(&nets, &c.scenario, c.seed, link);
         if records.iter().any(|r| matches!(r.kind, RecordKind::LinkLost { .. })) {
             with_messages += 1;
+        }
+        let asks =
+            |r: &Record| matches!(&r.kind, RecordKind::LinkSend { what, .. } if what.starts_with("coord.request."));
+        if records.iter().any(asks) {
+            token_requests += 1;
         }
         // The checker sees violations: without `a`'s firings, the credits
         // of an order (or a sync) that `b` used were never given.
@@ -268,6 +274,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     assert!(runnable >= 8, "only {runnable} of 12 generated pairs pass the analysis");
     assert!(with_messages >= 4, "only {with_messages} runs lost frames");
     assert!(caught >= 2, "the checker caught only {caught} forged violations");
+    assert!(token_requests >= 1, "no run asked a mutex holder for a token over the link");
 }
 
 // ---------------------------------------------------------------------------

@@ -1160,6 +1160,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         end.messages,
         match o.transport {
             _ if o.vehicle.is_some() => "TCP",
+            _ if o.link.is_some() => "acoustic link model over the in-process",
             Transport::InProcess => "in-process",
             Transport::Tcp => "TCP",
         }
