@@ -142,6 +142,8 @@ struct Sender {
     queue: VecDeque<CoordMessage>,
     /// seq → (message, attempts).
     outstanding: BTreeMap<u64, (CoordMessage, u32)>,
+    /// seq → the key of its pending timeout (removed with its acknowledgement).
+    timeouts: HashMap<u64, (u64, u64)>,
     /// Every message up to this one is acknowledged.
     acked: u64,
 }
@@ -198,9 +200,11 @@ impl Channel {
         }
     }
 
-    fn push(&mut self, t: f64, e: Event) {
+    fn push(&mut self, t: f64, e: Event) -> (u64, u64) {
         self.counter += 1;
-        self.events.insert((t.max(0.0).to_bits(), self.counter), e);
+        let key = (t.max(0.0).to_bits(), self.counter);
+        self.events.insert(key, e);
+        key
     }
 
     /// The time of the next event.
@@ -274,7 +278,10 @@ impl Channel {
         self.stats.json_bytes += json;
         let (start, rto) = self.transmit(now, (from, to), &frame, m.t, attempt, json)?;
         let backoff = 2f64.powi(attempt.saturating_sub(1).min(5) as i32).min(MAX_BACKOFF);
-        self.push(start + rto * backoff, Event::Timeout { from, to, seq: m.seq });
+        let key = self.push(start + rto * backoff, Event::Timeout { from, to, seq: m.seq });
+        if let Some(s) = self.senders.get_mut(&(from, to)) {
+            s.timeouts.insert(m.seq, key);
+        }
         Ok(())
     }
 
@@ -338,11 +345,18 @@ impl Channel {
         s.acked = s.acked.max(upto);
         let acked = s.acked;
         s.outstanding.retain(|&k, _| k > acked);
+        // Their timeouts are moot: once every message is acknowledged,
+        // nothing is left on the link.
+        let done: Vec<u64> = s.timeouts.keys().copied().filter(|&k| k <= acked).collect();
+        let keys: Vec<(u64, u64)> = done.iter().filter_map(|k| s.timeouts.remove(k)).collect();
         let mut next = Vec::new();
         while s.outstanding.len() < self.book.window() as usize {
             let Some(m) = s.queue.pop_front() else { break };
             s.outstanding.insert(m.seq, (m.clone(), 1));
             next.push(m);
+        }
+        for k in keys {
+            self.events.remove(&k);
         }
         let kind = RecordKind::LinkDeliver {
             from: names[receiver].clone(),
@@ -428,19 +442,22 @@ mod tests {
     }
 
     /// Offers `n` messages at 0 and runs the channel until it has nothing
-    /// left to do; the messages handed over, with their times.
-    fn drain(c: &mut Channel, n: u64) -> Vec<(f64, u64)> {
+    /// left to do; the messages handed over, with their times, and the
+    /// time of its last event.
+    fn drain(c: &mut Channel, n: u64) -> (Vec<(f64, u64)>, f64) {
         for seq in 1..=n {
             c.offer(0.0, message(seq)).unwrap();
         }
         let mut out = Vec::new();
         let mut steps = 0;
+        let mut last = 0.0;
         while let Some(t) = c.next_deadline() {
+            last = t;
             out.extend(c.step(t).unwrap().into_iter().map(|m| (t, m.seq)));
             steps += 1;
             assert!(steps < 100_000, "the channel never settles");
         }
-        out
+        (out, last)
     }
 
     #[test]
@@ -449,7 +466,7 @@ mod tests {
             let spec = LinkSpec { bitrate: 80.0, loss, delay: 2.0, range: None };
             let (mut c, sink) = channel(spec, seed);
             // 30 messages: the 3-bit sequence number wraps three times.
-            let got = drain(&mut c, 30);
+            let (got, _) = drain(&mut c, 30);
             let seqs: Vec<u64> = got.iter().map(|(_, s)| *s).collect();
             assert_eq!(seqs, (1..=30).collect::<Vec<_>>(), "loss {loss}");
             let s = c.stats();
@@ -474,11 +491,15 @@ mod tests {
         // frames leave at once (the window), the fifth after the first ack.
         let spec = LinkSpec { bitrate: 80.0, loss: 0.0, delay: 2.0, range: None };
         let (mut c, _) = channel(spec, 0);
-        let got = drain(&mut c, 5);
+        let (got, last) = drain(&mut c, 5);
         let times: Vec<f64> = got.iter().map(|(t, _)| (t * 10.0).round() / 10.0).collect();
+        // The last thing on the link is the acknowledgement of 5 (8.4 s),
+        // not the timeouts of acknowledged frames (frame 5's: 9.4 s).
+        assert_eq!((last * 10.0).round() / 10.0, 8.4);
         // b's acknowledgement of 1 leaves at 2.1 and arrives at 4.2; frame 5
         // leaves then (a's modem is free) and arrives at 4.2 + 0.1 + 2.
         assert_eq!(times, [2.1, 2.2, 2.3, 2.4, 6.3]);
+        assert!(c.senders.values().all(|s| s.timeouts.is_empty() && s.outstanding.is_empty()));
     }
 
     #[test]
