@@ -241,7 +241,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     // Guards the property above: most of its cases pass the analysis and
     // send messages, some over links that lose frames.
     let mut runnable = 0;
-    let mut with_messages = 0;
+    let mut lossy_runs = 0;
     let mut caught = 0;
     let mut token_requests = 0;
     for seed in 0..12u64 {
@@ -251,7 +251,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
         let link = AcousticLink { spec: LinkSpec { loss: 0.5, ..c.link }, seed: c.seed, positions: None };
         let (_, records) = run(&nets, &c.scenario, c.seed, link);
         if records.iter().any(|r| matches!(r.kind, RecordKind::LinkLost { .. })) {
-            with_messages += 1;
+            lossy_runs += 1;
         }
         let asks =
             |r: &Record| matches!(&r.kind, RecordKind::LinkSend { what, .. } if what.starts_with("coord.request."));
@@ -272,7 +272,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
         }
     }
     assert!(runnable >= 8, "only {runnable} of 12 generated pairs pass the analysis");
-    assert!(with_messages >= 4, "only {with_messages} runs lost frames");
+    assert!(lossy_runs >= 4, "only {lossy_runs} runs lost frames");
     assert!(caught >= 2, "the checker caught only {caught} forged violations");
     assert!(token_requests >= 1, "no run asked a mutex holder for a token over the link");
 }

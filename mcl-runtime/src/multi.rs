@@ -25,6 +25,10 @@
 //!   Vehicles start one after the other, each with the messages of the
 //!   previous ones' first firings already applied to its initial marking. At equal times vehicles go in the order
 //!   given, a player's timers before its mock's messages.
+//!   [`run_virtual_with_link`] carries the messages over a modelled
+//!   acoustic link instead ([`crate::acoustic`]): each arrives when the link
+//!   delivers it (delays, losses, retransmissions), an event of the same
+//!   loop.
 //! * [`run_real_time`]: one tokio task per vehicle, each sleeping until its
 //!   next timer or mock message and waking for messages; a message is
 //!   delivered as soon as it arrives. The run ends when every mission has
