@@ -74,6 +74,17 @@ enum Command {
         /// mission's control structures and calls), or `task:NAME` (one task's net).
         #[arg(long, default_value = "net", value_name = "net|structure|task:NAME")]
         view: cmd::compile::View,
+        /// Instead of the nets: per constraint and per mission, the most coordination messages
+        /// a run sends and the bytes each takes, compact and as JSON (docs/acoustic.md).
+        #[arg(long, conflicts_with_all = ["output", "dot", "out_dir"])]
+        link_report: bool,
+        /// With --link-report: its format.
+        #[arg(long, value_enum, default_value = "human", requires = "link_report")]
+        format: Format,
+        /// With --link-report: a message that does not fit a frame of N bytes is an error
+        /// (E0410) at its constraint.
+        #[arg(long, value_name = "N", requires = "link_report")]
+        frame_bytes: Option<u64>,
     },
     /// Explore the state space of a PNML net (ours or any other tool's).
     ///
@@ -251,7 +262,10 @@ fn main() -> ExitCode {
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)
         }
-        Command::Compile { file, output, dot, out_dir, view } => {
+        Command::Compile { file, link_report: true, format, frame_bytes, .. } => {
+            cmd::link_report::run(&file, format, frame_bytes)
+        }
+        Command::Compile { file, output, dot, out_dir, view, .. } => {
             let dot = match (dot, &out_dir) {
                 (Some(None), None) => {
                     eprintln!("error: --dot needs a path (--dot OUT.dot) unless --out-dir is given");

@@ -56,6 +56,14 @@ pub const CONFLICTING_CONSTRAINTS: &str = "E0408";
 /// Codes that `check_file` never produces: the coordination analysis of
 /// `mcl-coord` reports them (its tests check their explanations).
 pub const COORDINATION: &[&str] = &[DEADLOCKING_CONSTRAINTS, COORDINATION_INCONCLUSIVE, CONFLICTING_CONSTRAINTS];
+/// `mcl compile --link-report --frame-bytes N`: a coordination message does
+/// not fit a frame of the acoustic link (`mcl_coord::link_report`).
+pub const FRAME_TOO_SMALL: &str = "E0410";
+
+/// Codes of the link report, never produced by `check_file` nor by the
+/// coordination analysis (`mcl-coord/tests/link_report.rs` checks their
+/// explanations).
+pub const LINK: &[&str] = &[FRAME_TOO_SMALL];
 
 // Planning (`planning { ... }`, `pddl_map { ... }`).
 pub const PLAN_UNKNOWN_TYPE: &str = "E0701";
@@ -142,6 +150,7 @@ registry! {
     "W0407" => "coordination analysis inconclusive",
     "E0408" => "constraints that conflict by construction",
     "E0409" => "constraint names a planning operator",
+    "E0410" => "coordination message larger than the link's frame",
     "E0501" => "imported file not found",
     "E0502" => "import cycle",
     "E0601" => "building block that breaks the block properties",

@@ -50,6 +50,7 @@ pub mod conflict;
 pub mod decentral;
 pub mod error;
 pub mod interrupt;
+pub mod link_report;
 pub mod model;
 pub mod replay;
 pub mod source;

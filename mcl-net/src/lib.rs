@@ -13,6 +13,7 @@
 //! * [`structural`]: incidence matrix, invariants, siphons and traps;
 //! * [`graph`]: strongly connected components of implicit graphs;
 //! * [`coord_props`]: the coordination properties of a vehicle net;
+//! * [`wire`]: the compact binary encoding of coordination messages;
 //! * [`input`]: the bounded reader of every input file (regular files only).
 //!
 //! ```
@@ -47,6 +48,7 @@ pub mod pnml;
 pub mod semantics;
 pub mod structural;
 pub mod suggest;
+pub mod wire;
 mod xml;
 pub mod xml_id;
 

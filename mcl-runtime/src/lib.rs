@@ -6,6 +6,7 @@
 //! over a [`link::Link`] to an Architecture Abstraction Component (AAC), in
 //! process or over TCP.
 
+pub mod acoustic;
 pub mod chronogram;
 pub mod clock;
 pub mod coord;

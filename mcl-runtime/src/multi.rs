@@ -25,6 +25,10 @@
 //!   Vehicles start one after the other, each with the messages of the
 //!   previous ones' first firings already applied to its initial marking. At equal times vehicles go in the order
 //!   given, a player's timers before its mock's messages.
+//!   [`run_virtual_with_link`] carries the messages over a modelled
+//!   acoustic link instead ([`crate::acoustic`]): each arrives when the link
+//!   delivers it (delays, losses, retransmissions), an event of the same
+//!   loop.
 //! * [`run_real_time`]: one tokio task per vehicle, each sleeping until its
 //!   next timer or mock message and waking for messages; a message is
 //!   delivered as soon as it arrives. The run ends when every mission has
@@ -39,6 +43,7 @@ use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use crate::acoustic::{AcousticLink, Channel};
 use crate::clock::Clock;
 use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, Incoming, MutexMessages, TokenMutex};
 use crate::driver::{drain_poses, feed_mock, perception_or_event, End, Limits, Session, Sink};
@@ -48,6 +53,7 @@ use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::VirtualVehicle;
 use crate::virtual_loop::{self, Discrete, Stop};
 use mcl_net::semantics::{fire, is_enabled, is_enabled_with};
+use mcl_net::wire::Codebook;
 use mcl_net::{Marking, Net};
 
 /// How long virtual time waits for a message to cross the transport.
@@ -715,7 +721,7 @@ fn finish(vs: &[Live<'_>], messages: u64) -> MultiEnd {
 /// writing records to `sink`. Runs inside a tokio runtime (the transport's).
 /// The loop is [`virtual_loop::run`].
 pub async fn run_virtual(vehicles: Vec<Vehicle>, sink: SharedSink, limits: Limits) -> Result<MultiEnd, String> {
-    run_virtual_paced(vehicles, sink, limits, None).await
+    run_virtual_with_link(vehicles, sink, limits, None, None).await
 }
 
 /// [`run_virtual`], each input taken once `pace` reaches its time
@@ -727,10 +733,33 @@ pub async fn run_virtual_paced(
     limits: Limits,
     pace: Option<Clock>,
 ) -> Result<MultiEnd, String> {
+    run_virtual_with_link(vehicles, sink, limits, None, pace).await
+}
+
+/// [`run_virtual_paced`] with every message carried by a modelled acoustic
+/// link when `link` is given ([`crate::acoustic`]): messages are delayed,
+/// lost and sent again, delivered in order once; the link's records
+/// (`link_send`, `link_lost`, `link_deliver`) and a `link` summary go to the
+/// trace.
+pub async fn run_virtual_with_link(
+    vehicles: Vec<Vehicle>,
+    sink: SharedSink,
+    limits: Limits,
+    link: Option<AcousticLink>,
+    pace: Option<Clock>,
+) -> Result<MultiEnd, String> {
+    let channel = match link {
+        Some(link) => {
+            let nets: Vec<(&str, &Net)> = vehicles.iter().map(|v| (v.name.as_str(), &**v.player.net())).collect();
+            let book = Codebook::of_nets(nets, mcl_net::wire::DEFAULT_SEQ_BITS).map_err(|e| e.to_string())?;
+            Some(Channel::new(link, book, sink.clone()))
+        }
+        None => None,
+    };
     let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
     let vs = live(vehicles, &mut handles);
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
-    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0 };
+    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel };
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings.
     fleet.settle().await?;
@@ -764,6 +793,22 @@ pub async fn run_virtual_paced(
         }
     }
     let end = finish(&fleet.vs, fleet.sent);
+    if let Some(c) = &fleet.channel {
+        let s = c.stats();
+        let r = Record {
+            mission: Some(ALL_MISSIONS.to_string()),
+            ..Record::link(
+                fleet.now,
+                format!(
+                    "acoustic link: {} messages, {} frames ({} retransmissions, {} lost), {} bytes on the wire; the messages as JSON: {} bytes",
+                    s.messages, s.frames, s.retransmissions, s.lost, s.bytes, s.json_bytes
+                ),
+            )
+        };
+        if let Ok(mut k) = sink.lock() {
+            k.record(&r);
+        }
+    }
     summary(&sink, fleet.now, &end);
     Ok(end)
 }
@@ -777,7 +822,12 @@ struct Fleet<'a> {
     work: VecDeque<(usize, Vec<Output>)>,
     sent: u64,
     now: f64,
+    /// The modelled link, when messages travel over one.
+    channel: Option<Channel>,
 }
+
+/// The [`Discrete`] source of the modelled link's events.
+const LINK: (usize, bool) = (usize::MAX, false);
 
 impl Fleet<'_> {
     /// Settles the consequences of the last inputs, messages included, at
@@ -803,7 +853,12 @@ impl Fleet<'_> {
                         .ok_or_else(|| format!("the transport of `{}` closed", m.to))?;
                     match got {
                         Incoming::Message(got) => {
-                            self.vs[j].received(got, now.max(m.t))?;
+                            match &mut self.channel {
+                                Some(c) => c.offer(now, got)?,
+                                None => {
+                                    self.vs[j].received(got, now.max(m.t))?;
+                                }
+                            }
                             break;
                         }
                         Incoming::Rejected(why) => self.vs[j].rejected(why, now),
@@ -841,10 +896,25 @@ impl Discrete for Fleet<'_> {
             out.extend(v.s.player.next_deadline().map(|t| (t, (i, true))));
             out.extend(v.mock.next_deadline().map(|t| (t, (i, false))));
         }
+        out.extend(self.channel.as_ref().and_then(Channel::next_deadline).map(|t| (t, LINK)));
     }
 
     async fn step(&mut self, t: f64, (i, timer): (usize, bool)) -> Result<(), String> {
         self.now = self.now.max(t);
+        if (i, timer) == LINK {
+            let Some(c) = &mut self.channel else { return Ok(()) };
+            for m in c.step(t)? {
+                let j = *self.index.get(&m.to).ok_or_else(|| format!("a message for an unknown mission `{}`", m.to))?;
+                self.vs[j].received(m, t)?;
+            }
+            for (j, v) in self.vs.iter_mut().enumerate() {
+                if let Some(outs) = v.deliver(t)? {
+                    self.work.push_back((j, outs));
+                    break;
+                }
+            }
+            return self.settle().await;
+        }
         let v = &mut self.vs[i];
         if timer {
             let outs = v.s.step(Input::Timer(t))?;

@@ -200,6 +200,45 @@ pub enum RecordKind {
         /// Heading, radians (0 towards +x, counter-clockwise).
         yaw: f64,
     },
+    /// A frame put on a modelled acoustic link (`--link`, docs/acoustic.md;
+    /// `mission` is the sender).
+    LinkSend {
+        /// The receiving mission.
+        to: String,
+        /// Its number on the link (of the message it carries or acknowledges).
+        seq: u64,
+        /// The message's transition, or `ack`.
+        what: String,
+        /// Bytes on the wire (the compact encoding).
+        bytes: u64,
+        /// Bytes of the same message as JSON (0 for an acknowledgement).
+        json_bytes: u64,
+        /// 1 for the first transmission, 2 for the first retransmission...
+        attempt: u32,
+    },
+    /// A frame the link lost (`mission` is the sender).
+    LinkLost {
+        /// The mission it was for.
+        to: String,
+        /// Its number on the link.
+        seq: u64,
+        /// The message's transition, or `ack`.
+        what: String,
+        /// `loss` (drawn) or `range` (the vehicles were too far apart).
+        reason: String,
+    },
+    /// A frame that reached its receiver (`mission` is the receiver).
+    LinkDeliver {
+        /// The sending mission.
+        from: String,
+        /// Its number on the link.
+        seq: u64,
+        /// The message's transition, or `ack`.
+        what: String,
+        /// `new` (handed to the vehicle), `repeat` (already had it),
+        /// `early` (kept until the frames before it arrive), `ack`.
+        status: String,
+    },
     /// A record of a kind this version does not know (the planner's `plan`,
     /// `step`... in a `mcl plan --run` trace): read, ignored by every
     /// reader.
@@ -506,6 +545,12 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
         RecordKind::CoordSend { seq, transition, to } => (format!("send     {transition} -> {to}  (#{seq})"), None),
         RecordKind::CoordReceive { seq, transition, from, .. } => {
             (format!("receive  {from}/{transition}  (#{seq})"), None)
+        }
+        RecordKind::LinkLost { to, seq, what, reason } => {
+            (format!("LOST     {what} -> {to}  (#{seq}, {reason})"), None)
+        }
+        RecordKind::LinkSend { to, seq, what, attempt, .. } if *attempt > 1 => {
+            (format!("resend   {what} -> {to}  (#{seq}, attempt {attempt})"), None)
         }
         RecordKind::CoordSummary { result, messages, .. } => {
             (format!("ALL MISSIONS {}: {messages} coordination messages sent", result.to_uppercase()), None)

@@ -7,6 +7,7 @@ pub mod compile;
 pub mod explain;
 pub mod fmt;
 pub mod interface;
+pub mod link_report;
 pub mod lsp;
 pub mod mock_aac;
 pub mod new;

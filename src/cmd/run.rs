@@ -121,6 +121,12 @@ pub struct Options {
     /// (anyone who reaches the port can then forge coordination messages).
     #[arg(long)]
     pub coord_insecure: bool,
+    /// Coordinated runs in virtual time: carry every coordination message over a modelled
+    /// acoustic link, `acoustic:bitrate=BPS,loss=P,delay=S[,range=M]` (losses drawn from
+    /// --seed; with --sim, the delay from the distance and frames beyond range lost;
+    /// docs/acoustic.md).
+    #[arg(long, value_name = "SPEC")]
+    pub link: Option<String>,
     /// No live log.
     #[arg(short, long)]
     pub quiet: bool,
@@ -367,6 +373,11 @@ pub fn run(o: Options) -> u8 {
     }
     if several && o.mission.is_none() && (o.mock || o.sim) && is_mcl {
         return run_coordinated(&o, sets);
+    }
+    if o.link.is_some() {
+        return usage(
+            "--link models the coordination link of several missions run together (--mock or --sim, without --mission)",
+        );
     }
     let chosen = match &o.mission {
         Some(n) => match missions.into_iter().find(|m| &m.name == n) {
@@ -729,6 +740,31 @@ fn say_reproduced(
     }
 }
 
+/// The link model of `--link` (virtual time, several vehicles in this
+/// process), with the simulated vehicles' positions.
+fn acoustic_link(
+    o: &Options,
+    simulated: &[(String, mcl_sim::SharedSim)],
+) -> Result<Option<mcl_runtime::acoustic::AcousticLink>, u8> {
+    let Some(text) = &o.link else { return Ok(None) };
+    if !o.virtual_time || o.vehicle.is_some() {
+        return Err(usage(
+            "--link models the coordination link of a run in virtual time: give --virtual-time, without --vehicle",
+        ));
+    }
+    let spec = mcl_runtime::acoustic::LinkSpec::parse(text).map_err(|e| usage(&format!("--link: {e}")))?;
+    let positions: Option<mcl_runtime::acoustic::Positions> = (!simulated.is_empty()).then(|| {
+        let sims: Vec<(String, mcl_sim::SharedSim)> = simulated.to_vec();
+        std::sync::Arc::new(move |name: &str| {
+            sims.iter().find(|(n, _)| n == name).map(|(_, v)| {
+                let p = v.lock().pose();
+                [p.x, p.y, p.z]
+            })
+        }) as mcl_runtime::acoustic::Positions
+    });
+    Ok(Some(mcl_runtime::acoustic::AcousticLink { spec, seed: o.seed.unwrap_or(0), positions }))
+}
+
 /// The fleet secret of `--vehicle`'s coordination links (`--coord-token`,
 /// `--coord-token-file`), none otherwise. Refuses (exit status 2) a listener
 /// on a non-loopback address without a secret unless `--coord-insecure`.
@@ -1030,6 +1066,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Err(e) => return usage(&format!("cannot start the runtime: {e}")),
     };
     let limits = if o.virtual_time { Limits::virtual_time(o.time_limit) } else { Limits::real_time(o.time_limit) };
+    let link = match acoustic_link(o, &simulated) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
     let shared: mcl_runtime::multi::SharedSink = sink.clone();
     let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
         let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = if let Some(me) = &o.vehicle {
@@ -1074,10 +1114,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             });
         }
         if o.virtual_time {
-            mcl_runtime::multi::run_virtual(vs, shared, limits).await
+            mcl_runtime::multi::run_virtual_with_link(vs, shared, limits, link, None).await
         } else if o.sim {
             // Simulated vehicles: the virtual-time run, paced by the clock.
-            mcl_runtime::multi::run_virtual_paced(vs, shared, limits, Some(Clock::new(o.speed, 0.0))).await
+            mcl_runtime::multi::run_virtual_with_link(vs, shared, limits, link, Some(Clock::new(o.speed, 0.0))).await
         } else {
             let peers: Vec<String> = peers.iter().map(|(n, _)| n.clone()).collect();
             // A resumed vehicle's clock goes on from its last journaled input.
@@ -1132,6 +1172,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         end.messages,
         match o.transport {
             _ if o.vehicle.is_some() => "TCP",
+            _ if o.link.is_some() => "acoustic link model over the in-process",
             Transport::InProcess => "in-process",
             Transport::Tcp => "TCP",
         }

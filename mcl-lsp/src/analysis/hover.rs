@@ -22,7 +22,14 @@ pub fn hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Hover>
     };
     let md = match &occ.role {
         Role::Structure(s) => structure_text(s),
-        Role::ConstraintKeyword(k) => constraint_text(*k),
+        Role::ConstraintKeyword(k) => {
+            let mut md = constraint_text(*k);
+            if let Some(link) = constraint_link_text(a, file, occ.span) {
+                md.push_str("\n\n");
+                md.push_str(&link);
+            }
+            md
+        }
         Role::Symbolic => format!("```mcl\n{}\n```\nA symbolic value, passed to the vehicle as it is.", occ.name),
         Role::Primitive => primitive_text(a, file, &occ.name),
         Role::Command => format!("```mcl\nc: {}\n```\nThe command sent to the primitive.", occ.name),
@@ -120,6 +127,22 @@ fn section_hover(a: &Analysis<'_>, file: SourceFile, offset: usize) -> Option<Ho
         contents: HoverContents::Markup(MarkupContent { kind: MarkupKind::Markdown, value: md }),
         range: Some(a.range(file, span)),
     })
+}
+
+/// The messages and bytes of the constraint whose keyword is at `span`
+/// (`mcl_coord::link_report`).
+fn constraint_link_text(a: &Analysis<'_>, file: SourceFile, span: Span) -> Option<String> {
+    let number = parse(a.db, file)
+        .file
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Constraints(b) => Some(&b.constraints),
+            _ => None,
+        })
+        .flatten()
+        .position(|c| c.keyword_span == span)?;
+    mcl_coord::link_report::link_report_of(a.db, file).as_ref()?.hover_text(number + 1)
 }
 
 /// What a coordination constraint asks (docs/language.md, seed 6.1).

@@ -232,6 +232,19 @@ fn hover_on_keywords_describes_the_structure() {
 }
 
 #[test]
+fn hover_on_a_constraint_states_its_messages_and_bytes() {
+    // The AUV tells the ASC the end of `go`, once.
+    let m = "import \"vehicle.mcl\";\nmission : auv { Void() : go ; Goto( [0, 0] ) }\nmission : asc { Void() : wait }\nconstraints {\n    $0order { auv:go, asc:wait }\n}\n";
+    let f = Fixture::new(&[("mission.mcl", m), ("vehicle.mcl", VEHICLE)]);
+    let t = hover_text(&f);
+    assert!(t.contains("**order** (coordination constraint)"), "{t}");
+    assert!(t.contains("**Link**: a run sends at most 1 coordination messages for it, 1 bytes each"), "{t}");
+    // The fixture's own order deadlocks (E0406): no link text.
+    let t = hover_text(&fx("mission", "order {"));
+    assert!(t.contains("**order**") && !t.contains("**Link**"), "{t}");
+}
+
+#[test]
 fn hover_on_action_event_label_and_mission() {
     let t = hover_text(&fx("vehicle", "enableDepth -> T0"));
     assert!(t.starts_with("```mcl\nenableDepth = DepthPrimitive( c: enable, v: depth, v: mode )\n```"), "{t}");

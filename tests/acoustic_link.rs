@@ -1,0 +1,433 @@
+//! Coordination over a lossy, slow acoustic link (`--link`,
+//! `mcl_runtime::acoustic`, docs/acoustic.md): random coordinated pairs
+//! (the generator of `tests/differential.rs`: two random missions with
+//! labelled calls and a random mutex, order or sync) run in virtual time
+//! over a link that loses up to half of its frames and delays each by
+//! seconds. Every run ends (each mission reaches its outcome) and no
+//! constraint is ever violated: replaying the firings of both vehicles in
+//! the order of the trace on the centralized supervisors of the
+//! constraints (seed 6.1: `μ_c = μ_c0 + D_c·v ≥ 0`), no supervisor place
+//! ever goes negative. The cases come from a fixed proptest seed (CI runs
+//! the same ones).
+//!
+//! Through the binary: `mcl compile --link-report` on the seed's AUV/ASC
+//! mission (every message fits a 32-byte frame; E0410 at one byte), `mcl
+//! run --link` (every message handed over once, in order, over a lossy
+//! link; the same seed gives the same trace), frames lost beyond `range` in
+//! a simulated world, and the usage errors of `--link`.
+
+use mcl_compiler::{check_file, Database};
+use mcl_runtime::acoustic::{AcousticLink, LinkSpec};
+use mcl_runtime::driver::{Collect, End, Limits};
+use mcl_runtime::mock::MockVehicle;
+use mcl_runtime::multi::{run_virtual_with_link, SharedSink, Vehicle};
+use mcl_runtime::player::{Outcome, PlayerOptions};
+use mcl_runtime::scenario::Scenario;
+use mcl_runtime::trace::{Record, RecordKind, SourceMap, Tracer};
+use mcl_syntax::gen::Rng;
+use proptest::prelude::*;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// A random call of the test vehicle.
+fn call(r: &mut Rng) -> String {
+    match r.below(4) {
+        0 => format!("A( {} )", r.below(3)),
+        1 => "B()".into(),
+        2 => format!("Timed( {} )", 1 + r.below(4)),
+        _ => "Void()".into(),
+    }
+}
+
+/// A random statement whose nominal runs reach the end (no `not`, no
+/// `while`: the structures `TAME` of tests/differential.rs).
+fn stmt(r: &mut Rng, depth: usize) -> String {
+    if depth == 0 || r.chance(35) {
+        return call(r);
+    }
+    let b = |r: &mut Rng| (0..1 + r.below(2)).map(|_| stmt(r, depth - 1)).collect::<Vec<_>>().join(" ; ");
+    match r.below(6) {
+        0 => format!("if ( {} ) {{ {} }}", b(r), b(r)),
+        1 => format!("if ( {} ) {{ {} }} else {{ {} }}", b(r), b(r), b(r)),
+        2 => format!("try {{ {} }} catch {{ {} }}", b(r), b(r)),
+        3 => format!("parallel {{ {} }} and {{ {} }}", b(r), b(r)),
+        4 => format!("parallel {{ {} }} or {{ {} }}", b(r), b(r)),
+        _ => format!("monitor {{ {} }} condition ( {} ) do {{ {} }}", b(r), b(r), b(r)),
+    }
+}
+
+/// A mission that starts with `s`, then has `x` and `y` among random statements.
+fn labelled_mission(r: &mut Rng) -> String {
+    let mut parts = vec!["A( 1 ) : x".to_string(), "B() : y".to_string()];
+    if r.chance(50) {
+        parts.swap(0, 1);
+    }
+    for _ in 0..1 + r.below(2) {
+        let at = r.below(parts.len() + 1);
+        parts.insert(at, stmt(r, 2));
+    }
+    format!("Void() : s ; {}", parts.join(" ; "))
+}
+
+/// One or two random constraints (orders and syncs from `s`, which every run reaches).
+fn constraints(r: &mut Rng) -> String {
+    let one = |r: &mut Rng| {
+        let (l, m) = (*r.pick(&["x", "y"]), *r.pick(&["x", "y"]));
+        match r.below(3) {
+            0 => format!("mutex {{ a:{l}, b:{m} }} = 1"),
+            1 => format!("order {{ a:s, b:{} }}", r.pick(&["s", "x", "y"])),
+            _ => "sync { a:s, b:s }".to_string(),
+        }
+    };
+    let mut cs = vec![one(r)];
+    if r.chance(40) {
+        cs.push(one(r));
+    }
+    cs.dedup();
+    cs.join("\n    ")
+}
+
+/// A scenario in which every task ends (ok or fail, random delays).
+fn scenario(r: &mut Rng) -> String {
+    let mut s = format!("seed = {}\ndefault_duration = {}\n", r.below(1000), r.below(4));
+    for task in ["A", "B", "Timed", "W"] {
+        s.push_str(&format!("[tasks.{task}]\n"));
+        match r.below(3) {
+            0 => s.push_str("outcome = \"ok\"\n"),
+            1 => s.push_str("outcome = \"fail\"\n"),
+            _ => s.push_str(&format!("probabilities = {{ ok = {}, fail = {} }}\n", 1 + r.below(3), 1 + r.below(3))),
+        }
+        let lo = r.below(4);
+        s.push_str(&format!("delay = [{lo}, {}]\n", lo + r.below(6)));
+    }
+    s
+}
+
+/// The supervisors of the constraints (not those of deadlock avoidance):
+/// per centralized transition id (`mission/id`), its effect on each.
+struct Supervisors {
+    ids: Vec<String>,
+    initial: Vec<i64>,
+    effect: HashMap<String, Vec<(usize, i64)>>,
+}
+
+/// The vehicle nets of a pair and its constraints' supervisors, or why
+/// there are none (the analysis finds a deadlock or is inconclusive).
+fn coordinate(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Supervisors), String> {
+    let mut db = Database::new();
+    let dir = Path::new("/virtual/acoustic");
+    db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
+    let file = db.set_text(&dir.join("pair.mcl"), text);
+    let diags = check_file(&db, file);
+    assert!(!mcl_compiler::has_errors(diags), "generated program has errors: {diags:?}\n{text}");
+    let (missions, cs) = mcl_coord::source::load(&db, file).map_err(|e| e.to_string())?;
+    let report = mcl_coord::analyze(&missions, &cs).map_err(|e| e.to_string())?;
+    if !report.deadlock_free {
+        return Err(format!("{:?}", report.verdict));
+    }
+    let mut sups = Supervisors { ids: Vec::new(), initial: Vec::new(), effect: HashMap::new() };
+    for s in &report.supervisors {
+        if !["coord.mutex", "coord.order", "coord.sync"].iter().any(|p| s.id.starts_with(p)) {
+            continue;
+        }
+        let k = sups.ids.len();
+        sups.ids.push(s.id.clone());
+        sups.initial.push(s.initial);
+        let arcs = s.produced_by.iter().map(|&(t, w)| (t, i64::from(w)));
+        for (t, w) in arcs.chain(s.consumed_by.iter().map(|&(t, w)| (t, -i64::from(w)))) {
+            let id = report.net.transitions()[t.index()].id.to_string();
+            sups.effect.entry(id).or_default().push((k, w));
+        }
+    }
+    let nets = mcl_coord::decentralize(&missions, &report.supervisors).map_err(|e| e.to_string())?;
+    Ok((nets, sups))
+}
+
+/// Runs the pair over `link`; returns how each mission ended and the records.
+fn run(nets: &[mcl_coord::VehicleNet], scenario: &str, seed: u64, link: AcousticLink) -> (Vec<End>, Vec<Record>) {
+    let names: Vec<String> = nets.iter().map(|v| v.mission.clone()).collect();
+    let sink = Arc::new(std::sync::Mutex::new(Collect::default()));
+    let mut vehicles = Vec::new();
+    for (v, transport) in nets.iter().zip(mcl_runtime::coord::in_process(&names)) {
+        let net = Arc::new(v.net.clone());
+        let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut SourceMap::default());
+        let scenario = Scenario::from_toml(scenario, "acoustic.toml").expect("a valid scenario");
+        let mock = MockVehicle::from_net(&net, scenario, seed);
+        let opts = PlayerOptions::seeded(seed);
+        vehicles.push(Vehicle::new(&v.mission, net, opts, tracer, mock, Box::new(transport)).expect("a vehicle"));
+    }
+    let shared: SharedSink = sink.clone();
+    let rt = tokio::runtime::Builder::new_current_thread().enable_time().build().expect("a runtime");
+    let end = rt
+        .block_on(run_virtual_with_link(vehicles, shared, Limits::virtual_time(Some(1e7)), Some(link), None))
+        .expect("the run goes through");
+    let records = std::mem::take(&mut sink.lock().expect("the sink").0);
+    (end.ends.into_iter().map(|(_, e, _)| e).collect(), records)
+}
+
+/// The first firing after which a constraint's supervisor is negative.
+fn violation(sups: &Supervisors, records: &[Record]) -> Option<String> {
+    let mut tokens = sups.initial.clone();
+    for r in records {
+        let RecordKind::Fire { transition, .. } = &r.kind else { continue };
+        let Some(m) = &r.mission else { continue };
+        let Some(effect) = sups.effect.get(&format!("{m}/{transition}")) else { continue };
+        for &(k, w) in effect {
+            tokens[k] += w;
+            if tokens[k] < 0 {
+                return Some(format!("{m}/{transition} at t={} leaves `{}` at {}", r.t, sups.ids[k], tokens[k]));
+            }
+        }
+    }
+    None
+}
+
+struct Case {
+    text: String,
+    scenario: String,
+    seed: u64,
+    link: LinkSpec,
+}
+
+fn case(seed: u64) -> Case {
+    let mut r = Rng(seed);
+    let (a, b, c) = (labelled_mission(&mut r), labelled_mission(&mut r), constraints(&mut r));
+    let text =
+        format!("import \"vehicle.mcl\";\nmission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n    {c}\n}}\n");
+    let scenario = scenario(&mut r);
+    let link = LinkSpec {
+        bitrate: *r.pick(&[20.0, 80.0, 500.0]),
+        loss: r.below(51) as f64 / 100.0,
+        delay: r.below(60) as f64 / 10.0,
+        range: None,
+    };
+    Case { text, scenario, seed: r.next_u64(), link }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 24,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6163_6f75_7374_6963),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn lossy_slow_links_keep_every_constraint_and_every_run_ends(seed in any::<u64>()) {
+        let c = case(seed);
+        let (nets, sups) = match coordinate(&c.text) {
+            Ok(x) => x,
+            // The analysis refuses it: nothing to run (counted below).
+            Err(_) => return Ok(()),
+        };
+        let what = || format!("{}\nscenario:\n{}\nlink {:?}, seed {}", c.text, c.scenario, c.link, c.seed);
+        let link = AcousticLink { spec: c.link.clone(), seed: c.seed, positions: None };
+        let (ends, records) = run(&nets, &c.scenario, c.seed, link);
+        for e in &ends {
+            prop_assert!(matches!(e, End::Outcome(Outcome::Ok | Outcome::Fail)), "a mission did not end: {e:?}\n{}", what());
+        }
+        prop_assert_eq!(violation(&sups, &records), None, "{}", what());
+        if c.link.loss > 0.2 {
+            let sent = records.iter().filter(|r| matches!(r.kind, RecordKind::CoordSend { .. })).count();
+            let lost = records.iter().filter(|r| matches!(r.kind, RecordKind::LinkLost { .. })).count();
+            prop_assert!(sent == 0 || lost > 0 || sent < 4, "a lossy link lost nothing: {}", what());
+        }
+    }
+}
+
+#[test]
+fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
+    // Guards the property above: most of its cases pass the analysis and
+    // send messages, some over links that lose frames.
+    let mut runnable = 0;
+    let mut lossy_runs = 0;
+    let mut caught = 0;
+    let mut token_requests = 0;
+    for seed in 0..12u64 {
+        let c = case(seed * 7919);
+        let Ok((nets, sups)) = coordinate(&c.text) else { continue };
+        runnable += 1;
+        let link = AcousticLink { spec: LinkSpec { loss: 0.5, ..c.link }, seed: c.seed, positions: None };
+        let (_, records) = run(&nets, &c.scenario, c.seed, link);
+        if records.iter().any(|r| matches!(r.kind, RecordKind::LinkLost { .. })) {
+            lossy_runs += 1;
+        }
+        let asks =
+            |r: &Record| matches!(&r.kind, RecordKind::LinkSend { what, .. } if what.starts_with("coord.request."));
+        if records.iter().any(asks) {
+            token_requests += 1;
+        }
+        // The checker sees violations: without `a`'s firings, the credits
+        // of an order (or a sync) that `b` used were never given.
+        if c.text.contains("order") || c.text.contains("sync") {
+            let without_a: Vec<Record> = records
+                .iter()
+                .filter(|r| !(r.mission.as_deref() == Some("a") && matches!(r.kind, RecordKind::Fire { .. })))
+                .cloned()
+                .collect();
+            if violation(&sups, &without_a).is_some() {
+                caught += 1;
+            }
+        }
+    }
+    assert!(runnable >= 8, "only {runnable} of 12 generated pairs pass the analysis");
+    assert!(lossy_runs >= 4, "only {lossy_runs} runs lost frames");
+    assert!(caught >= 2, "the checker caught only {caught} forged violations");
+    assert!(token_requests >= 1, "no run asked a mutex holder for a token over the link");
+}
+
+// ---------------------------------------------------------------------------
+// Through the binary
+// ---------------------------------------------------------------------------
+
+fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn mcl(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_mcl")).current_dir(root()).args(args).output().expect("mcl runs")
+}
+
+fn read_trace(path: &Path) -> Vec<Record> {
+    std::fs::read_to_string(path)
+        .expect("a trace")
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+#[test]
+fn link_report_of_the_auv_asc_mission_fits_32_bytes_and_refuses_one() {
+    let out = mcl(&["compile", "--link-report", "examples/auv-asc.mcl", "--frame-bytes", "32", "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert!(v["frame_bytes"].as_u64().is_some_and(|b| b <= 32), "{v}");
+    assert_eq!(v["diagnostics"].as_array().map(Vec::len), Some(0));
+    assert_eq!(v["constraints"][0]["messages"], serde_json::json!({"bound": "bounded", "max": 1}));
+    assert_eq!(v["constraints"][1]["messages"]["bound"], "unbounded");
+    let out = mcl(&["compile", "--link-report", "examples/auv-asc.mcl", "--frame-bytes", "1"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("[E0410]").count(), 7, "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("compact encoding: 10 bits per frame, 2 bytes"));
+}
+
+#[test]
+fn a_lossy_link_run_delivers_every_message_once_in_order_and_is_deterministic() {
+    let dir = std::env::temp_dir().join(format!("mcl-acoustic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |name: &str| {
+        let trace = dir.join(name);
+        let out = mcl(&[
+            "run",
+            "--mock",
+            "--virtual-time",
+            "-q",
+            "examples/auv-asc.mcl",
+            "--scenario",
+            "examples/scenarios/auv-asc.toml",
+            "--link",
+            "acoustic:bitrate=80,loss=0.4,delay=2",
+            "--seed",
+            "3",
+            "--trace",
+            trace.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        trace
+    };
+    let (a, b) = (run("a.jsonl"), run("b.jsonl"));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "the same seed gives the same run");
+    let records = read_trace(&a);
+    let lost = records.iter().filter(|r| matches!(r.kind, RecordKind::LinkLost { .. })).count();
+    let resent =
+        records.iter().filter(|r| matches!(r.kind, RecordKind::LinkSend { attempt, .. } if attempt > 1)).count();
+    assert!(lost > 0 && resent > 0, "{lost} lost, {resent} resent");
+    // Per link, the messages handed over (`new`) are 1, 2, 3... and each is
+    // received once, as a `coord_receive` with the same number.
+    let mut next: HashMap<(String, String), u64> = HashMap::new();
+    for r in &records {
+        match &r.kind {
+            RecordKind::LinkDeliver { from, seq, status, .. } if status == "new" => {
+                let n = next.entry((from.clone(), r.mission.clone().unwrap())).or_insert(1);
+                assert_eq!(*seq, *n, "in order");
+                *n += 1;
+            }
+            RecordKind::CoordReceive { from, seq, .. } => {
+                let n = next.get(&(from.clone(), r.mission.clone().unwrap())).copied().unwrap_or(1);
+                assert_eq!(*seq + 1, n, "received right after it was handed over");
+            }
+            _ => {}
+        }
+    }
+    let sent = records.iter().filter(|r| matches!(r.kind, RecordKind::CoordSend { .. })).count() as u64;
+    let handed: u64 = next.values().map(|n| n - 1).sum();
+    assert!(
+        handed + 1 >= sent && handed > 0,
+        "{handed} handed over of {sent} sent (the last may be in flight at the end)"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn in_a_simulated_world_frames_beyond_range_are_lost() {
+    // The simulated AUV and ASC are more than 10 m apart: nothing gets
+    // through, the order on the AUV's dive waits until the time limit.
+    let dir = std::env::temp_dir().join(format!("mcl-acoustic-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let trace = dir.join("t.jsonl");
+    let args = [
+        "run",
+        "--sim",
+        "--virtual-time",
+        "-q",
+        "examples/auv-asc.mcl",
+        "--time-limit",
+        "2000",
+        "--trace",
+        trace.to_str().unwrap(),
+    ];
+    let mut near = args.to_vec();
+    near.extend(["--link", "acoustic:bitrate=80,loss=0,delay=0,range=10"]);
+    let out = mcl(&near);
+    assert_eq!(out.status.code(), Some(3), "{}", String::from_utf8_lossy(&out.stderr));
+    let records = read_trace(&trace);
+    let reasons: Vec<&str> = records
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::LinkLost { reason, .. } => Some(reason.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert!(!reasons.is_empty() && reasons.iter().all(|r| *r == "range"), "{reasons:?}");
+    // In range, the delay comes from the distance (not the 0 s given).
+    let mut far = args.to_vec();
+    far.extend(["--link", "acoustic:bitrate=8000,loss=0,delay=0,range=100000"]);
+    let out = mcl(&far);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let records = read_trace(&trace);
+    let sent = records.iter().find(|r| matches!(r.kind, RecordKind::LinkSend { .. })).expect("a frame");
+    let got = records.iter().find(|r| matches!(r.kind, RecordKind::LinkDeliver { .. })).expect("a delivery");
+    assert!(got.t - sent.t > 0.01, "sent at {}, delivered at {}", sent.t, got.t);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_link_option_is_refused_where_it_cannot_apply() {
+    let out = mcl(&["run", "--mock", "examples/auv-asc.mcl", "--link", "acoustic:bitrate=80,loss=0,delay=0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--virtual-time"));
+    let out = mcl(&["run", "--mock", "--virtual-time", "examples/auv-asc.mcl", "--link", "acoustic:bitrate=80"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing `loss=`"));
+    let out = mcl(&[
+        "run",
+        "--mock",
+        "--virtual-time",
+        "examples/survey.mcl",
+        "--link",
+        "acoustic:bitrate=80,loss=0,delay=0",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+}
