@@ -293,7 +293,19 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
                         "stuck, but a nominal run from there ends every mission\n{text}"
                     );
                 } else if p.kind == WitnessKind::Dead {
-                    prop_assert!(mcl_net::semantics::enabled(net, &m).is_empty(), "counterexample not dead\n{text}");
+                    // Dead: nothing of a mission that has not ended can fire
+                    // (an ended mission fires nothing more, as the player).
+                    let ended = |name: &str| {
+                        ["mission.ok", "mission.fail"]
+                            .iter()
+                            .any(|p| m.get(net.place_by_id(&format!("{name}/{p}")).unwrap()) == 1)
+                    };
+                    let live: Vec<String> = mcl_net::semantics::enabled(net, &m)
+                        .into_iter()
+                        .map(|t| net.transition(t).unwrap().id.to_string())
+                        .filter(|id| id.split_once('/').is_none_or(|(mission, _)| !ended(mission)))
+                        .collect();
+                    prop_assert!(live.is_empty(), "counterexample not dead: {live:?} can fire\n{text}");
                 } else if !mcl_net::semantics::enabled(net, &m).is_empty() {
                     // Blocked: some mission has not ended.
                     let ended = |name: &str| {
@@ -465,17 +477,13 @@ fn fixed_seeds_meet_stuck_missions() {
     assert!(stuck > 0, "no stuck case in the batch: the generator no longer exercises nominal runs");
 }
 
-/// The differential property of `mcl check --counterexample-scenario`:
-/// each problem the analysis reports converts to a scenario that the
-/// runtime replays, event by event, to the problem's marking (the builder
-/// checks it with `multi::run_virtual` before returning it). The one
-/// exception is proven, not assumed: a counterexample in which one vehicle
-/// takes its first steps after another's events (the verifier lets each
-/// vehicle move at its own pace) while no run of the supervised net under
-/// the player's rule, every vehicle starting at once as in a dry run,
-/// reaches that marking (an exhaustive exploration). Returns the problems
-/// replayed and those excepted.
+/// Every counterexample the analysis reports converts to a scenario that
+/// the runtime replays, event by event, to the problem's marking (the
+/// builder checks it with `multi::run_virtual` before returning it), with
+/// the vehicles that take their first steps after another's events
+/// starting late (`[counterexample.start]`). Returns the problems replayed.
 fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize), TestCaseError> {
+    // Problems replayed, and of those, the ones with a late start.
     let (ms, cs) = compile(text, seed);
     let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
     if r.problems.is_empty() {
@@ -485,24 +493,24 @@ fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize
         mcl_coord::replay::deadlock_replays(&ms, &cs).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
     let table =
         mcl_runtime::counterexample::Expected { code: "E0406".into(), at: "property".into(), ..Default::default() };
-    let (mut ok, mut excepted) = (0, 0);
+    let (mut ok, mut late) = (0, 0);
     for (i, b) in builds.iter().enumerate() {
         match b(&table) {
             Ok(scenario) => {
                 prop_assert!(scenario.contains("[counterexample.marking]"), "{scenario}");
                 ok += 1;
+                late += usize::from(scenario.contains("[counterexample.start]"));
             }
-            Err(e) if e.contains("and no run reaches that marking when every vehicle starts at once") => excepted += 1,
             Err(e) => return Err(TestCaseError::fail(format!("problem {}: {e}\n{text}", i + 1))),
         }
     }
-    Ok((ok, excepted))
+    Ok((ok, late))
 }
 
 proptest! {
-    // A fixed seed: random seeds found a known gap (a counterexample that
-    // goes on after one mission has ended: `a/call2.cancel` after `a` ended
-    // ok, which the player never fires), not yet fixed.
+    // A fixed seed in CI: random seeds still meet a rare case whose dry run
+    // the scenario's seeds do not steer into the counterexample's order of
+    // simultaneous firings (`a_dry_run_may_miss_the_order_of_simultaneous_firings`).
     #![proptest_config(ProptestConfig {
         cases: 16,
         failure_persistence: None,
@@ -517,17 +525,46 @@ proptest! {
     }
 }
 
-/// The same over a fixed batch that meets deadlocks and stuck missions;
-/// most replay.
+/// The same over a fixed batch that meets deadlocks and stuck missions:
+/// every one replays, some only with a vehicle starting late.
 #[test]
 fn fixed_seeds_counterexamples_replay() {
-    let (mut ok, mut excepted) = (0, 0);
+    let (mut ok, mut late) = (0, 0);
     for seed in 0..40 {
-        let (o, e) =
+        let (o, l) =
             replays(seed, &case(seed), &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
         ok += o;
-        excepted += e;
+        late += l;
     }
-    eprintln!("{ok} counterexamples replayed, {excepted} need a vehicle to start late");
-    assert!(ok > 2 * excepted, "{ok} replayed, {excepted} need a vehicle to start late");
+    eprintln!("{ok} counterexamples replayed, {late} with a vehicle starting late");
+    assert!(ok > 0 && late > 0, "{ok} replayed, {late} with a late start");
+}
+
+/// A mission ends where the player ends it: `a` ends ok while `b` waits for
+/// ever for its `l3`; the counterexample stops at `a`'s end and replays (it
+/// used to go on with `a/call2.cancel` after `a` ended, which the player
+/// never fires).
+#[test]
+fn an_ended_mission_fires_nothing_more() {
+    let text = "mission : a { parallel { monitor { Void() : l1 } condition ( Alarm() ) do { Surface() } } or { \
+                if ( Surface() : l2 ) { Goto( p ) : l3 } else { Void() : l4 } } }\n\
+                mission : b { Surface() : l1 }\nconstraints {\n order { a:l3, b:l1 }\n}\n";
+    check_text(text.to_string(), 1, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let (ok, _) = replays(1, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(ok > 0, "no counterexample reported\n{text}");
+}
+
+/// A known gap, found by random seeds: the counterexample holds both of
+/// `a`'s first calls for ever (`b`'s `l2` never arrives), while every dry
+/// run that the scenario's seeds give starts `a`'s `l1`: the order of the
+/// firings at one instant that the counterexample needs is one that no
+/// seed tried draws, and a seed cannot be chosen per vehicle yet.
+#[test]
+#[ignore = "known gap: a dry run's seed does not steer the order of simultaneous firings"]
+fn a_dry_run_may_miss_the_order_of_simultaneous_firings() {
+    let text = "mission : a { parallel { GotoTarget() : l1 } or { GotoTarget() : l2 } ; \
+                try { Surface() : l3 } catch { Surface() : l4 } }\n\
+                mission : b { parallel { Goto( p ) : l1 } and { parallel { GotoTarget() : l2 } or { GotoTarget() : l3 } } }\n\
+                constraints {\n sync { a:l1, b:l2 }\n sync { a:l2, b:l2 }\n order { a:l4, b:l1 }\n}\n";
+    replays(4, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
 }

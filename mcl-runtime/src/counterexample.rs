@@ -44,7 +44,7 @@ use crate::trace::{Record, RecordKind, SourceMap, Tracer};
 pub const STEP: f64 = 1.0;
 
 /// How many seeds of the player [`build`] tries.
-pub const SEEDS: u64 = 16;
+pub const SEEDS: u64 = 64;
 
 /// Prefix of the places a vehicle net adds for coordination (its copies of
 /// supervisors): never compared with a counterexample's marking.
@@ -75,6 +75,12 @@ pub struct Expected {
     /// Per mission: its marked places at the end (`id`, or `id*k` for `k`
     /// tokens), places named `coord.*` left out.
     pub marking: BTreeMap<String, Vec<String>>,
+    /// Per mission of a coordinated run: when its mission begins, in
+    /// seconds of virtual time (`[counterexample.start]`; a mission not
+    /// named begins at 0). A counterexample may need a vehicle to take its
+    /// first steps after another's events.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub start: BTreeMap<String, f64>,
 }
 
 /// A firing sequence to replay.
@@ -156,14 +162,88 @@ pub struct Schedule {
     pub events: Vec<(f64, String, String)>,
     /// The marking the player ended in, per mission (as [`Expected::marking`]).
     pub marking: BTreeMap<String, Vec<String>>,
+    /// When each mission that starts late begins (as [`Expected::start`]).
+    pub start: BTreeMap<String, f64>,
+}
+
+/// The local name of the event that starts a late mission in the net that
+/// [`schedule_late`] plays (a `coord.` name: never compared, never sent).
+const START: &str = "coord.start";
+
+/// The missions of a centralized `cx` that take their first step after a
+/// step of another mission, and those it names waiting that it never
+/// moves (they start after the whole path): those a dry run may have to
+/// start late (each vehicle of the verifier moves at its own pace, while a
+/// dry run starts them one after the other at once, each settling before
+/// the next).
+pub fn late_missions(cx: &Counterexample<'_>) -> Vec<String> {
+    let mut seen: BTreeSet<&str> = BTreeSet::new();
+    let mut late = Vec::new();
+    for t in cx.path.iter().filter_map(|&t| cx.net.transition(t)) {
+        let Some((mission, _)) = t.id.split_once(SEP) else { continue };
+        if seen.insert(mission) && seen.len() > 1 {
+            late.push(mission.to_string());
+        }
+    }
+    if !seen.is_empty() {
+        late.extend(cx.waiting.iter().filter(|w| !seen.contains(w.as_str())).cloned());
+        late.dedup();
+    }
+    late
+}
+
+/// `net` where every transition of each mission of `late` waits for a
+/// token that the event `mission/coord.start` puts once (the mission's
+/// start); the ids of `net`'s nodes are kept.
+fn gated(net: &Net, late: &[String]) -> Result<Net, String> {
+    let mut b = net.to_builder();
+    for m in late {
+        let idle = b.add_place(mcl_net::Place::new(format!("{m}{SEP}{COORD_PREFIX}unstarted")).with_tokens(1));
+        let on = b.add_place(mcl_net::Place::new(format!("{m}{SEP}{COORD_PREFIX}started")));
+        let event = format!("{m}{SEP}{START}");
+        let go = b.add_transition(mcl_net::Transition::new(event.clone()).with_kind(TransitionKind::Event(event)));
+        b.add_input(idle, go, 1).add_output(go, on, 1);
+        let prefix = format!("{m}{SEP}");
+        for t in net.transition_ids() {
+            if net.transition(t).is_some_and(|x| x.id.starts_with(&prefix)) {
+                b.add_input(on, t, 1).add_output(t, on, 1);
+            }
+        }
+    }
+    b.build().map_err(|e| e.to_string())
 }
 
 /// Plays `cx.path` on a [`Player`] with `seed`: each event transition of
 /// the path is its event, sent at its own instant; immediate, zero-delay
 /// and timed transitions are left to the player, which must fire them in
-/// the path's order (up to the order of transitions fired at one instant).
+/// the path's order, up to the order of transitions fired at one instant:
+/// an immediate or zero-delay step it does not take is passed over (it
+/// drew another order there), and the marking it ends in decides.
 pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> {
-    let net = Arc::new(cx.net.clone());
+    schedule_late(cx, seed, &[])
+}
+
+/// [`schedule`] where each mission of `late` (a centralized net's) begins
+/// only just before its first step in the path, at an instant of its own
+/// ([`Schedule::start`]); the others begin at 0.
+pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String]) -> Result<Schedule, String> {
+    let net = Arc::new(if late.is_empty() { cx.net.clone() } else { gated(cx.net, late)? });
+    // Each late mission's start, just before its first step.
+    let mut path: Vec<TransitionId> = Vec::with_capacity(cx.path.len() + late.len());
+    let mut started: BTreeSet<&str> = BTreeSet::new();
+    for &t in cx.path {
+        if let Some((m, _)) = net.transition(t).and_then(|x| x.id.split_once(SEP)) {
+            if late.iter().any(|l| l == m) && started.insert(m) {
+                let go = net.transition_by_id(&format!("{m}{SEP}{START}")).ok_or("no start event")?;
+                path.push(go);
+            }
+        }
+        path.push(t);
+    }
+    // The late missions that the path never moves start after it.
+    for m in late.iter().filter(|m| !started.contains(m.as_str())) {
+        path.push(net.transition_by_id(&format!("{m}{SEP}{START}")).ok_or("no start event")?);
+    }
     let mut player = Player::new(net.clone(), PlayerOptions::seeded(seed));
     let mut pending: Vec<TransitionId> = Vec::new();
     let take = |outs: &[Output], pending: &mut Vec<TransitionId>| {
@@ -175,12 +255,19 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
     let name = |t: TransitionId| net.transition(t).map_or_else(|| format!("#{}", t.0), |x| x.id.to_string());
     take(&player.start(0.0), &mut pending);
     let mut events = Vec::new();
-    for (i, &t) in cx.path.iter().enumerate() {
+    let mut start = BTreeMap::new();
+    for (i, &t) in path.iter().enumerate() {
         if let Some(k) = pending.iter().position(|&p| p == t) {
             pending.remove(k);
             continue;
         }
         let Some(tr) = net.transition(t) else { return Err(format!("step {}: no transition #{}", i + 1, t.0)) };
+        if tr.kind.is_immediate() || tr.kind.is_deferred() {
+            // The player chose another order among the transitions ready at
+            // one instant (its draws, not the path's): passed over; the
+            // marking it ends in decides ([`build`]).
+            continue;
+        }
         if player.outcome().is_some() {
             return Err(format!("step {}: `{}`: the mission has already ended", i + 1, tr.id));
         }
@@ -210,7 +297,11 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
                     pending.remove(k);
                 }
                 let (mission, local) = cx.split(e).unwrap_or((cx.mission, e));
-                events.push((at, mission.to_string(), local.to_string()));
+                if local == START && late.iter().any(|l| l == mission) {
+                    start.insert(mission.to_string(), at);
+                } else {
+                    events.push((at, mission.to_string(), local.to_string()));
+                }
             }
             TransitionKind::Timed(_) => {
                 let Some(&(_, due)) = player.timers().iter().find(|(x, _)| *x == t) else {
@@ -225,12 +316,10 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
                     None => return Err(format!("step {}: timer `{}` did not fire at {due} s", i + 1, tr.id)),
                 }
             }
-            TransitionKind::Immediate => {
-                return Err(format!("step {}: the player took another way than `{}`", i + 1, tr.id));
-            }
+            TransitionKind::Immediate => {}
         }
     }
-    Ok(Schedule { seed, events, marking: cx.marking(player.marking()) })
+    Ok(Schedule { seed, events, marking: cx.marking(player.marking()), start })
 }
 
 /// The text of a scenario that replays `schedule`, leaving every task of
@@ -266,6 +355,12 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
     for (m, places) in &expected.marking {
         let _ = writeln!(s, "{} = {}", key(m), list(places));
     }
+    if !expected.start.is_empty() {
+        let _ = writeln!(s, "\n[counterexample.start]");
+        for (m, t) in &expected.start {
+            let _ = writeln!(s, "{} = {t:?}", key(m));
+        }
+    }
     for t in tasks {
         let _ = writeln!(s, "\n[tasks.{}]\noutcome = \"never\"", key(t));
     }
@@ -288,10 +383,13 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
 ///
 /// A counterexample of the verifier of coordinated missions may rely on a
 /// vehicle taking its first steps later than another (each vehicle moves
-/// at its own pace there), while a dry run starts every vehicle at once.
-/// When no seed follows the path, the shortest path of the same net to the
-/// same marking ([`SEARCH_STATES`] markings at most, the player's firing
-/// rule) is tried instead; when there is none, the error says so.
+/// at its own pace there). When no seed follows the path with every
+/// vehicle starting at once, the missions that take their first step after
+/// another's ([`late_missions`]) start late, each just
+/// before its first step ([`Expected::start`], [`schedule_late`]); failing
+/// that, the shortest path of the same net to the same marking
+/// ([`SEARCH_STATES`] markings at most, the player's firing rule) is tried
+/// instead; when there is none, the error says so.
 pub fn build(
     cx: &Counterexample<'_>,
     tasks: &[String],
@@ -299,9 +397,18 @@ pub fn build(
     per_mission: bool,
     check: impl Fn(&str) -> Result<(), String>,
 ) -> Result<String, String> {
-    let why = match build_on(cx, tasks, expected, per_mission, &check) {
+    let why = match build_on(cx, tasks, expected, per_mission, &check, &[]) {
         Ok(text) => return Ok(text),
         Err(why) => why,
+    };
+    let late = if cx.centralized { late_missions(cx) } else { Vec::new() };
+    let why = if late.is_empty() {
+        why
+    } else {
+        match build_on(cx, tasks, expected, per_mission, &check, &late) {
+            Ok(text) => return Ok(text),
+            Err(e) => format!("{why}; with {} starting late: {e}", late.join(", ")),
+        }
     };
     let ss = mcl_net::explore(cx.net, &mcl_net::Options { max_states: SEARCH_STATES, ..Default::default() });
     let target = ss
@@ -309,14 +416,14 @@ pub fn build(
         .find(|&s| !ss.is_vanishing(s) && same_marking(&expected.marking, &cx.marked(&ss.marking(s))).is_ok());
     let Some(target) = target else {
         return Err(format!(
-            "{why}; and no run {}reaches that marking when every vehicle starts at once, as in a dry run (the \
-             counterexample needs a vehicle to take its first steps later than another)",
+            "{why}; and no run {}reaches that marking when every vehicle starts at once",
             if ss.complete() { "" } else { "within the markings explored " }
         ));
     };
     let path = ss.path_to(target);
     let other = Counterexample { path: &path, ..*cx };
-    build_on(&other, tasks, expected, per_mission, &check).map_err(|e| format!("{why}; and along another run: {e}"))
+    build_on(&other, tasks, expected, per_mission, &check, &[])
+        .map_err(|e| format!("{why}; and along another run: {e}"))
 }
 
 /// Largest number of markings [`build`] explores to find another path.
@@ -328,10 +435,11 @@ fn build_on(
     expected: &Expected,
     per_mission: bool,
     check: &impl Fn(&str) -> Result<(), String>,
+    late: &[String],
 ) -> Result<String, String> {
     let mut why = String::from("no seed tried");
     for seed in 0..SEEDS {
-        let sch = match schedule(cx, seed) {
+        let sch = match schedule_late(cx, seed, late) {
             Ok(s) => s,
             Err(e) => {
                 why = format!("the player cannot follow the counterexample ({e})");
@@ -342,7 +450,8 @@ fn build_on(
             why = format!("the player does not end where the counterexample does ({e})");
             continue;
         }
-        let text = scenario_text(&sch, tasks, expected, per_mission);
+        let want = Expected { start: sch.start.clone(), ..expected.clone() };
+        let text = scenario_text(&sch, tasks, &want, per_mission);
         match check(&text) {
             Ok(()) => return Ok(text),
             Err(e) => why = format!("a dry run of the scenario does not reproduce it ({e})"),
@@ -494,7 +603,8 @@ pub fn check_vehicles(nets: &[(String, Arc<Net>)], text: &str) -> Result<(), Str
     let end = rt.block_on(async {
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(crate::coord::in_process(&names)) {
-            vs.push(crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?);
+            let start = expected.start.get(&name).copied().unwrap_or(0.0);
+            vs.push(crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?.starting_at(start));
         }
         crate::multi::run_virtual(vs, shared, Limits::virtual_time(None)).await
     })?;
@@ -572,7 +682,12 @@ mod tests {
             marking: BTreeMap::from([("m".to_string(), vec!["mid".to_string()])]),
             ..Default::default()
         };
-        let s = Schedule { seed: 0, events: vec![(1.0, "m".into(), "go".into())], marking: BTreeMap::new() };
+        let s = Schedule {
+            seed: 0,
+            events: vec![(1.0, "m".into(), "go".into())],
+            marking: BTreeMap::new(),
+            start: BTreeMap::new(),
+        };
         let text = scenario_text(&s, &[], &expected, false);
         // The timer of T2 fires after the event: the run ends in `end`.
         let e = check_single(&Arc::new(n), "m", &text).unwrap_err();
