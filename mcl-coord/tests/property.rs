@@ -508,9 +508,9 @@ fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize
 }
 
 proptest! {
-    // A fixed seed in CI: random seeds still meet a rare case whose dry run
-    // the scenario's seeds do not steer into the counterexample's order of
-    // simultaneous firings (`a_dry_run_may_miss_the_order_of_simultaneous_firings`).
+    // A fixed seed in CI: random seeds still meet, about once in 16 cases,
+    // a counterexample that no dry run reproduces (see the ignored
+    // `a_counterexample_that_no_dry_run_reproduces_yet`).
     #![proptest_config(ProptestConfig {
         cases: 16,
         failure_persistence: None,
@@ -554,17 +554,34 @@ fn an_ended_mission_fires_nothing_more() {
     assert!(ok > 0, "no counterexample reported\n{text}");
 }
 
-/// A known gap, found by random seeds: the counterexample holds both of
-/// `a`'s first calls for ever (`b`'s `l2` never arrives), while every dry
-/// run that the scenario's seeds give starts `a`'s `l1`: the order of the
-/// firings at one instant that the counterexample needs is one that no
-/// seed tried draws, and a seed cannot be chosen per vehicle yet.
+/// Found by random seeds: the counterexample lets `a` leave its allowed
+/// starts unfired while `b`'s `l3` wins its `parallel ... or` and withdraws
+/// the `l2` arrival they waited for (each vehicle of the verifier moves at
+/// its own pace), which a player, firing what is ready at once, never does.
+/// A dry run reaches the same dead marking with `a` starting after `b`'s
+/// events (`LateStart::FirstWait`).
 #[test]
-#[ignore = "known gap: a dry run's seed does not steer the order of simultaneous firings"]
-fn a_dry_run_may_miss_the_order_of_simultaneous_firings() {
+fn a_vehicle_that_waits_starts_after_the_others_events() {
     let text = "mission : a { parallel { GotoTarget() : l1 } or { GotoTarget() : l2 } ; \
                 try { Surface() : l3 } catch { Surface() : l4 } }\n\
                 mission : b { parallel { Goto( p ) : l1 } and { parallel { GotoTarget() : l2 } or { GotoTarget() : l3 } } }\n\
                 constraints {\n sync { a:l1, b:l2 }\n sync { a:l2, b:l2 }\n order { a:l4, b:l1 }\n}\n";
-    replays(4, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let (ok, late) = replays(4, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(ok > 0 && late > 0, "{ok} replayed, {late} with a late start\n{text}");
+}
+
+/// A known gap, found by random seeds (about one case in 16 meets one like
+/// it): in the counterexample `b` ends in its `catch` with its `Surface()`
+/// `l4` never started and the task's lock free, a marking that no schedule
+/// of the player (64 seeds, every vehicle at once or started late) ends in;
+/// whether the verifier's per-vehicle rule allows a step that no player
+/// takes here is not settled yet.
+#[test]
+#[ignore = "known gap: a counterexample that no dry run reproduces yet"]
+fn a_counterexample_that_no_dry_run_reproduces_yet() {
+    let text = "mission : a { parallel { parallel { Void() : l1 } and { Deploy() : l2 } } or { Deploy() : l3 } }\n\
+                mission : b { try { parallel { Surface() : l1 } and { Surface() : l2 } } catch { \
+                parallel { GotoTarget() : l3 } and { Surface() : l4 } } }\n\
+                constraints {\n sync { a:l2, b:l2 }\n sync { a:l2, b:l1 }\n order { b:l1, a:l3 }\n}\n";
+    replays(5, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
 }

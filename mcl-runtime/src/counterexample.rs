@@ -16,7 +16,9 @@
 //!   instants by playing the sequence on the [`Player`] itself, so the
 //!   schedule follows the player's firing rule exactly. Its only free
 //!   choice is among transitions ready at one instant: the seeds
-//!   `0..SEEDS` are tried until one follows the sequence.
+//!   `0..SEEDS` are tried until one follows the sequence, and the dry
+//!   run's seed (its players draw on other nets) among the first
+//!   [`RUN_SEEDS`].
 //! * **Self-checking.** The scenario is written only once a replay of its
 //!   text, in process, with the mock and the player in virtual time
 //!   (`driver::run_virtual`, or `multi::run_virtual` for the vehicle nets
@@ -220,20 +222,33 @@ fn gated(net: &Net, late: &[String]) -> Result<Net, String> {
 /// an immediate or zero-delay step it does not take is passed over (it
 /// drew another order there), and the marking it ends in decides.
 pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> {
-    schedule_late(cx, seed, &[])
+    schedule_late(cx, seed, &[], LateStart::First)
+}
+
+/// When a late mission of [`schedule_late`] begins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LateStart {
+    /// Just before its first step in the path.
+    First,
+    /// Just before its first event or timer in the path (its immediate and
+    /// zero-delay steps before it come with its start), or after the path:
+    /// a counterexample may let a vehicle leave ready transitions unfired
+    /// while another moves, which a player never does.
+    FirstWait,
 }
 
 /// [`schedule`] where each mission of `late` (a centralized net's) begins
-/// only just before its first step in the path, at an instant of its own
+/// only at the point `when` of the path, at an instant of its own
 /// ([`Schedule::start`]); the others begin at 0.
-pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String]) -> Result<Schedule, String> {
+pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: LateStart) -> Result<Schedule, String> {
     let net = Arc::new(if late.is_empty() { cx.net.clone() } else { gated(cx.net, late)? });
-    // Each late mission's start, just before its first step.
+    // Each late mission's start, where `when` says.
     let mut path: Vec<TransitionId> = Vec::with_capacity(cx.path.len() + late.len());
     let mut started: BTreeSet<&str> = BTreeSet::new();
     for &t in cx.path {
-        if let Some((m, _)) = net.transition(t).and_then(|x| x.id.split_once(SEP)) {
-            if late.iter().any(|l| l == m) && started.insert(m) {
+        if let Some((m, tr)) = net.transition(t).and_then(|x| Some((x.id.split_once(SEP)?.0, x))) {
+            let waits = !tr.kind.is_immediate() && !tr.kind.is_deferred();
+            if late.iter().any(|l| l == m) && (when == LateStart::First || waits) && started.insert(m) {
                 let go = net.transition_by_id(&format!("{m}{SEP}{START}")).ok_or("no start event")?;
                 path.push(go);
             }
@@ -386,7 +401,8 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
 /// at its own pace there). When no seed follows the path with every
 /// vehicle starting at once, the missions that take their first step after
 /// another's ([`late_missions`]) start late, each just
-/// before its first step ([`Expected::start`], [`schedule_late`]); failing
+/// before its first step ([`Expected::start`], [`schedule_late`]), then
+/// just before its first event or timer ([`LateStart::FirstWait`]); failing
 /// that, the shortest path of the same net to the same marking
 /// ([`SEARCH_STATES`] markings at most, the player's firing rule) is tried
 /// instead; when there is none, the error says so.
@@ -397,7 +413,7 @@ pub fn build(
     per_mission: bool,
     check: impl Fn(&str) -> Result<(), String>,
 ) -> Result<String, String> {
-    let why = match build_on(cx, tasks, expected, per_mission, &check, &[]) {
+    let why = match build_on(cx, tasks, expected, per_mission, &check, (&[], LateStart::First)) {
         Ok(text) => return Ok(text),
         Err(why) => why,
     };
@@ -405,9 +421,13 @@ pub fn build(
     let why = if late.is_empty() {
         why
     } else {
-        match build_on(cx, tasks, expected, per_mission, &check, &late) {
+        let first = match build_on(cx, tasks, expected, per_mission, &check, (&late, LateStart::First)) {
             Ok(text) => return Ok(text),
             Err(e) => format!("{why}; with {} starting late: {e}", late.join(", ")),
+        };
+        match build_on(cx, tasks, expected, per_mission, &check, (&late, LateStart::FirstWait)) {
+            Ok(text) => return Ok(text),
+            Err(e) => format!("{first}; and later: {e}"),
         }
     };
     let ss = mcl_net::explore(cx.net, &mcl_net::Options { max_states: SEARCH_STATES, ..Default::default() });
@@ -422,7 +442,7 @@ pub fn build(
     };
     let path = ss.path_to(target);
     let other = Counterexample { path: &path, ..*cx };
-    build_on(&other, tasks, expected, per_mission, &check, &[])
+    build_on(&other, tasks, expected, per_mission, &check, (&[], LateStart::First))
         .map_err(|e| format!("{why}; and along another run: {e}"))
 }
 
@@ -435,11 +455,15 @@ fn build_on(
     expected: &Expected,
     per_mission: bool,
     check: &impl Fn(&str) -> Result<(), String>,
-    late: &[String],
+    (late, when): (&[String], LateStart),
 ) -> Result<String, String> {
     let mut why = String::from("no seed tried");
+    let mut schedules = 0;
     for seed in 0..SEEDS {
-        let sch = match schedule_late(cx, seed, late) {
+        if schedules == SCHEDULES {
+            break;
+        }
+        let sch = match schedule_late(cx, seed, late, when) {
             Ok(s) => s,
             Err(e) => {
                 why = format!("the player cannot follow the counterexample ({e})");
@@ -450,15 +474,29 @@ fn build_on(
             why = format!("the player does not end where the counterexample does ({e})");
             continue;
         }
+        schedules += 1;
         let want = Expected { start: sch.start.clone(), ..expected.clone() };
-        let text = scenario_text(&sch, tasks, &want, per_mission);
-        match check(&text) {
-            Ok(()) => return Ok(text),
-            Err(e) => why = format!("a dry run of the scenario does not reproduce it ({e})"),
+        // The dry run's players draw on other nets (the vehicle nets, or
+        // with the mock): its seed is the schedule's, else one of the first
+        // few that reproduces it.
+        for run_seed in std::iter::once(seed).chain((0..RUN_SEEDS).filter(|&s| s != seed)) {
+            let text = scenario_text(&Schedule { seed: run_seed, ..sch.clone() }, tasks, &want, per_mission);
+            match check(&text) {
+                Ok(()) => return Ok(text),
+                Err(e) => why = format!("a dry run of the scenario does not reproduce it ({e})"),
+            }
         }
     }
     Err(why)
 }
+
+/// How many schedules that end in the counterexample's marking
+/// [`build`] checks by a dry run at most, per way of starting the vehicles.
+pub const SCHEDULES: usize = 4;
+
+/// How many seeds of the dry run [`build`] tries per schedule (besides the
+/// schedule's own).
+pub const RUN_SEEDS: u64 = 16;
 
 /// Compares markings (as [`Expected::marking`]) on the missions of `want`.
 fn same_marking(want: &BTreeMap<String, Vec<String>>, got: &BTreeMap<String, Vec<String>>) -> Result<(), String> {
