@@ -571,11 +571,14 @@ fn a_vehicle_that_waits_starts_after_the_others_events() {
 }
 
 /// A known gap, found by random seeds (about one case in 16 meets one like
-/// it): in the counterexample `b` ends in its `catch` with its `Surface()`
-/// `l4` never started and the task's lock free, a marking that no schedule
-/// of the player (64 seeds, every vehicle at once or started late) ends in;
-/// whether the verifier's per-vehicle rule allows a step that no player
-/// takes here is not settled yet.
+/// it). The counterexample has `b`, its `Surface()` lock released and the
+/// sync credit of `a:l2`'s arrival already in its copy, leave its allowed
+/// start of `l2` unfired while `a` takes an event and withdraws that
+/// arrival (the product interleaves the vehicles without making one fire
+/// what is ready before another's event). A player fires that start at
+/// once, and no start time changes that: only a coordination message
+/// delayed past the withdrawal (a real link's latency, which a dry run's
+/// in-process transport does not have) reproduces it.
 #[test]
 #[ignore = "known gap: a counterexample that no dry run reproduces yet"]
 fn a_counterexample_that_no_dry_run_reproduces_yet() {
