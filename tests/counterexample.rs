@@ -239,3 +239,62 @@ fn without_the_flag_or_with_other_errors_nothing_changes() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("no vehicle net was made"), "{}", stderr(&o));
 }
+
+/// Two random missions (the batch of `mcl-coord/tests/property.rs`) whose
+/// counterexample needs a vehicle to start late: the verifier moves each
+/// vehicle at its own pace, and `b` takes the mutex before `a` moves, while
+/// a dry run starts `a` first. The scenario starts `a` late
+/// (`[counterexample.start]`), and `mcl run` reproduces it.
+#[test]
+fn a_counterexample_that_needs_a_late_start_replays() {
+    let dir = out_dir("late_start");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/vehicle.mcl"), dir.join("vehicle.mcl")).unwrap();
+    let file = dir.join("late.mcl");
+    std::fs::write(
+        &file,
+        "import \"vehicle.mcl\";\n\
+         mission : a { parallel { Goto( p ) : l1 } or { try { Void() : l2 } catch { SendData() : l3 } } }\n\
+         mission : b { parallel { parallel { Surface() : l1 } or { Goto( p ) : l2 } } and { parallel { Surface() : l3 } and { Void() : l4 } } }\n\
+         constraints {\n mutex { a:l1, b:l3 } = 1\n sync { a:l1, b:l4 }\n}\n",
+    )
+    .unwrap();
+    let file = file.to_str().unwrap();
+    let out = dir.join("late.toml");
+    let o = mcl(&["check", file, "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let mut written: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    written.sort();
+    assert!(!written.is_empty(), "{err}");
+    let mut late = 0;
+    for scenario in &written {
+        let text = std::fs::read_to_string(scenario).unwrap();
+        let starts = text.contains("[counterexample.start]");
+        late += usize::from(starts);
+        let (code, err, records) = run(file, scenario);
+        assert_eq!(code, Some(3), "{err}\n{text}");
+        assert!(err.contains(": reproduced"), "{err}\n{text}");
+        if starts {
+            // The late vehicle fires nothing before its start time, and the
+            // other vehicle moves before.
+            let first = |m: &str| {
+                records.iter().find(|r| r["mission"] == m && r["kind"] == "fire").and_then(|r| r["t"].as_f64())
+            };
+            let table = text.split("[counterexample.start]\n").nth(1).unwrap_or("");
+            for line in table.lines().take_while(|l| !l.trim().is_empty()) {
+                let (m, t) = line.split_once(" = ").unwrap();
+                let t: f64 = t.parse().unwrap();
+                assert!(t > 0.0, "{text}");
+                assert!(first(m).is_none_or(|x| x >= t), "{text}\n{records:?}");
+                let before =
+                    records.iter().any(|r| r["mission"] != m && r["kind"] == "fire" && r["t"].as_f64() < Some(t));
+                assert!(before, "nothing moved before `{m}` started\n{text}\n{records:?}");
+            }
+        }
+    }
+    assert!(late > 0, "no scenario needed a late start: {written:?}\n{err}");
+}

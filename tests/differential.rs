@@ -18,6 +18,17 @@
 //! whenever they are enabled; every other firing must be an edge of the
 //! explored state space from the current marking.
 //!
+//! Their joint behaviour is checked too: the firings of both vehicles, in
+//! the order the run took them, are a path of the coordination verifier's
+//! product, replayed on the supervised centralized net (supervisor places
+//! included, exact counts) under the per-vehicle firing rule that the
+//! verifier applies (`check_joint`), a supervised start counting as held
+//! while the vehicle's own supervisor copy does not enable it. A few
+//! firings need that: a deferred or timed transition fired while a start
+//! that the centralized supervisor would let go waits for its token (a
+//! single-holder mutex's, granted at the same instant); the product itself
+//! would fire the start first. They are counted and printed.
+//!
 //! `MCL_DIFFERENTIAL_CASES` (default 40 per kind) and
 //! `MCL_DIFFERENTIAL_SEED` change the run.
 
@@ -374,9 +385,11 @@ fn constraint(r: &mut Rng) -> String {
     }
 }
 
-/// The vehicle nets of a coordinated pair, or why there are none (the
-/// constraints deadlock, or the analysis was inconclusive).
-fn vehicle_nets(text: &str) -> Result<Vec<mcl_coord::VehicleNet>, String> {
+/// The vehicle nets of a coordinated pair and its supervised centralized
+/// net (the take-back of withdrawn sync arrivals written as nodes), or why
+/// there are none (the constraints deadlock, or the analysis was
+/// inconclusive).
+fn vehicle_nets(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Net), String> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/differential");
     db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
@@ -388,7 +401,129 @@ fn vehicle_nets(text: &str) -> Result<Vec<mcl_coord::VehicleNet>, String> {
     if !report.deadlock_free {
         return Err(format!("{:?}: {:?}", report.verdict, report.problems.first().map(|p| &p.message)));
     }
-    mcl_coord::decentralize(&missions, &report.supervisors).map_err(|e| e.to_string())
+    let central =
+        mcl_coord::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?;
+    let nets = mcl_coord::decentralize(&missions, &report.supervisors).map_err(|e| e.to_string())?;
+    Ok((nets, central))
+}
+
+/// Fires the take-back nodes that `central` enables (`S.withdraw`, else
+/// `S.forget`, immediate of priorities 2 and 1: under the firing rule they
+/// fire before anything else).
+fn take_backs(central: &Net, m: &mut Marking) {
+    loop {
+        let en = mcl_net::semantics::enabled(central, m);
+        let id = |t: &&TransitionId| central.transitions()[t.index()].id.to_string();
+        let next =
+            en.iter().find(|t| id(t).ends_with(".withdraw")).or_else(|| en.iter().find(|t| id(t).ends_with(".forget")));
+        match next {
+            Some(&t) => mcl_net::semantics::fire(central, m, t).expect("an enabled take-back fires"),
+            None => return,
+        }
+    }
+}
+
+/// What [`check_joint`] checked.
+#[derive(Default)]
+struct Joint {
+    /// Firings replayed on the supervised centralized net.
+    firings: usize,
+    /// Of those, firings that the product allows only with a start held
+    /// that the centralized net would let go: the vehicle's copy of a
+    /// supervisor lacked the token (a single-holder mutex's token still
+    /// with the other vehicle, granted at the same instant).
+    held_by_copy: usize,
+}
+
+/// Checks the joint behaviour of a coordinated run: the firings of both
+/// vehicles, in the order of the records, are a path of the coordination
+/// verifier's product, replayed on the supervised centralized net with
+/// exact token counts. Each firing of a mission's transition (`mission/id`
+/// there) must be enabled there, supervisor places included, and ready for
+/// its vehicle under the per-vehicle firing rule (`select_ready` among its
+/// enabled transitions, as the verifier's transition systems and replay
+/// apply it), where a supervised start counts as held while the vehicle's
+/// own copy of the supervisor does not enable it (the product's gates may
+/// be held; tallied apart). The vehicle nets' own coordination transitions
+/// (receptions, `coord.*`) have no counterpart there; a mission fires
+/// nothing of its own after its outcome (its supervisor copies still
+/// receive).
+fn check_joint(
+    central: &Net,
+    nets: &[mcl_coord::VehicleNet],
+    records: &[Record],
+    joint: &mut Joint,
+    what: &dyn Fn() -> String,
+) {
+    let mut m = central.initial_marking();
+    // Each vehicle's own marking, on its vehicle net.
+    let mut local: Vec<Marking> = nets.iter().map(|v| v.net.initial_marking()).collect();
+    let mut started = vec![false; nets.len()];
+    let mut ended: Vec<&str> = Vec::new();
+    let mut so_far: Vec<String> = Vec::new();
+    for r in records {
+        let Some(mission) = r.mission.as_deref() else { continue };
+        let Some(k) = nets.iter().position(|v| v.mission == mission) else { continue };
+        let v = &nets[k];
+        let id = match &r.kind {
+            RecordKind::Outcome { .. } => {
+                ended.push(mission);
+                continue;
+            }
+            // Messages received before the start fire on the initial marking.
+            RecordKind::Event { transition, .. } if !started[k] => {
+                if let Some(t) = v.net.transition_by_id(transition) {
+                    mcl_net::semantics::fire(&v.net, &mut local[k], t).expect("a delivery fires");
+                }
+                continue;
+            }
+            RecordKind::Fire { transition, .. } => transition.as_str(),
+            _ => continue,
+        };
+        started[k] = true;
+        let fail = |why: String, m: &Marking| -> ! {
+            panic!("joint run: {why}\nmarking: {:?}\nfired so far: {so_far:?}\n{}", marked(central, m), what())
+        };
+        let lt = v.net.transition_by_id(id).unwrap_or_else(|| panic!("`{id}` is not a transition of `{mission}`"));
+        let gid = format!("{mission}/{id}");
+        let Some(t) = central.transition_by_id(&gid) else {
+            if !v.receive.iter().any(|(r, _)| r == id) && !id.starts_with("coord.") {
+                fail(format!("`{gid}` is not a transition of the centralized net"), &m);
+            }
+            mcl_net::semantics::fire(&v.net, &mut local[k], lt).expect("a reception fires");
+            continue;
+        };
+        if ended.contains(&mission) {
+            fail(format!("`{mission}` fired `{id}` after its outcome"), &m);
+        }
+        if !mcl_net::semantics::is_enabled(central, &m, t) {
+            fail(format!("`{gid}` fired while the supervised centralized net does not enable it"), &m);
+        }
+        let prefix = format!("{mission}/");
+        let mut ready: Vec<TransitionId> = mcl_net::semantics::enabled(central, &m)
+            .into_iter()
+            .filter(|u| central.transitions()[u.index()].id.starts_with(&prefix))
+            .collect();
+        let all = ready.clone();
+        // A start whose supervisor copy in the vehicle lacks the token is held.
+        ready.retain(|u| {
+            let local_id = &central.transitions()[u.index()].id[prefix.len()..];
+            v.net.transition_by_id(local_id).is_none_or(|lu| mcl_net::semantics::is_enabled(&v.net, &local[k], lu))
+        });
+        mcl_net::semantics::select_ready(central, &mut ready);
+        if !ready.contains(&t) {
+            let ready: Vec<String> = ready.iter().map(|u| central.transitions()[u.index()].id.to_string()).collect();
+            fail(format!("`{gid}` fired where its vehicle's firing rule allows only {ready:?}"), &m);
+        }
+        let mut exact = all;
+        mcl_net::semantics::select_ready(central, &mut exact);
+        joint.held_by_copy += usize::from(!exact.contains(&t));
+        mcl_net::semantics::fire(central, &mut m, t).expect("an enabled transition fires");
+        take_backs(central, &mut m);
+        mcl_net::semantics::fire(&v.net, &mut local[k], lt).expect("the vehicle's firing fires");
+        so_far.push(gid);
+        joint.firings += 1;
+    }
 }
 
 /// Runs the vehicles of `nets` together in virtual time, each against its
@@ -423,6 +558,9 @@ struct PairTally {
     /// Firings in a marking the explorer never reaches (after messages
     /// delivered together): checked against the firing rule's ready set.
     off_space: usize,
+    /// Firings of both vehicles checked together on the supervised
+    /// centralized net ([`check_joint`]).
+    joint: Joint,
 }
 
 /// Checks one vehicle's firings in `records` on its net (see the module
@@ -529,8 +667,8 @@ fn coordinated_vehicles_fire_along_their_explored_state_spaces() {
         let text = format!(
             "import \"vehicle.mcl\";\nmission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n    {c}\n}}\n"
         );
-        let nets = match vehicle_nets(&text) {
-            Ok(nets) => nets,
+        let (nets, central) = match vehicle_nets(&text) {
+            Ok(x) => x,
             Err(why) => {
                 eprintln!("pair {case} skipped: {why}");
                 skipped += 1;
@@ -547,19 +685,21 @@ fn coordinated_vehicles_fire_along_their_explored_state_spaces() {
             let scenario = pair_scenario(&mut r);
             let seed = r.next_u64();
             let records = play_pair(&nets, &scenario, seed);
+            let what = || format!("case {case}, seed {seed}\n{text}\nscenario:\n{scenario}");
             for (v, space) in nets.iter().zip(&spaces) {
-                check_vehicle(v, space, &records, &mut tally, &|| {
-                    format!("case {case}, seed {seed}\n{text}\nscenario:\n{scenario}")
-                });
+                check_vehicle(v, space, &records, &mut tally, &what);
             }
+            check_joint(&central, &nets, &records, &mut tally.joint, &what);
             runs += 1;
         }
     }
     eprintln!(
-        "coordinated pairs: {runs} runs; {} firings along edges, {} receptions, {} off the explored space; {skipped} pairs skipped",
-        tally.edges, tally.received, tally.off_space
+        "coordinated pairs: {runs} runs; {} firings along edges, {} receptions, {} off the explored space, {} joint \
+         firings along the product ({} with a start held by a vehicle's supervisor copy); {skipped} pairs skipped",
+        tally.edges, tally.received, tally.off_space, tally.joint.firings, tally.joint.held_by_copy
     );
     assert_eq!(pairs, cases, "too many pairs were skipped ({skipped})");
     assert!(tally.received > 0, "no coordination message was received: the pairs do not coordinate");
     assert!(tally.edges > 10 * tally.off_space, "too few firings checked against the explorer");
+    assert!(tally.joint.firings > 0, "no joint firing was checked against the product");
 }

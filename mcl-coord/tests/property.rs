@@ -293,7 +293,19 @@ fn check_text(text: String, seed: u64, opts: &AnalyzeOptions) -> Result<(), Test
                         "stuck, but a nominal run from there ends every mission\n{text}"
                     );
                 } else if p.kind == WitnessKind::Dead {
-                    prop_assert!(mcl_net::semantics::enabled(net, &m).is_empty(), "counterexample not dead\n{text}");
+                    // Dead: nothing of a mission that has not ended can fire
+                    // (an ended mission fires nothing more, as the player).
+                    let ended = |name: &str| {
+                        ["mission.ok", "mission.fail"]
+                            .iter()
+                            .any(|p| m.get(net.place_by_id(&format!("{name}/{p}")).unwrap()) == 1)
+                    };
+                    let live: Vec<String> = mcl_net::semantics::enabled(net, &m)
+                        .into_iter()
+                        .map(|t| net.transition(t).unwrap().id.to_string())
+                        .filter(|id| id.split_once('/').is_none_or(|(mission, _)| !ended(mission)))
+                        .collect();
+                    prop_assert!(live.is_empty(), "counterexample not dead: {live:?} can fire\n{text}");
                 } else if !mcl_net::semantics::enabled(net, &m).is_empty() {
                     // Blocked: some mission has not ended.
                     let ended = |name: &str| {
@@ -465,17 +477,13 @@ fn fixed_seeds_meet_stuck_missions() {
     assert!(stuck > 0, "no stuck case in the batch: the generator no longer exercises nominal runs");
 }
 
-/// The differential property of `mcl check --counterexample-scenario`:
-/// each problem the analysis reports converts to a scenario that the
-/// runtime replays, event by event, to the problem's marking (the builder
-/// checks it with `multi::run_virtual` before returning it). The one
-/// exception is proven, not assumed: a counterexample in which one vehicle
-/// takes its first steps after another's events (the verifier lets each
-/// vehicle move at its own pace) while no run of the supervised net under
-/// the player's rule, every vehicle starting at once as in a dry run,
-/// reaches that marking (an exhaustive exploration). Returns the problems
-/// replayed and those excepted.
+/// Every counterexample the analysis reports converts to a scenario that
+/// the runtime replays, event by event, to the problem's marking (the
+/// builder checks it with `multi::run_virtual` before returning it), with
+/// the vehicles that take their first steps after another's events
+/// starting late (`[counterexample.start]`). Returns the problems replayed.
 fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize), TestCaseError> {
+    // Problems replayed, and of those, the ones with a late start.
     let (ms, cs) = compile(text, seed);
     let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
     if r.problems.is_empty() {
@@ -485,24 +493,24 @@ fn replays(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usize, usize
         mcl_coord::replay::deadlock_replays(&ms, &cs).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
     let table =
         mcl_runtime::counterexample::Expected { code: "E0406".into(), at: "property".into(), ..Default::default() };
-    let (mut ok, mut excepted) = (0, 0);
+    let (mut ok, mut late) = (0, 0);
     for (i, b) in builds.iter().enumerate() {
         match b(&table) {
             Ok(scenario) => {
                 prop_assert!(scenario.contains("[counterexample.marking]"), "{scenario}");
                 ok += 1;
+                late += usize::from(scenario.contains("[counterexample.start]"));
             }
-            Err(e) if e.contains("and no run reaches that marking when every vehicle starts at once") => excepted += 1,
             Err(e) => return Err(TestCaseError::fail(format!("problem {}: {e}\n{text}", i + 1))),
         }
     }
-    Ok((ok, excepted))
+    Ok((ok, late))
 }
 
 proptest! {
-    // A fixed seed: random seeds found a known gap (a counterexample that
-    // goes on after one mission has ended: `a/call2.cancel` after `a` ended
-    // ok, which the player never fires), not yet fixed.
+    // A fixed seed in CI: random seeds still meet, about once in 16 cases,
+    // a counterexample that no dry run reproduces (see the ignored
+    // `a_counterexample_that_no_dry_run_reproduces_yet`).
     #![proptest_config(ProptestConfig {
         cases: 16,
         failure_persistence: None,
@@ -517,17 +525,66 @@ proptest! {
     }
 }
 
-/// The same over a fixed batch that meets deadlocks and stuck missions;
-/// most replay.
+/// The same over a fixed batch that meets deadlocks and stuck missions:
+/// every one replays, some only with a vehicle starting late.
 #[test]
 fn fixed_seeds_counterexamples_replay() {
-    let (mut ok, mut excepted) = (0, 0);
+    let (mut ok, mut late) = (0, 0);
     for seed in 0..40 {
-        let (o, e) =
+        let (o, l) =
             replays(seed, &case(seed), &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
         ok += o;
-        excepted += e;
+        late += l;
     }
-    eprintln!("{ok} counterexamples replayed, {excepted} need a vehicle to start late");
-    assert!(ok > 2 * excepted, "{ok} replayed, {excepted} need a vehicle to start late");
+    eprintln!("{ok} counterexamples replayed, {late} with a vehicle starting late");
+    assert!(ok > 0 && late > 0, "{ok} replayed, {late} with a late start");
+}
+
+/// A mission ends where the player ends it: `a` ends ok while `b` waits for
+/// ever for its `l3`; the counterexample stops at `a`'s end and replays (it
+/// used to go on with `a/call2.cancel` after `a` ended, which the player
+/// never fires).
+#[test]
+fn an_ended_mission_fires_nothing_more() {
+    let text = "mission : a { parallel { monitor { Void() : l1 } condition ( Alarm() ) do { Surface() } } or { \
+                if ( Surface() : l2 ) { Goto( p ) : l3 } else { Void() : l4 } } }\n\
+                mission : b { Surface() : l1 }\nconstraints {\n order { a:l3, b:l1 }\n}\n";
+    check_text(text.to_string(), 1, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let (ok, _) = replays(1, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(ok > 0, "no counterexample reported\n{text}");
+}
+
+/// Found by random seeds: the counterexample lets `a` leave its allowed
+/// starts unfired while `b`'s `l3` wins its `parallel ... or` and withdraws
+/// the `l2` arrival they waited for (each vehicle of the verifier moves at
+/// its own pace), which a player, firing what is ready at once, never does.
+/// A dry run reaches the same dead marking with `a` starting after `b`'s
+/// events (`LateStart::FirstWait`).
+#[test]
+fn a_vehicle_that_waits_starts_after_the_others_events() {
+    let text = "mission : a { parallel { GotoTarget() : l1 } or { GotoTarget() : l2 } ; \
+                try { Surface() : l3 } catch { Surface() : l4 } }\n\
+                mission : b { parallel { Goto( p ) : l1 } and { parallel { GotoTarget() : l2 } or { GotoTarget() : l3 } } }\n\
+                constraints {\n sync { a:l1, b:l2 }\n sync { a:l2, b:l2 }\n order { a:l4, b:l1 }\n}\n";
+    let (ok, late) = replays(4, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(ok > 0 && late > 0, "{ok} replayed, {late} with a late start\n{text}");
+}
+
+/// A known gap, found by random seeds (about one case in 16 meets one like
+/// it). The counterexample has `b`, its `Surface()` lock released and the
+/// sync credit of `a:l2`'s arrival already in its copy, leave its allowed
+/// start of `l2` unfired while `a` takes an event and withdraws that
+/// arrival (the product interleaves the vehicles without making one fire
+/// what is ready before another's event). A player fires that start at
+/// once, and no start time changes that: only a coordination message
+/// delayed past the withdrawal (a real link's latency, which a dry run's
+/// in-process transport does not have) reproduces it.
+#[test]
+#[ignore = "known gap: a counterexample that no dry run reproduces yet"]
+fn a_counterexample_that_no_dry_run_reproduces_yet() {
+    let text = "mission : a { parallel { parallel { Void() : l1 } and { Deploy() : l2 } } or { Deploy() : l3 } }\n\
+                mission : b { try { parallel { Surface() : l1 } and { Surface() : l2 } } catch { \
+                parallel { GotoTarget() : l3 } and { Surface() : l4 } } }\n\
+                constraints {\n sync { a:l2, b:l2 }\n sync { a:l2, b:l1 }\n order { b:l1, a:l3 }\n}\n";
+    replays(5, text, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
 }

@@ -22,6 +22,7 @@ pub mod mcl;
 pub mod model;
 pub mod pddl;
 pub mod plan;
+pub mod record;
 pub mod run;
 pub mod search;
 pub mod sexpr;

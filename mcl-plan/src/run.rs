@@ -14,8 +14,9 @@
 //! its tasks are disabled by the nets), and a new plan is computed from the
 //! current facts while the holding mission (`--holding`) runs. Every player
 //! record and every planning record goes to the caller's sink as JSON
-//! (`kind`: `plan`, `replan`, `step`, `step_end`, `facts`, `holding`, then
-//! the final `outcome`), with a live-log line.
+//! (the typed [`PlanRecord`]s, `kind`: `plan`, `replan`, `step`,
+//! `step_end`, `facts`, `holding`, then the final `outcome`), with a
+//! live-log line.
 //!
 //! One vehicle serves the whole run: the mock vehicle's tables are the union
 //! of those of the operators file's missions (an instance has the call sites
@@ -28,6 +29,7 @@
 use crate::executor::{Decision, Executor};
 use crate::ground::{McValue, MclInstance};
 use crate::pddl::Fact;
+use crate::record::{Holding, PlanKind, PlanRecord};
 use crate::world::{Percept, WorldModeler};
 use mcl_compiler::compile::compile_file;
 use mcl_compiler::diagnostics::render_human;
@@ -43,7 +45,7 @@ use mcl_runtime::trace::{live_line, round_time, Record, RecordKind, SourceMap, T
 use mcl_runtime::vehicle::VirtualVehicle;
 use mcl_runtime::virtual_loop::{self, Discrete, Stop};
 use mcl_syntax::ast::{Item, Value, ValueKind};
-use serde_json::{json, Value as Json};
+use serde_json::Value as Json;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -419,80 +421,30 @@ struct Run<'a> {
 }
 
 impl Run<'_> {
-    fn emit(&mut self, kind: &str, fields: Json) {
-        let mut r = json!({ "t": round_time(self.t), "kind": kind });
-        if let (Some(o), Json::Object(f)) = (r.as_object_mut(), fields) {
-            o.extend(f);
-        }
-        let live = self.live(&r);
-        self.sink.record(r, live);
+    /// Emits a plan record ([`PlanKind`]), with its live line.
+    fn emit(&mut self, kind: PlanKind) {
+        let r = PlanRecord { t: round_time(self.t), kind };
+        let live = r.live_line();
+        self.sink.record(r.to_json(), Some(live));
     }
 
     /// Emits a record of one of the player's kinds (a warning, a link
-    /// notice...), with the planner's live line.
+    /// notice...), without a live line.
     fn emit_kind(&mut self, kind: RecordKind) {
         let r = serde_json::to_value(Record::new(self.t, kind)).unwrap_or_default();
-        let live = self.live(&r);
-        self.sink.record(r, live);
-    }
-
-    fn live(&self, r: &Json) -> Option<String> {
-        let s = |k: &str| r.get(k).and_then(Json::as_str).unwrap_or("").to_string();
-        let what = match s("kind").as_str() {
-            "plan" => {
-                let mut line = format!(
-                    "PLAN {} ({}): {} step(s), cost {}",
-                    r["plan"],
-                    s("reason"),
-                    r["steps"].as_array().map_or(0, Vec::len),
-                    r["cost"]
-                );
-                for (i, (a, c)) in r["steps"]
-                    .as_array()
-                    .into_iter()
-                    .flatten()
-                    .zip(r["calls"].as_array().into_iter().flatten())
-                    .enumerate()
-                {
-                    line.push_str(&format!(
-                        "\n             {}. {}  {}",
-                        i + 1,
-                        a.as_str().unwrap_or(""),
-                        c.as_str().unwrap_or("")
-                    ));
-                }
-                line
-            }
-            "replan" => format!("REPLAN: {}", s("reason")),
-            "step" => format!("step {} {}: {}", r["step"], s("action"), s("call")),
-            "step_end" => format!("step {} {}: {}", r["step"], s("action"), s("result").to_uppercase()),
-            "facts" => {
-                let f = |k: &str| {
-                    r[k].as_array().into_iter().flatten().filter_map(Json::as_str).collect::<Vec<_>>().join(" ")
-                };
-                format!("facts    +[{}] -[{}]", f("added"), f("deleted"))
-            }
-            "holding" => format!("holding  {} ({})", s("mission"), s("state")),
-            "outcome" => format!(
-                "PLANNED MISSION {}{}",
-                s("result").to_uppercase(),
-                r.get("reason").and_then(Json::as_str).map(|x| format!(": {x}")).unwrap_or_default()
-            ),
-            _ => return None,
-        };
-        Some(format!("[{:>10.3}] {what}", r["t"].as_f64().unwrap_or(0.0)))
+        self.sink.record(r, None);
     }
 
     fn emit_plan(&mut self, reason: &str) {
         let p = self.ex.plan();
-        let fields = json!({
-            "plan": self.ex.replans + 1,
-            "reason": reason,
-            "steps": p.steps.iter().map(|s| s.action.clone()).collect::<Vec<_>>(),
-            "calls": p.steps.iter().map(|s| s.mcl.as_ref().map(|m| m.to_string())).collect::<Vec<_>>(),
-            "cost": p.cost,
-        });
-        self.emit("plan", fields);
+        let kind = PlanKind::Plan {
+            plan: self.ex.replans + 1,
+            reason: reason.to_string(),
+            steps: p.steps.iter().map(|s| s.action.clone()).collect(),
+            calls: p.steps.iter().map(|s| s.mcl.as_ref().map(|m| m.to_string())).collect(),
+            cost: p.cost,
+        };
+        self.emit(kind);
     }
 
     /// Mission time now (real time runs from the start of the run).
@@ -599,7 +551,7 @@ impl Run<'_> {
         }
         let added: Vec<Fact> = after.difference(&before).cloned().collect();
         let deleted: Vec<Fact> = before.difference(after).cloned().collect();
-        self.emit("facts", json!({ "added": strs(&added), "deleted": strs(&deleted), "perception": name }));
+        self.emit(PlanKind::Facts { added: strs(&added), deleted: strs(&deleted), perception: name });
         // While a step runs: does the world still fit the plan?
         let Some(Running { role: Role::Step(i), player, .. }) = &self.running else { return };
         if player.outcome().is_some() || self.ex.expects(self.world.facts(), *i) {
@@ -630,7 +582,7 @@ impl Run<'_> {
                 run.player.outcome().map_or("fail", |o| o.as_str())
             };
             let action = self.ex.step(i).action.clone();
-            self.emit("step_end", json!({ "step": i + 1, "action": action, "result": result }));
+            self.emit(PlanKind::StepEnd { step: i + 1, action, result: result.to_string() });
             self.ex.step_ended(i, ok);
         }
     }
@@ -675,14 +627,12 @@ impl Run<'_> {
     }
 
     fn replan(&mut self, reason: String) -> Result<(), String> {
-        self.emit(
-            "replan",
-            json!({ "reason": reason, "facts": self.world.facts().iter().map(|f| f.to_string()).collect::<Vec<_>>() }),
-        );
+        let facts = self.world.facts().iter().map(|f| f.to_string()).collect();
+        self.emit(PlanKind::Replan { reason: reason.clone(), facts });
         if let Some(net) = self.holding.clone() {
             let name = self.opts.holding.clone().unwrap_or_default();
             let index = self.missions.index_of(&name);
-            self.emit("holding", json!({ "mission": name, "state": "started" }));
+            self.emit(PlanKind::Holding { mission: name.clone(), state: Holding::Started });
             self.start(net, format!("holding:{name}"), Role::Holding, index);
         }
         let facts = self.world.facts().clone();
@@ -694,7 +644,7 @@ impl Run<'_> {
         if let Some(name) = self.opts.holding.clone().filter(|_| self.running.is_some()) {
             self.abort_running("holding mission stopped: a plan is ready");
             self.running = None;
-            self.emit("holding", json!({ "mission": name, "state": "stopped" }));
+            self.emit(PlanKind::Holding { mission: name, state: Holding::Stopped });
         }
         match r {
             Ok(()) => {
@@ -719,11 +669,12 @@ impl Run<'_> {
     fn finish(&mut self, result: &str, reason: Option<String>) -> Report {
         self.abort_running("the planned run ended");
         self.running = None;
-        let mut f = json!({ "result": result, "plans": self.ex.replans + 1, "steps": self.steps });
-        if let Some(r) = &reason {
-            f["reason"] = json!(r);
-        }
-        self.emit("outcome", f);
+        self.emit(PlanKind::Outcome {
+            result: result.to_string(),
+            plans: self.ex.replans + 1,
+            steps: self.steps,
+            reason: reason.clone(),
+        });
         Report { result: result.to_string(), reason, plans: self.ex.replans + 1, steps: self.steps, t: self.t }
     }
 
@@ -826,11 +777,14 @@ impl Run<'_> {
                         };
                         let net = self.missions.instance(&call)?;
                         self.steps += 1;
-                        self.emit(
-                            "step",
-                            json!({ "step": i + 1, "of": self.ex.plan().steps.len(), "action": st.action, "call": call.to_string(),
-                                    "before": strs(&st.before), "after": strs(&st.after) }),
-                        );
+                        self.emit(PlanKind::Step {
+                            step: i + 1,
+                            of: self.ex.plan().steps.len(),
+                            action: st.action.clone(),
+                            call: call.to_string(),
+                            before: strs(&st.before),
+                            after: strs(&st.after),
+                        });
                         let index = self.missions.index_of(&call.mission);
                         self.start(net, format!("step{}:{}", i + 1, call.mission), Role::Step(i), index);
                     }
@@ -867,10 +821,8 @@ impl Run<'_> {
                     return Ok(self.finish("time_limit", Some(format!("the time limit of {limit} s passed"))));
                 }
                 Stop::ZeroTimeLoop(t) => {
-                    self.emit(
-                        "warning",
-                        json!({ "message": format!("{}: the step fails", virtual_loop::zero_time_message(t)) }),
-                    );
+                    let message = format!("{}: the step fails", virtual_loop::zero_time_message(t));
+                    self.emit_kind(RecordKind::Warning { message });
                     self.abort_running("the step loops without mission time advancing");
                     self.end_step(false);
                 }

@@ -16,7 +16,9 @@
 //!   instants by playing the sequence on the [`Player`] itself, so the
 //!   schedule follows the player's firing rule exactly. Its only free
 //!   choice is among transitions ready at one instant: the seeds
-//!   `0..SEEDS` are tried until one follows the sequence.
+//!   `0..SEEDS` are tried until one follows the sequence, and the dry
+//!   run's seed (its players draw on other nets) among the first
+//!   [`RUN_SEEDS`].
 //! * **Self-checking.** The scenario is written only once a replay of its
 //!   text, in process, with the mock and the player in virtual time
 //!   (`driver::run_virtual`, or `multi::run_virtual` for the vehicle nets
@@ -44,7 +46,7 @@ use crate::trace::{Record, RecordKind, SourceMap, Tracer};
 pub const STEP: f64 = 1.0;
 
 /// How many seeds of the player [`build`] tries.
-pub const SEEDS: u64 = 16;
+pub const SEEDS: u64 = 64;
 
 /// Prefix of the places a vehicle net adds for coordination (its copies of
 /// supervisors): never compared with a counterexample's marking.
@@ -75,6 +77,12 @@ pub struct Expected {
     /// Per mission: its marked places at the end (`id`, or `id*k` for `k`
     /// tokens), places named `coord.*` left out.
     pub marking: BTreeMap<String, Vec<String>>,
+    /// Per mission of a coordinated run: when its mission begins, in
+    /// seconds of virtual time (`[counterexample.start]`; a mission not
+    /// named begins at 0). A counterexample may need a vehicle to take its
+    /// first steps after another's events.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub start: BTreeMap<String, f64>,
 }
 
 /// A firing sequence to replay.
@@ -156,14 +164,101 @@ pub struct Schedule {
     pub events: Vec<(f64, String, String)>,
     /// The marking the player ended in, per mission (as [`Expected::marking`]).
     pub marking: BTreeMap<String, Vec<String>>,
+    /// When each mission that starts late begins (as [`Expected::start`]).
+    pub start: BTreeMap<String, f64>,
+}
+
+/// The local name of the event that starts a late mission in the net that
+/// [`schedule_late`] plays (a `coord.` name: never compared, never sent).
+const START: &str = "coord.start";
+
+/// The missions of a centralized `cx` that take their first step after a
+/// step of another mission, and those it names waiting that it never
+/// moves (they start after the whole path): those a dry run may have to
+/// start late (each vehicle of the verifier moves at its own pace, while a
+/// dry run starts them one after the other at once, each settling before
+/// the next).
+pub fn late_missions(cx: &Counterexample<'_>) -> Vec<String> {
+    let mut seen: BTreeSet<&str> = BTreeSet::new();
+    let mut late = Vec::new();
+    for t in cx.path.iter().filter_map(|&t| cx.net.transition(t)) {
+        let Some((mission, _)) = t.id.split_once(SEP) else { continue };
+        if seen.insert(mission) && seen.len() > 1 {
+            late.push(mission.to_string());
+        }
+    }
+    if !seen.is_empty() {
+        late.extend(cx.waiting.iter().filter(|w| !seen.contains(w.as_str())).cloned());
+        late.dedup();
+    }
+    late
+}
+
+/// `net` where every transition of each mission of `late` waits for a
+/// token that the event `mission/coord.start` puts once (the mission's
+/// start); the ids of `net`'s nodes are kept.
+fn gated(net: &Net, late: &[String]) -> Result<Net, String> {
+    let mut b = net.to_builder();
+    for m in late {
+        let idle = b.add_place(mcl_net::Place::new(format!("{m}{SEP}{COORD_PREFIX}unstarted")).with_tokens(1));
+        let on = b.add_place(mcl_net::Place::new(format!("{m}{SEP}{COORD_PREFIX}started")));
+        let event = format!("{m}{SEP}{START}");
+        let go = b.add_transition(mcl_net::Transition::new(event.clone()).with_kind(TransitionKind::Event(event)));
+        b.add_input(idle, go, 1).add_output(go, on, 1);
+        let prefix = format!("{m}{SEP}");
+        for t in net.transition_ids() {
+            if net.transition(t).is_some_and(|x| x.id.starts_with(&prefix)) {
+                b.add_input(on, t, 1).add_output(t, on, 1);
+            }
+        }
+    }
+    b.build().map_err(|e| e.to_string())
 }
 
 /// Plays `cx.path` on a [`Player`] with `seed`: each event transition of
 /// the path is its event, sent at its own instant; immediate, zero-delay
 /// and timed transitions are left to the player, which must fire them in
-/// the path's order (up to the order of transitions fired at one instant).
+/// the path's order, up to the order of transitions fired at one instant:
+/// an immediate or zero-delay step it does not take is passed over (it
+/// drew another order there), and the marking it ends in decides.
 pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> {
-    let net = Arc::new(cx.net.clone());
+    schedule_late(cx, seed, &[], LateStart::First)
+}
+
+/// When a late mission of [`schedule_late`] begins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LateStart {
+    /// Just before its first step in the path.
+    First,
+    /// Just before its first event or timer in the path (its immediate and
+    /// zero-delay steps before it come with its start), or after the path:
+    /// a counterexample may let a vehicle leave ready transitions unfired
+    /// while another moves, which a player never does.
+    FirstWait,
+}
+
+/// [`schedule`] where each mission of `late` (a centralized net's) begins
+/// only at the point `when` of the path, at an instant of its own
+/// ([`Schedule::start`]); the others begin at 0.
+pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: LateStart) -> Result<Schedule, String> {
+    let net = Arc::new(if late.is_empty() { cx.net.clone() } else { gated(cx.net, late)? });
+    // Each late mission's start, where `when` says.
+    let mut path: Vec<TransitionId> = Vec::with_capacity(cx.path.len() + late.len());
+    let mut started: BTreeSet<&str> = BTreeSet::new();
+    for &t in cx.path {
+        if let Some((m, tr)) = net.transition(t).and_then(|x| Some((x.id.split_once(SEP)?.0, x))) {
+            let waits = !tr.kind.is_immediate() && !tr.kind.is_deferred();
+            if late.iter().any(|l| l == m) && (when == LateStart::First || waits) && started.insert(m) {
+                let go = net.transition_by_id(&format!("{m}{SEP}{START}")).ok_or("no start event")?;
+                path.push(go);
+            }
+        }
+        path.push(t);
+    }
+    // The late missions that the path never moves start after it.
+    for m in late.iter().filter(|m| !started.contains(m.as_str())) {
+        path.push(net.transition_by_id(&format!("{m}{SEP}{START}")).ok_or("no start event")?);
+    }
     let mut player = Player::new(net.clone(), PlayerOptions::seeded(seed));
     let mut pending: Vec<TransitionId> = Vec::new();
     let take = |outs: &[Output], pending: &mut Vec<TransitionId>| {
@@ -175,12 +270,19 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
     let name = |t: TransitionId| net.transition(t).map_or_else(|| format!("#{}", t.0), |x| x.id.to_string());
     take(&player.start(0.0), &mut pending);
     let mut events = Vec::new();
-    for (i, &t) in cx.path.iter().enumerate() {
+    let mut start = BTreeMap::new();
+    for (i, &t) in path.iter().enumerate() {
         if let Some(k) = pending.iter().position(|&p| p == t) {
             pending.remove(k);
             continue;
         }
         let Some(tr) = net.transition(t) else { return Err(format!("step {}: no transition #{}", i + 1, t.0)) };
+        if tr.kind.is_immediate() || tr.kind.is_deferred() {
+            // The player chose another order among the transitions ready at
+            // one instant (its draws, not the path's): passed over; the
+            // marking it ends in decides ([`build`]).
+            continue;
+        }
         if player.outcome().is_some() {
             return Err(format!("step {}: `{}`: the mission has already ended", i + 1, tr.id));
         }
@@ -210,7 +312,11 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
                     pending.remove(k);
                 }
                 let (mission, local) = cx.split(e).unwrap_or((cx.mission, e));
-                events.push((at, mission.to_string(), local.to_string()));
+                if local == START && late.iter().any(|l| l == mission) {
+                    start.insert(mission.to_string(), at);
+                } else {
+                    events.push((at, mission.to_string(), local.to_string()));
+                }
             }
             TransitionKind::Timed(_) => {
                 let Some(&(_, due)) = player.timers().iter().find(|(x, _)| *x == t) else {
@@ -225,12 +331,10 @@ pub fn schedule(cx: &Counterexample<'_>, seed: u64) -> Result<Schedule, String> 
                     None => return Err(format!("step {}: timer `{}` did not fire at {due} s", i + 1, tr.id)),
                 }
             }
-            TransitionKind::Immediate => {
-                return Err(format!("step {}: the player took another way than `{}`", i + 1, tr.id));
-            }
+            TransitionKind::Immediate => {}
         }
     }
-    Ok(Schedule { seed, events, marking: cx.marking(player.marking()) })
+    Ok(Schedule { seed, events, marking: cx.marking(player.marking()), start })
 }
 
 /// The text of a scenario that replays `schedule`, leaving every task of
@@ -266,6 +370,12 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
     for (m, places) in &expected.marking {
         let _ = writeln!(s, "{} = {}", key(m), list(places));
     }
+    if !expected.start.is_empty() {
+        let _ = writeln!(s, "\n[counterexample.start]");
+        for (m, t) in &expected.start {
+            let _ = writeln!(s, "{} = {t:?}", key(m));
+        }
+    }
     for t in tasks {
         let _ = writeln!(s, "\n[tasks.{}]\noutcome = \"never\"", key(t));
     }
@@ -288,10 +398,14 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
 ///
 /// A counterexample of the verifier of coordinated missions may rely on a
 /// vehicle taking its first steps later than another (each vehicle moves
-/// at its own pace there), while a dry run starts every vehicle at once.
-/// When no seed follows the path, the shortest path of the same net to the
-/// same marking ([`SEARCH_STATES`] markings at most, the player's firing
-/// rule) is tried instead; when there is none, the error says so.
+/// at its own pace there). When no seed follows the path with every
+/// vehicle starting at once, the missions that take their first step after
+/// another's ([`late_missions`]) start late, each just
+/// before its first step ([`Expected::start`], [`schedule_late`]), then
+/// just before its first event or timer ([`LateStart::FirstWait`]); failing
+/// that, the shortest path of the same net to the same marking
+/// ([`SEARCH_STATES`] markings at most, the player's firing rule) is tried
+/// instead; when there is none, the error says so.
 pub fn build(
     cx: &Counterexample<'_>,
     tasks: &[String],
@@ -299,9 +413,22 @@ pub fn build(
     per_mission: bool,
     check: impl Fn(&str) -> Result<(), String>,
 ) -> Result<String, String> {
-    let why = match build_on(cx, tasks, expected, per_mission, &check) {
+    let why = match build_on(cx, tasks, expected, per_mission, &check, (&[], LateStart::First)) {
         Ok(text) => return Ok(text),
         Err(why) => why,
+    };
+    let late = if cx.centralized { late_missions(cx) } else { Vec::new() };
+    let why = if late.is_empty() {
+        why
+    } else {
+        let first = match build_on(cx, tasks, expected, per_mission, &check, (&late, LateStart::First)) {
+            Ok(text) => return Ok(text),
+            Err(e) => format!("{why}; with {} starting late: {e}", late.join(", ")),
+        };
+        match build_on(cx, tasks, expected, per_mission, &check, (&late, LateStart::FirstWait)) {
+            Ok(text) => return Ok(text),
+            Err(e) => format!("{first}; and later: {e}"),
+        }
     };
     let ss = mcl_net::explore(cx.net, &mcl_net::Options { max_states: SEARCH_STATES, ..Default::default() });
     let target = ss
@@ -309,14 +436,14 @@ pub fn build(
         .find(|&s| !ss.is_vanishing(s) && same_marking(&expected.marking, &cx.marked(&ss.marking(s))).is_ok());
     let Some(target) = target else {
         return Err(format!(
-            "{why}; and no run {}reaches that marking when every vehicle starts at once, as in a dry run (the \
-             counterexample needs a vehicle to take its first steps later than another)",
+            "{why}; and no run {}reaches that marking when every vehicle starts at once",
             if ss.complete() { "" } else { "within the markings explored " }
         ));
     };
     let path = ss.path_to(target);
     let other = Counterexample { path: &path, ..*cx };
-    build_on(&other, tasks, expected, per_mission, &check).map_err(|e| format!("{why}; and along another run: {e}"))
+    build_on(&other, tasks, expected, per_mission, &check, (&[], LateStart::First))
+        .map_err(|e| format!("{why}; and along another run: {e}"))
 }
 
 /// Largest number of markings [`build`] explores to find another path.
@@ -328,10 +455,15 @@ fn build_on(
     expected: &Expected,
     per_mission: bool,
     check: &impl Fn(&str) -> Result<(), String>,
+    (late, when): (&[String], LateStart),
 ) -> Result<String, String> {
     let mut why = String::from("no seed tried");
+    let mut schedules = 0;
     for seed in 0..SEEDS {
-        let sch = match schedule(cx, seed) {
+        if schedules == SCHEDULES {
+            break;
+        }
+        let sch = match schedule_late(cx, seed, late, when) {
             Ok(s) => s,
             Err(e) => {
                 why = format!("the player cannot follow the counterexample ({e})");
@@ -342,14 +474,29 @@ fn build_on(
             why = format!("the player does not end where the counterexample does ({e})");
             continue;
         }
-        let text = scenario_text(&sch, tasks, expected, per_mission);
-        match check(&text) {
-            Ok(()) => return Ok(text),
-            Err(e) => why = format!("a dry run of the scenario does not reproduce it ({e})"),
+        schedules += 1;
+        let want = Expected { start: sch.start.clone(), ..expected.clone() };
+        // The dry run's players draw on other nets (the vehicle nets, or
+        // with the mock): its seed is the schedule's, else one of the first
+        // few that reproduces it.
+        for run_seed in std::iter::once(seed).chain((0..RUN_SEEDS).filter(|&s| s != seed)) {
+            let text = scenario_text(&Schedule { seed: run_seed, ..sch.clone() }, tasks, &want, per_mission);
+            match check(&text) {
+                Ok(()) => return Ok(text),
+                Err(e) => why = format!("a dry run of the scenario does not reproduce it ({e})"),
+            }
         }
     }
     Err(why)
 }
+
+/// How many schedules that end in the counterexample's marking
+/// [`build`] checks by a dry run at most, per way of starting the vehicles.
+pub const SCHEDULES: usize = 4;
+
+/// How many seeds of the dry run [`build`] tries per schedule (besides the
+/// schedule's own).
+pub const RUN_SEEDS: u64 = 16;
 
 /// Compares markings (as [`Expected::marking`]) on the missions of `want`.
 fn same_marking(want: &BTreeMap<String, Vec<String>>, got: &BTreeMap<String, Vec<String>>) -> Result<(), String> {
@@ -494,7 +641,8 @@ pub fn check_vehicles(nets: &[(String, Arc<Net>)], text: &str) -> Result<(), Str
     let end = rt.block_on(async {
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(crate::coord::in_process(&names)) {
-            vs.push(crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?);
+            let start = expected.start.get(&name).copied().unwrap_or(0.0);
+            vs.push(crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?.starting_at(start));
         }
         crate::multi::run_virtual(vs, shared, Limits::virtual_time(None)).await
     })?;
@@ -572,7 +720,12 @@ mod tests {
             marking: BTreeMap::from([("m".to_string(), vec!["mid".to_string()])]),
             ..Default::default()
         };
-        let s = Schedule { seed: 0, events: vec![(1.0, "m".into(), "go".into())], marking: BTreeMap::new() };
+        let s = Schedule {
+            seed: 0,
+            events: vec![(1.0, "m".into(), "go".into())],
+            marking: BTreeMap::new(),
+            start: BTreeMap::new(),
+        };
         let text = scenario_text(&s, &[], &expected, false);
         // The timer of T2 fires after the event: the run ends in `end`.
         let e = check_single(&Arc::new(n), "m", &text).unwrap_err();

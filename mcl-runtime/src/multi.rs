@@ -24,7 +24,11 @@
 //!   synchronous communication that keeps the copies of a supervisor equal).
 //!   Vehicles start one after the other, each with the messages of the
 //!   previous ones' first firings already applied to its initial marking. At equal times vehicles go in the order
-//!   given, a player's timers before its mock's messages.
+//!   given, a player's timers before its mock's messages. A vehicle given a
+//!   start time ([`Vehicle::starting_at`]: a counterexample scenario's
+//!   `[counterexample.start]`) begins its mission then: until that instant
+//!   its player and its vehicle do nothing, and the messages it receives
+//!   wait in its inbox (applied at its start, as above).
 //!   [`run_virtual_with_link`] carries the messages over a modelled
 //!   acoustic link instead ([`crate::acoustic`]): each arrives when the link
 //!   delivers it (delays, losses, retransmissions), an event of the same
@@ -98,6 +102,7 @@ pub struct Vehicle {
     journal: Option<JournalWriter>,
     resume: Option<Vec<Entry>>,
     crash_after: Option<u64>,
+    start_at: f64,
 }
 
 impl Vehicle {
@@ -130,7 +135,15 @@ impl Vehicle {
             journal: None,
             resume: None,
             crash_after: None,
+            start_at: 0.0,
         })
+    }
+
+    /// The vehicle's mission begins at `t` seconds of virtual time
+    /// ([`run_virtual`]; 0, the default: at once), not before.
+    pub fn starting_at(mut self, t: f64) -> Self {
+        self.start_at = if t.is_finite() { t.max(0.0) } else { 0.0 };
+        self
     }
 
     /// Journals the vehicle's inputs, firings and messages in `journal`
@@ -212,6 +225,8 @@ struct Live<'a> {
     ended_sent: bool,
     /// [`ENDED`] messages received.
     peers_ended: usize,
+    /// When its mission begins (virtual time).
+    start_at: f64,
 }
 
 impl Live<'_> {
@@ -682,6 +697,7 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
             resend: Vec::new(),
             ended_sent: false,
             peers_ended: 0,
+            start_at: v.start_at,
         })
         .collect()
 }
@@ -761,9 +777,13 @@ pub async fn run_virtual_with_link(
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
     let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel };
     // Vehicles start one after the other at 0, each after the messages of
-    // the previous ones' first firings.
+    // the previous ones' first firings; those given a later start time
+    // start then (`Due::Start`).
     fleet.settle().await?;
     for i in 0..fleet.vs.len() {
+        if fleet.vs[i].start_at > 0.0 {
+            continue;
+        }
         let outs = fleet.vs[i].start(0.0)?;
         fleet.work.push_back((i, outs));
         fleet.settle().await?;
@@ -827,7 +847,7 @@ struct Fleet<'a> {
 }
 
 /// The [`Discrete`] source of the modelled link's events.
-const LINK: (usize, bool) = (usize::MAX, false);
+const LINK: (usize, Due) = (usize::MAX, Due::Link);
 
 impl Fleet<'_> {
     /// Settles the consequences of the last inputs, messages included, at
@@ -878,9 +898,22 @@ impl Fleet<'_> {
     }
 }
 
+/// What is due for a vehicle of a virtual-time run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Due {
+    /// Its player's timers.
+    Timer,
+    /// Its vehicle's messages.
+    Vehicle,
+    /// Its mission's start.
+    Start,
+    /// The modelled link's deliveries ([`LINK`], not a vehicle's).
+    Link,
+}
+
 impl Discrete for Fleet<'_> {
-    /// The vehicle, and whether its timers (else its vehicle's messages).
-    type Source = (usize, bool);
+    /// The vehicle, and what is due for it.
+    type Source = (usize, Due);
 
     fn is_over(&mut self) -> bool {
         for v in self.vs.iter_mut().filter(|v| v.end.is_none()) {
@@ -891,17 +924,21 @@ impl Discrete for Fleet<'_> {
         self.vs.iter().all(|v| v.end.is_some())
     }
 
-    fn deadlines(&self, out: &mut Vec<(f64, (usize, bool))>) {
+    fn deadlines(&self, out: &mut Vec<(f64, (usize, Due))>) {
         for (i, v) in self.vs.iter().enumerate().filter(|(_, v)| v.end.is_none()) {
-            out.extend(v.s.player.next_deadline().map(|t| (t, (i, true))));
-            out.extend(v.mock.next_deadline().map(|t| (t, (i, false))));
+            if !v.s.player.is_started() {
+                out.push((v.start_at, (i, Due::Start)));
+                continue;
+            }
+            out.extend(v.s.player.next_deadline().map(|t| (t, (i, Due::Timer))));
+            out.extend(v.mock.next_deadline().map(|t| (t, (i, Due::Vehicle))));
         }
         out.extend(self.channel.as_ref().and_then(Channel::next_deadline).map(|t| (t, LINK)));
     }
 
-    async fn step(&mut self, t: f64, (i, timer): (usize, bool)) -> Result<(), String> {
+    async fn step(&mut self, t: f64, (i, due): (usize, Due)) -> Result<(), String> {
         self.now = self.now.max(t);
-        if (i, timer) == LINK {
+        if due == Due::Link {
             let Some(c) = &mut self.channel else { return Ok(()) };
             for m in c.step(t)? {
                 let j = *self.index.get(&m.to).ok_or_else(|| format!("a message for an unknown mission `{}`", m.to))?;
@@ -916,7 +953,10 @@ impl Discrete for Fleet<'_> {
             return self.settle().await;
         }
         let v = &mut self.vs[i];
-        if timer {
+        if due == Due::Start {
+            let outs = v.start(t)?;
+            self.work.push_back((i, outs));
+        } else if due == Due::Timer {
             let outs = v.s.step(Input::Timer(t))?;
             self.work.push_back((i, outs));
         } else if let Some((tm, m)) = v.mock.pop_due(t) {

@@ -1107,7 +1107,11 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         };
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(transports) {
-            let v = mcl_runtime::multi::Vehicle::new(&name, net, opts, tracer, mock, tr)?;
+            let mut v = mcl_runtime::multi::Vehicle::new(&name, net, opts, tracer, mock, tr)?;
+            // A counterexample may start a vehicle late (`[counterexample.start]`).
+            if let Some(t) = counterexample.as_ref().and_then(|e| e.start.get(&name)).filter(|_| o.virtual_time) {
+                v = v.starting_at(*t);
+            }
             vs.push(match journal_writer.take() {
                 Some(w) => v.with_journal(w, resume_entries.clone(), o.crash_after),
                 None => v,

@@ -2,7 +2,8 @@
 //! per-vehicle firing rule (`mcl_net::semantics::select_ready`: immediate
 //! transitions first, by priority; then deferred ones, by priority; then
 //! events and timers), with the supervisor effect of each transition as its
-//! label.
+//! label. A mission stops where the player stops it: once a final place
+//! is marked in a stable marking, nothing of it fires any more (`Lts::fin`).
 //!
 //! A transition that a supervisor controls (*gated*) may be held, so the
 //! ready set is computed without the gated transitions (all held), and each
@@ -63,7 +64,11 @@ pub(super) struct Lts {
     edges: Vec<Edge>,
     goff: Vec<u32>,
     gated: Vec<u32>,
-    /// Markings in which the mission has ended.
+    /// Markings in which the mission has ended as the player ends it: a
+    /// final place marked and the marking stable (nothing immediate nor
+    /// zero-delay ready). Such a marking has no edge but those of the
+    /// gated immediate transitions waiting in it (allowed, they fire before
+    /// the player looks; held, the mission has ended).
     pub(super) fin: Vec<bool>,
 }
 
@@ -141,7 +146,7 @@ pub(super) fn build_lts(
         }
         cur.clear();
         cur.extend_from_slice(&lts.marks[next * np..(next + 1) * np]);
-        lts.fin.push(m.final_places.iter().any(|p| cur[p.index()] > 0));
+        let final_marked = m.final_places.iter().any(|p| cur[p.index()] > 0);
         ready.clear();
         gated_en.clear();
         for t in net.transition_ids() {
@@ -159,11 +164,21 @@ pub(super) fn build_lts(
         select_ready(net, &mut ready);
         waiting.clear();
         out.clear();
+        // The player's end: a final place marked in a stable marking (no
+        // immediate nor zero-delay transition ready, gated ones held); from
+        // there it fires nothing more. Only a gated immediate transition
+        // that its supervisors allow would still fire first.
+        let settles = |t: TransitionId| net.transitions()[t.index()].kind.is_deferred() || imm[t.index()];
+        let ended = final_marked && !ready.iter().any(|&t| settles(t));
+        lts.fin.push(ended);
         // A gated transition is ready when allowed if the rule picks it
         // beside the best of the others (the ready ones all rank alike).
         for &t in &gated_en {
             if imm[t.index()] {
                 waiting.push(v(t));
+            }
+            if ended && !settles(t) {
+                continue;
             }
             pair.clear();
             pair.extend(ready.first().copied());
@@ -176,7 +191,7 @@ pub(super) fn build_lts(
         // Non-immediate transitions wait for every waiting gated immediate
         // one to be held.
         let blocked = |t: TransitionId| !imm[t.index()] && !waiting.is_empty();
-        for &t in &ready {
+        for &t in ready.iter().filter(|_| !ended) {
             out.push((lab(v(t), blocked(t)), t.0));
         }
         for &(label, t) in &out {

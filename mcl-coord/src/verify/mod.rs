@@ -284,7 +284,8 @@ fn verify_mode(
         }
     }
     let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
-    let rules = ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts };
+    let finals: Vec<Vec<PlaceId>> = plant.parts.iter().map(|p| p.final_places.clone()).collect();
+    let rules = ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals };
 
     // Vehicles that no supervisor links are independent: each group of
     // linked vehicles is verified alone (docs/coordination.md).

@@ -36,6 +36,17 @@ pub(super) struct ReplayRules<'a> {
     /// places is marked (the off-nominal answers of
     /// [`super::verify_quiet`]; empty: no such rule).
     pub(super) quiet: &'a [Vec<PlaceId>],
+    /// The final places of each vehicle (`mission.ok`, `mission.fail`, plant
+    /// ids): once one is marked in a marking stable for its vehicle, the
+    /// vehicle has ended and fires nothing more, as the player.
+    pub(super) finals: &'a [Vec<PlaceId>],
+}
+
+/// The end of a replay: the marking reached and, per vehicle, whether its
+/// mission has ended.
+pub(super) struct Replayed {
+    pub(super) marking: Marking,
+    pub(super) ended: Vec<bool>,
 }
 
 impl ReplayRules<'_> {
@@ -45,14 +56,19 @@ impl ReplayRules<'_> {
     /// (`mcl_net::semantics::select_ready`) among the enabled transitions
     /// of its vehicle, so an event or a timer fires only in a marking
     /// tangible for its vehicle, and a deferred transition only before the
-    /// events and after those of higher priority.
-    fn replay(&self, snet: &Net, nsups: usize, path: &[TransitionId]) -> Option<Marking> {
+    /// events and after those of higher priority. A vehicle whose mission
+    /// has ended (a final place marked in a marking stable for it) fires
+    /// nothing more.
+    fn replay(&self, snet: &Net, nsups: usize, path: &[TransitionId]) -> Option<Replayed> {
         let mut m = snet.initial_marking();
         let mut tracker = EnabledTracker::new(snet, &m).ok()?;
         let np = snet.place_count().checked_sub(nsups)?;
         let mut ready = Vec::new();
+        let mut ended = vec![false; self.vehicles.len()];
+        self.mark_ended(snet, &tracker, &m, &mut ended);
         for &t in path {
-            if !self.ready(snet, &tracker, &m, t, &mut ready) {
+            let v = self.vehicles.iter().position(|r| r.contains(&t.0));
+            if v.is_none_or(|v| ended[v]) || !self.ready(snet, &tracker, &m, t, &mut ready) {
                 return None;
             }
             tracker.fire(snet, &mut m, t).ok()?;
@@ -66,8 +82,33 @@ impl ReplayRules<'_> {
                 // A token taken outside the net's arcs: enabledness anew.
                 tracker = EnabledTracker::new(snet, &m).ok()?;
             }
+            self.mark_ended(snet, &tracker, &m, &mut ended);
         }
-        Some(m)
+        Some(Replayed { marking: m, ended })
+    }
+
+    /// Marks the vehicles whose mission ends in `m`: a final place marked
+    /// and no immediate nor zero-delay transition of theirs enabled (the
+    /// player's end, `mcl_runtime::player`).
+    fn mark_ended(&self, snet: &Net, tracker: &EnabledTracker, m: &Marking, ended: &mut [bool]) {
+        for (v, range) in self.vehicles.iter().enumerate() {
+            if ended[v] || !self.finals.get(v).is_some_and(|ps| ps.iter().any(|&p| m.get(p) > 0)) {
+                continue;
+            }
+            let mine = |u: &&TransitionId| range.contains(&u.0) && !self.silent(m, **u);
+            let settling = tracker.enabled_immediate().iter().any(|u| mine(&u))
+                || tracker
+                    .enabled_non_immediate()
+                    .iter()
+                    .filter(mine)
+                    .any(|&u| snet.transitions()[u.index()].kind.is_deferred());
+            ended[v] = !settling;
+        }
+    }
+
+    /// True when `t` belongs to a vehicle that has ended.
+    fn of_ended(&self, ended: &[bool], t: TransitionId) -> bool {
+        self.vehicles.iter().position(|r| r.contains(&t.0)).is_some_and(|v| ended[v])
     }
 
     /// True when `t` is ready in `m` for its vehicle (`buf`: scratch).
@@ -180,9 +221,11 @@ pub(super) fn concretize(
         }
     }
     // Replay with exact counts.
-    let m = replay.rules.replay(snet, replay.nsups, &path)?;
+    let Replayed { marking: m, ended } = replay.rules.replay(snet, replay.nsups, &path)?;
+    // What can still fire: the transitions of the vehicles that have not
+    // ended (an ended vehicle is not deadlocked, whatever is enabled in it).
     let mut enabled = mcl_net::semantics::enabled(snet, &m);
-    enabled.retain(|&t| !replay.rules.silent(&m, t));
+    enabled.retain(|&t| !replay.rules.silent(&m, t) && !replay.rules.of_ended(&ended, t));
     let mut kind = kind;
     match replay.group_ts {
         None => {
@@ -195,8 +238,11 @@ pub(super) fn concretize(
             // input places marked (no other vehicle touches them); the
             // whole net is dead only if the other vehicles are too.
             if kind == WitnessKind::Dead {
-                let live =
-                    ts.iter().any(|&t| snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w) && !replay.rules.silent(&m, t));
+                let live = ts.iter().any(|&t| {
+                    snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w)
+                        && !replay.rules.silent(&m, t)
+                        && !replay.rules.of_ended(&ended, t)
+                });
                 if live {
                     return None;
                 }
@@ -208,7 +254,7 @@ pub(super) fn concretize(
     }
     let np_plant = snet.place_count() - replay.nsups;
     let mut held = Vec::new();
-    for t in snet.transition_ids() {
+    for t in snet.transition_ids().filter(|&t| !replay.rules.of_ended(&ended, t)) {
         let pre = snet.pre(t);
         let plant_ok = pre.iter().filter(|(p, _)| p.index() < np_plant).all(|&(p, w)| m.get(p) >= w);
         let missing: Vec<usize> = pre
@@ -254,7 +300,7 @@ mod tests {
     fn a_step_replays_only_if_its_vehicle_could_choose_it() {
         let snet = net();
         let vehicles = [0..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[] };
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[] };
         let replays = |path: &[u32]| {
             let path: Vec<TransitionId> = path.iter().map(|&t| TransitionId(t)).collect();
             rules.replay(&snet, 0, &path).is_some()
@@ -276,7 +322,7 @@ mod tests {
         // vehicle 1..4 sees only `e`, `lo` and `hi`; `hi` goes first.
         let snet = net();
         let vehicles = [1..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[] };
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[] };
         let m = snet.initial_marking();
         let tracker = EnabledTracker::new(&snet, &m).unwrap();
         let mut buf = Vec::new();
