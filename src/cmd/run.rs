@@ -71,6 +71,9 @@ pub struct Options {
     /// Write an SVG chronogram of the run here.
     #[arg(long, value_name = "FILE")]
     pub chronogram: Option<PathBuf>,
+    /// Write the trace's records as an MCAP file here, for Foxglove (docs/mcap.md).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
     /// Journal every firing and received event here, to --resume after a crash.
     #[arg(long, value_name = "FILE")]
     pub journal: Option<PathBuf>,
@@ -259,6 +262,17 @@ struct RunSink {
     /// The last notice of the link to the AAC: `-q` prints none, but says
     /// the last one when the run fails.
     last_link: Option<String>,
+    /// `--mcap FILE`: the same records as MCAP messages.
+    mcap: Option<McapOut>,
+}
+
+type McapOut = mcl_mcap::McapTrace<std::io::BufWriter<std::fs::File>>;
+
+/// The MCAP writer of `--mcap FILE`.
+fn open_mcap(path: &Option<PathBuf>) -> Result<Option<McapOut>, u8> {
+    let Some(p) = path else { return Ok(None) };
+    let file = super::trace_to_mcap::create(p)?;
+    mcl_mcap::McapTrace::new(file).map(Some).map_err(|e| usage(&format!("`{}`: {e}", p.display())))
 }
 
 impl RunSink {
@@ -268,6 +282,11 @@ impl RunSink {
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.flush() {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        if let Some(m) = self.mcap.take() {
+            if let Err(e) = m.finish() {
+                self.error.get_or_insert(e.to_string());
             }
         }
         let end = result.map_err(|e| {
@@ -296,6 +315,11 @@ impl Sink for RunSink {
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.write(r) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        if let Some(m) = &mut self.mcap {
+            if let Err(e) = m.record(r) {
+                self.error.get_or_insert(e.to_string());
             }
         }
         if self.live && !self.quiet_replay {
@@ -557,6 +581,10 @@ pub fn run(o: Options) -> u8 {
         Ok(t) => t,
         Err(code) => return code,
     };
+    let mcap = match open_mcap(&o.mcap) {
+        Ok(m) => m,
+        Err(code) => return code,
+    };
     let mut sink = RunSink {
         trace,
         live: !o.quiet,
@@ -565,6 +593,7 @@ pub fn run(o: Options) -> u8 {
         records: Vec::new(),
         error: None,
         last_link: None,
+        mcap,
     };
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
@@ -1046,6 +1075,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(t) => t,
         Err(code) => return code,
     };
+    let mcap = match open_mcap(&o.mcap) {
+        Ok(m) => m,
+        Err(code) => return code,
+    };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         trace,
         live: !o.quiet,
@@ -1054,6 +1087,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         records: Vec::new(),
         error: None,
         last_link: None,
+        mcap,
     }));
     let mut sources = SourceMap::new();
     let mut parts = Vec::new();
