@@ -190,3 +190,28 @@ fn errors_and_unreadable_files() {
     let out = mcl(&["interface", "no/such/file.mcl"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// A symbolic argument without a value is sent as its own name
+/// (docs/aac-protocol.md §11): a run against a vehicle says so at start,
+/// naming each one and the `--set` that gives it a value.
+#[test]
+fn a_run_against_a_vehicle_names_its_symbols_without_a_value() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let addr = format!("127.0.0.1:{port}");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "--aac", &addr, "-q", "--connect-timeout", "0.2", "examples/survey.mcl"];
+        args.extend_from_slice(extra);
+        let out = mcl(&args);
+        assert_eq!(out.status.code(), Some(2), "nobody listens");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run(&[]);
+    assert!(
+        err.contains("warning: symbolic arguments without a value, sent to the vehicle as their own names: altitude, timeout, velocity (give each a value with --set altitude=VALUE)"),
+        "{err}"
+    );
+    let err = run(&["--set", "altitude=2.5", "--set", "timeout=60"]);
+    assert!(err.contains("as its own name: velocity (give it a value with --set velocity=VALUE)"), "{err}");
+    let err = run(&["--set", "altitude=2.5", "--set", "timeout=60", "--set", "velocity=0.5"]);
+    assert!(!err.contains("symbolic"), "{err}");
+}
