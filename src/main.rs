@@ -123,6 +123,18 @@ enum Command {
         #[arg(long)]
         mission: Option<String>,
     },
+    /// Convert a trace written by `mcl run --trace` to an MCAP file for Foxglove (docs/mcap.md).
+    ///
+    /// One channel per kind of record (actions, events, firings, poses, outcomes, coordination
+    /// messages...), JSON messages with JSON schemas, logged at their mission time. Exit status: 0
+    /// when written, 2 when the trace cannot be read or the file cannot be written.
+    TraceToMcap {
+        /// A JSONL trace.
+        trace: PathBuf,
+        /// The MCAP file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Run the mock vehicle as an AAC server speaking the TCP protocol (docs/aac-protocol.md).
     ///
     /// Prints `listening on ADDR` on standard output, then logs every message on standard error.
@@ -259,6 +271,7 @@ fn main() -> ExitCode {
             })
         }
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
+        Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)
         }

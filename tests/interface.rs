@@ -17,14 +17,15 @@ fn primitive<'a>(i: &'a Value, name: &str) -> &'a Value {
     i["primitives"].as_array().unwrap().iter().find(|p| p["primitive"] == name).unwrap_or_else(|| panic!("{name}"))
 }
 
-#[test]
-fn a_vehicle_with_names_that_follow_no_convention() {
-    let dir = std::env::temp_dir().join(format!("mcl-interface-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// A vehicle whose names follow no convention, and `mission`.
+fn boat(dir: &std::path::Path, mission: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
     let file = dir.join("boat.mcl");
-    std::fs::write(
-        &file,
-        r#"
+    std::fs::write(&file, format!("{BOAT}\n{mission}\n")).unwrap();
+    file
+}
+
+const BOAT: &str = r#"
 actions {
     goThere = NavPrimitive( c: start, v: target, v: speed );
     halt = NavPrimitive( c: stop );
@@ -52,10 +53,22 @@ tasks {
         e: obstacleSeen -> T2; e: sonarBroken -> T3;
     }
 }
-mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0], 1 ) } }
-"#,
-    )
-    .unwrap();
+"#;
+
+/// The role `hello.events` gives to an event of `mcl interface`'s role.
+fn hello_role(interface_role: &str) -> &str {
+    match interface_role {
+        "ends_ok" => "ok",
+        "ends_fail" => "fail",
+        "condition" => "condition",
+        r => panic!("no hello role for {r}"),
+    }
+}
+
+#[test]
+fn a_vehicle_with_names_that_follow_no_convention() {
+    let dir = std::env::temp_dir().join(format!("mcl-interface-{}", std::process::id()));
+    let file = boat(&dir, "mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0], 1 ) } }");
     let out = mcl(&["interface", file.to_str().unwrap(), "--format", "json"]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let i: Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -71,7 +84,10 @@ mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0],
     assert_eq!(role(nav, "navProgress"), "other");
     assert_eq!(nav["monitor_condition"], false);
     let sonar = primitive(&i, "SonarPrimitive");
-    assert_eq!(role(sonar, "obstacleSeen"), "ends_ok");
+    // A monitor's condition: its ok event raises the `do` block, and the
+    // vehicle must not send it as a plain answer.
+    assert_eq!(role(sonar, "obstacleSeen"), "condition");
+    assert_eq!(role(sonar, "sonarBroken"), "ends_fail");
     assert_eq!(sonar["monitor_condition"], true);
 
     let md = mcl(&["interface", file.to_str().unwrap()]);
@@ -84,23 +100,64 @@ mission { monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0],
 
     // The player announces the same roles in its `hello` (docs/aac-protocol.md §3).
     let hello = first_hello(&file);
-    assert_eq!(hello["type"], "hello");
-    let ends = hello["events"].as_array().expect("hello.events");
-    for p in i["primitives"].as_array().unwrap() {
-        for e in p["events"].as_array().unwrap() {
-            let said = ends.iter().find(|x| x["event"] == e["event"]);
-            match e["role"].as_str().unwrap() {
-                "ends_ok" | "ends_fail" => {
-                    let said = said.unwrap_or_else(|| panic!("{} not in hello: {hello}", e["event"]));
-                    assert_eq!(said["role"], if e["role"] == "ends_ok" { "ok" } else { "fail" }, "{hello}");
-                    assert_eq!(said["primitive"], p["primitive"], "{hello}");
-                }
-                _ => assert!(said.is_none(), "{} ends nothing but hello lists it: {hello}", e["event"]),
-            }
-        }
-    }
+    assert_same_roles(&i, &hello);
+    let ends = hello["events"].as_array().unwrap();
     let nav = ends.iter().find(|x| x["event"] == "navReady").unwrap();
     assert_eq!(nav["task"], "Nav");
+    let seen = ends.iter().find(|x| x["event"] == "obstacleSeen").unwrap();
+    assert_eq!((seen["role"].as_str(), seen["call_sites"].as_array().map(Vec::len)), (Some("condition"), Some(1)));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `mcl interface` and the player's `hello.events` give every event the
+/// same roles, and `hello` lists exactly the events that end a task.
+fn assert_same_roles(i: &Value, hello: &Value) {
+    assert_eq!(hello["type"], "hello");
+    let ends = hello["events"].as_array().expect("hello.events");
+    let mut expected = 0;
+    for p in i["primitives"].as_array().unwrap() {
+        for e in p["events"].as_array().unwrap() {
+            let role = e["role"].as_str().unwrap();
+            let said: Vec<&Value> =
+                ends.iter().filter(|x| x["event"] == e["event"] && x["task"] == e["task"]).collect();
+            if role == "other" {
+                assert!(said.is_empty(), "{} ends nothing but hello lists it: {hello}", e["event"]);
+                continue;
+            }
+            expected += 1;
+            let said = said
+                .iter()
+                .find(|x| x["role"] == hello_role(role))
+                .unwrap_or_else(|| panic!("{} ({role}) not in hello: {hello}", e["event"]));
+            assert_eq!(said["primitive"], p["primitive"], "{hello}");
+        }
+    }
+    assert_eq!(ends.len(), expected, "hello lists more than the interface: {hello}");
+}
+
+/// A task called both as a monitor's condition and as a step: its ok event
+/// has both roles, and `hello` names the condition's call.
+#[test]
+fn a_task_called_as_a_condition_and_as_a_step() {
+    let dir = std::env::temp_dir().join(format!("mcl-interface-both-{}", std::process::id()));
+    let file = boat(
+        &dir,
+        "mission { Sonar() ; monitor { Nav( [1, 2], 0.5 ) } condition ( Sonar() ) do { Nav( [0, 0], 1 ) } }",
+    );
+    let out = mcl(&["interface", file.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let sonar = primitive(&i, "SonarPrimitive");
+    let roles: Vec<&str> = sonar["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["event"] == "obstacleSeen")
+        .map(|e| e["role"].as_str().unwrap())
+        .collect();
+    assert_eq!(roles, ["ends_ok", "condition"]);
+    let hello = first_hello(&file);
+    assert_same_roles(&i, &hello);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -132,4 +189,29 @@ fn errors_and_unreadable_files() {
     assert_eq!(out.status.code(), Some(1));
     let out = mcl(&["interface", "no/such/file.mcl"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// A symbolic argument without a value is sent as its own name
+/// (docs/aac-protocol.md §11): a run against a vehicle says so at start,
+/// naming each one and the `--set` that gives it a value.
+#[test]
+fn a_run_against_a_vehicle_names_its_symbols_without_a_value() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let addr = format!("127.0.0.1:{port}");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "--aac", &addr, "-q", "--connect-timeout", "0.2", "examples/survey.mcl"];
+        args.extend_from_slice(extra);
+        let out = mcl(&args);
+        assert_eq!(out.status.code(), Some(2), "nobody listens");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run(&[]);
+    assert!(
+        err.contains("warning: symbolic arguments without a value, sent to the vehicle as their own names: altitude, timeout, velocity (give each a value with --set altitude=VALUE)"),
+        "{err}"
+    );
+    let err = run(&["--set", "altitude=2.5", "--set", "timeout=60"]);
+    assert!(err.contains("as its own name: velocity (give it a value with --set velocity=VALUE)"), "{err}");
+    let err = run(&["--set", "altitude=2.5", "--set", "timeout=60", "--set", "velocity=0.5"]);
+    assert!(!err.contains("symbolic"), "{err}");
 }

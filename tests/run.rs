@@ -4,7 +4,6 @@
 
 use mcl_runtime::trace::{Call, Ends, Record, RecordKind};
 use mcl_testutil::browser;
-use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -40,7 +39,7 @@ struct Act<'a> {
     action: &'a str,
     primitive: &'a str,
     command: &'a str,
-    params: &'a Map<String, Value>,
+    params: &'a mcl_runtime::params::Params,
     call: &'a Call,
     queued: bool,
 }
@@ -1085,10 +1084,15 @@ fn unreachable_aac_is_told_in_the_live_log() {
     let tr = trace(&tp);
     assert!(tr.iter().filter(|r| matches!(r.kind, RecordKind::Link { .. })).count() >= 2);
     assert!(acts(&tr).is_empty());
-    // -q: no live log, but the link's news on standard error.
+    // -q: no live log and no link lines; the error says the link's last notice.
     let out = mcl(&["run", "--aac", &addr, "-q", "--connect-timeout", "1", "examples/extract-5-4.mcl"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(stderr(&out).contains("link: cannot connect to"), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(!err.lines().any(|l| l.starts_with("link")), "{err}");
+    assert_eq!(err.lines().filter(|l| l.contains("retrying in")).count(), 1, "only the last notice: {err}");
+    assert!(err.contains("no vehicle answered within 1 s"), "{err}");
+    assert!(err.contains("the link's last notice: cannot connect to"), "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).is_empty());
 }
 
 /// The mission clock starts when the vehicle is connected: an AAC that

@@ -2,13 +2,12 @@
 //! AAC written from `docs/aac-protocol.md` alone (no other AAC read), runs
 //! the bundled single-vehicle missions to `ok` along their nominal path.
 //!
-//! The AAC answers every enabled primitive with its `ok` event from
-//! `hello.events`, except keep modes (`"mode": "keep"`) and the primitives a
-//! monitor watches, which it is told with `--silent` from `mcl interface
-//! FILE --format json` (`monitor_condition`): `hello.events` lists a
-//! monitor's condition (`eventAlarmOk`) as an ok event like any other, so
-//! an AAC that answers it raises the alarm (survey) or loops for ever
-//! (cable-tracking's `InvalidPositioning`).
+//! The AAC answers every enabled primitive with the `ok` event of the
+//! action's task from `hello.events`, except keep modes (`"mode": "keep"`)
+//! and the calls `hello.events` lists with role `condition` (a monitor's
+//! condition, `eventAlarmOk`: answering it would raise the alarm in survey,
+//! or loop for ever in cable-tracking's `InvalidPositioning`). It reads
+//! nothing but the protocol (no `mcl interface`).
 
 use std::net::TcpListener;
 use std::process::{Child, Command, Stdio};
@@ -31,28 +30,11 @@ fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
-/// The primitives that the mission watches as a monitor's condition.
-fn monitor_conditions(file: &str) -> Vec<String> {
-    let out = Command::new(MCL).args(["interface", file, "--format", "json"]).output().unwrap();
-    assert!(out.status.success(), "mcl interface {file}: {}", String::from_utf8_lossy(&out.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    json["primitives"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|p| p["monitor_condition"] == true)
-        .map(|p| p["primitive"].as_str().unwrap().to_string())
-        .collect()
-}
-
 fn run_against_stranger(file: &str) {
     assert!(std::path::Path::new(file).exists(), "{file} is missing");
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
-    let mut args = vec!["tests/stranger_aac/aac.py".to_string(), addr.clone()];
-    for p in monitor_conditions(file) {
-        args.extend(["--silent".to_string(), p]);
-    }
+    let args = ["tests/stranger_aac/aac.py".to_string(), addr.clone()];
     let _aac = Aac(Command::new("python3")
         .args(&args)
         .stdout(Stdio::null())

@@ -376,7 +376,8 @@ class AacServer(object):
         if self.token is not None and msg.get("token") != self.token:
             self._error(conn, "unauthorized", "wrong token" if "token" in msg else "this AAC requires a token")
             return None
-        key = (str(msg.get("mission") or ""), str(msg.get("run") or ""))
+        # No `run`: nothing to resume, a session of its own (§2).
+        key = (str(msg.get("mission") or ""), str(msg.get("run") or "unnamed-" + os.urandom(8).hex()))
         with self._lock:
             s = self._sessions.get(key)
             created = s is None

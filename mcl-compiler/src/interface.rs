@@ -2,15 +2,15 @@
 //! commands the player sends (each with its action name and its parameters
 //! in declaration order) and the events the vehicle may send, each with the
 //! role the compiled tasks give it (ends the task ok, ends it fail, or
-//! neither) — taken from the program, never from names — and whether a
-//! mission watches it as a monitor's condition. An AAC written against this
-//! runs the program's missions along their nominal path.
+//! neither, or raises a monitor's `do` block: `condition`) — taken from the
+//! program and its compiled missions, never from names, the same roles as
+//! the player's `hello.events`. An AAC written against this runs the
+//! program's missions along their nominal path.
 
 use crate::compile::task_outcome_events;
 use crate::db::{Db, SourceFile};
 use crate::scope::{self, DefKind};
-use mcl_syntax::ast::{BindingKind, Item, StmtKind, ValueKind};
-use mcl_syntax::visit::walk_block;
+use mcl_syntax::ast::{BindingKind, ValueKind};
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -60,6 +60,10 @@ pub struct EventInterface {
 pub enum EventRole {
     /// The primitive reached its goal: the task ends ok.
     EndsOk,
+    /// The task's ok event, for a call that is a monitor's condition: it
+    /// raises the monitor's `do` block, so the vehicle sends it only when
+    /// what it watches happens (the player's `hello` role `condition`).
+    Condition,
     /// The primitive failed: the task ends in fail.
     EndsFail,
     /// Neither (progress, or a step inside the task's pattern).
@@ -71,6 +75,7 @@ impl EventRole {
     pub fn describe(self) -> &'static str {
         match self {
             EventRole::EndsOk => "ends the task ok",
+            EventRole::Condition => "a monitor's condition: sent only when what it watches happens",
             EventRole::EndsFail => "ends the task in fail",
             EventRole::Other => "neither ends the task ok nor in fail",
         }
@@ -102,22 +107,19 @@ pub fn vehicle_interface(db: &dyn Db, root: SourceFile) -> VehicleInterface {
             params,
         });
     }
-    // Tasks called as a monitor's condition, in any mission of the program.
+    // How the compiled missions of the file call each task: as a monitor's
+    // condition, or otherwise (the player's `hello.events` reads the same
+    // bindings, `mcl_net::Net::task_calls`).
     let mut watched: BTreeSet<String> = BTreeSet::new();
-    for f in crate::queries::program(db, root).files.iter() {
-        for item in &crate::queries::parse(db, *f).file.items {
-            let Item::Mission(m) = item else { continue };
-            walk_block(&m.body, &mut |s| {
-                if let StmtKind::Monitor { handlers, .. } = &s.kind {
-                    for h in handlers {
-                        walk_block(&h.condition, &mut |c| {
-                            if let StmtKind::Call(call) = &c.kind {
-                                watched.insert(call.name.text.clone());
-                            }
-                        });
-                    }
-                }
-            });
+    let mut plain: BTreeSet<String> = BTreeSet::new();
+    for m in crate::compile::compile_file_unverified(db, root).unwrap_or_default() {
+        for (task, calls) in m.net.task_calls() {
+            if !calls.condition.is_empty() {
+                watched.insert(task.to_string());
+            }
+            if !calls.other.is_empty() {
+                plain.insert(task.to_string());
+            }
         }
     }
     // Events, through the tasks that drive each primitive.
@@ -138,17 +140,30 @@ pub fn vehicle_interface(db: &dyn Db, root: SourceFile) -> VehicleInterface {
             p.primitive = prim;
             p.tasks.push(name.to_string());
             p.monitor_condition |= watched.contains(name);
+            // A task only watched has no plain ok end; one called both ways
+            // has both roles (the action's `call_site` tells them apart).
+            let is_watched = watched.contains(name);
+            let is_plain = plain.contains(name) || !is_watched;
             for b in task.bindings.iter().filter(|b| b.kind == BindingKind::Event) {
                 let event = b.target.text.clone();
-                let role = if ok.contains(&event) {
-                    EventRole::EndsOk
+                let roles: Vec<EventRole> = if ok.contains(&event) {
+                    let mut r = Vec::new();
+                    if is_plain {
+                        r.push(EventRole::EndsOk);
+                    }
+                    if is_watched {
+                        r.push(EventRole::Condition);
+                    }
+                    r
                 } else if fail.contains(&event) {
-                    EventRole::EndsFail
+                    vec![EventRole::EndsFail]
                 } else {
-                    EventRole::Other
+                    vec![EventRole::Other]
                 };
-                if !p.events.iter().any(|e| e.event == event && e.task == name) {
-                    p.events.push(EventInterface { event, role, task: name.to_string() });
+                for role in roles {
+                    if !p.events.iter().any(|e| e.event == event && e.task == name && e.role == role) {
+                        p.events.push(EventInterface { event: event.clone(), role, task: name.to_string() });
+                    }
                 }
             }
         }

@@ -56,7 +56,7 @@ pub use engine::{Engine, Hooks, Livelock};
 pub use explore::{analyze, explore, AnalysisReport, Options, Semantics, StateId, StateSpace};
 pub use model::{
     ActionRef, Arc, CallBinding, Delay, Handler, HandlerKind, Marking, Name, Net, NetBuilder, NetError, NodeId, Place,
-    PlaceId, Provenance, SharedText, SourceSpan, TaskEvents, Transition, TransitionId, TransitionKind,
+    PlaceId, Provenance, SharedText, SourceSpan, TaskCalls, TaskEvents, Transition, TransitionId, TransitionKind,
     HANDLERS_PROPERTY,
 };
 pub use pnml::{read_pnml, read_pnml_nets, write_pnml, write_pnml_to, PnmlError};

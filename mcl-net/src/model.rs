@@ -23,6 +23,16 @@ pub struct TaskEvents {
     pub fail: Vec<String>,
 }
 
+/// The calls of one task in a mission ([`Net::task_calls`]), by call site.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TaskCalls {
+    /// Calls inside a monitor's condition (binding role `monitor_condition`):
+    /// the task's ok event raises the monitor's `do` block.
+    pub condition: Vec<u32>,
+    /// Every other call.
+    pub other: Vec<u32>,
+}
+
 /// A transition through which a mission leaves its nominal path: a
 /// `try`'s block failed and its `catch` starts, or a monitor's condition
 /// ended and its `do` block is about to run. The compiler lists them in the
@@ -468,6 +478,26 @@ impl Net {
             .filter_map(|(_, v)| serde_json::from_str::<Vec<Handler>>(v).ok())
             .flatten()
             .collect()
+    }
+
+    /// The calls of each task, from the start transitions' bindings, split
+    /// into monitor conditions and the others; by task name, call sites in
+    /// increasing order.
+    pub fn task_calls(&self) -> std::collections::BTreeMap<&str, TaskCalls> {
+        let mut out: std::collections::BTreeMap<&str, TaskCalls> = Default::default();
+        for b in self.transitions.iter().filter_map(|t| t.binding.as_deref()) {
+            let calls = out.entry(b.task.as_str()).or_default();
+            let list =
+                if b.role.as_deref() == Some("monitor_condition") { &mut calls.condition } else { &mut calls.other };
+            if !list.contains(&b.call_site) {
+                list.push(b.call_site);
+            }
+        }
+        for c in out.values_mut() {
+            c.condition.sort_unstable();
+            c.other.sort_unstable();
+        }
+        out
     }
 
     /// The events that end each task in ok and in fail: the properties

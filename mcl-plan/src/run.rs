@@ -134,6 +134,14 @@ enum Vehicle<'a> {
 /// Receives each trace record (JSON) with its live-log line.
 pub trait RecordSink {
     fn record(&mut self, record: Json, live: Option<String>);
+
+    /// A record of the player's kinds (an action, an event, a pose...).
+    /// By default as JSON; a sink that writes trace lines should write the
+    /// record itself, whose fields (an action's `params` included) keep
+    /// their order, as `mcl run` writes them.
+    fn record_typed(&mut self, record: &Record, live: Option<String>) {
+        self.record(serde_json::to_value(record).unwrap_or_default(), live);
+    }
 }
 
 /// The MCL side: the operators file compiled once (for the mock's tables and
@@ -494,7 +502,7 @@ impl Run<'_> {
         }
         for r in records {
             let live = live_line(&r, false);
-            self.sink.record(serde_json::to_value(&r).unwrap_or_default(), live);
+            self.sink.record_typed(&r, live);
         }
         let warnings = match &mut self.vehicle {
             Vehicle::Mock(mock) => mock.take_warnings(),
@@ -515,7 +523,7 @@ impl Run<'_> {
         };
         for p in poses {
             let r = mcl_runtime::driver::pose_record(None, &p);
-            self.sink.record(serde_json::to_value(&r).unwrap_or_default(), None);
+            self.sink.record_typed(&r, None);
         }
     }
 

@@ -31,7 +31,7 @@ use mcl_runtime::scenario::Scenario;
 use mcl_runtime::trace::{SourceMap, Tracer};
 use rand_chacha::rand_core::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 const BRANCHES: usize = 20;
 const CALLS: usize = 50;
@@ -191,7 +191,7 @@ impl<'a> Naive<'a> {
         let task = tr.provenance.task.clone();
         for a in &tr.actions {
             self.seq += 1;
-            let mut params = Map::new();
+            let mut params = mcl_runtime::params::Params::new();
             for (name, json) in &a.params {
                 let v = if json.contains("\"param\"") {
                     task.as_ref()

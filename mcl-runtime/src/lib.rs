@@ -17,6 +17,7 @@ pub mod journal;
 pub mod link;
 pub mod mock;
 pub mod multi;
+pub mod params;
 pub mod player;
 pub mod protocol;
 pub mod scenario;

@@ -18,8 +18,9 @@ pub struct Action {
     pub primitive: String,
     /// Command, e.g. `enable`.
     pub command: String,
-    /// Parameter values by name (resolved from the call's arguments).
-    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Parameter values by name (resolved from the call's arguments), in
+    /// the order the action declares them.
+    pub params: crate::params::Params,
     /// The task that sent it, and its call site.
     pub task: Option<String>,
     pub call_site: Option<u32>,

@@ -379,7 +379,6 @@ impl crate::vehicle::VirtualVehicle for MockVehicle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::Map;
 
     fn action(seq: u64, task: &str, command: &str, call_site: u32) -> Action {
         Action {
@@ -387,7 +386,7 @@ mod tests {
             action: format!("{command}{task}"),
             primitive: format!("{task}Primitive"),
             command: command.into(),
-            params: Map::new(),
+            params: Default::default(),
             task: Some(task.into()),
             call_site: Some(call_site),
         }

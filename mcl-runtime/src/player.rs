@@ -62,7 +62,7 @@ use std::ops::ControlFlow;
 
 use mcl_net::engine::{Engine, Hooks, Livelock, View};
 use mcl_net::{Delay, FireError, Marking, Net, PlaceId, TransitionId, TransitionKind};
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 use crate::link::Action;
 
@@ -718,7 +718,7 @@ impl Layer {
         let tmpl = &info.actions[k];
         let args =
             info.task.and_then(|i| self.tasks[i as usize].binding).and_then(|b| self.info[b.index()].args.clone());
-        let mut params = Map::new();
+        let mut params = crate::params::Params::new();
         for (name, src) in &tmpl.params {
             let v = match src {
                 ParamSrc::Const(v) => v.clone(),

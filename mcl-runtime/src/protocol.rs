@@ -10,7 +10,7 @@
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
-use serde_json::{Map, Value};
+use serde_json::Value;
 use tokio::io::{AsyncBufRead, AsyncBufReadExt};
 
 use crate::link::{Action, Inbound};
@@ -57,9 +57,10 @@ pub struct Hello {
     pub last_event: Option<u64>,
     /// The events that end a task of the mission, with their role, from
     /// the compiled net (never from their names): an AAC learns from them
-    /// which answer of a primitive ends its run ok or fail; an event not
-    /// listed ends nothing (a detector's or a keep-mode primitive's).
-    /// Absent or empty: the player does not say.
+    /// which answer of a primitive ends its run ok or fail, and which ok
+    /// event is a monitor's condition (sent only when what it watches
+    /// happens); an event not listed ends nothing. Absent or empty: the
+    /// player does not say.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<EventEnd>,
 }
@@ -72,6 +73,11 @@ pub enum EventRole {
     Ok,
     /// It ends its task's run in failure.
     Fail,
+    /// It ends its task's run ok, and that run is a monitor's condition:
+    /// the event raises the monitor's `do` block, so the vehicle sends it
+    /// only when what the primitive watches happens, never as a plain
+    /// answer (for the calls listed in [`EventEnd::call_sites`]).
+    Condition,
 }
 
 /// One event that ends a task (an entry of `hello.events`).
@@ -79,19 +85,26 @@ pub enum EventRole {
 pub struct EventEnd {
     /// The event's name.
     pub event: String,
-    /// `ok` or `fail`.
+    /// `ok`, `fail` or `condition`.
     pub role: EventRole,
     /// The task whose run it ends.
     pub task: String,
     /// The primitive that task drives (the one that raises the event).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub primitive: Option<String>,
+    /// For role `condition`: the calls of the task (the actions'
+    /// `call_site`) that are a monitor's condition. A task also called
+    /// elsewhere is listed with role `ok` too, for its other calls.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub call_sites: Vec<u32>,
 }
 
 impl EventEnd {
     /// Every event that ends a task of `net` (its `task_events` properties),
-    /// with the primitive each task's actions drive; sorted by task, then
-    /// ok before fail.
+    /// with the primitive each task's actions drive; the ok events of a
+    /// task called as a monitor's condition ([`mcl_net::Net::task_calls`])
+    /// have role `condition` for those calls (and `ok` as well when the task
+    /// has other calls). Sorted by task, then ok, fail, condition.
     pub fn of_net(net: &mcl_net::Net) -> Vec<EventEnd> {
         let primitive = |task: &str| {
             net.transitions()
@@ -99,14 +112,28 @@ impl EventEnd {
                 .filter(|t| t.provenance.task.as_deref() == Some(task))
                 .find_map(|t| t.actions.first().map(|a| a.primitive.clone()))
         };
+        let calls = net.task_calls();
         let mut tasks: Vec<(&str, mcl_net::TaskEvents)> = net.task_events().collect();
         tasks.sort_by(|a, b| a.0.cmp(b.0));
         let mut out = Vec::new();
         for (task, ev) in tasks {
             let prim = primitive(task);
-            let roles = ev.ok.iter().map(|e| (e, EventRole::Ok)).chain(ev.fail.iter().map(|e| (e, EventRole::Fail)));
-            for (event, role) in roles {
-                out.push(EventEnd { event: event.clone(), role, task: task.to_string(), primitive: prim.clone() });
+            let (condition, other) = match calls.get(task) {
+                Some(c) => (c.condition.clone(), !c.other.is_empty()),
+                None => (Vec::new(), true),
+            };
+            let ok = ev.ok.iter().filter(|_| other).map(|e| (e, EventRole::Ok, Vec::new()));
+            let fail = ev.fail.iter().map(|e| (e, EventRole::Fail, Vec::new()));
+            let cond =
+                ev.ok.iter().filter(|_| !condition.is_empty()).map(|e| (e, EventRole::Condition, condition.clone()));
+            for (event, role, call_sites) in ok.chain(fail).chain(cond) {
+                out.push(EventEnd {
+                    event: event.clone(),
+                    role,
+                    task: task.to_string(),
+                    primitive: prim.clone(),
+                    call_sites,
+                });
             }
         }
         out
@@ -140,7 +167,7 @@ pub struct ActionMsg {
     pub primitive: String,
     pub command: String,
     #[serde(default)]
-    pub params: Map<String, Value>,
+    pub params: crate::params::Params,
     #[serde(default)]
     pub task: Option<String>,
     #[serde(default)]
@@ -377,8 +404,9 @@ pub fn parse(line: &[u8]) -> Result<Message, ProtocolError> {
             seq,
         });
     }
-    let ty = ty.to_string();
-    serde_json::from_value(value).map_err(|e| malformed(format!("bad `{ty}` message: {e}"), seq))
+    // From the text, not from `value`, whose object keys are sorted: an
+    // action's `params` keep the order they were sent in.
+    serde_json::from_slice(line).map_err(|e| malformed(format!("bad `{ty}` message: {e}"), seq))
 }
 
 /// Encodes a message as one line, `\n` included.
@@ -520,6 +548,7 @@ mod tests {
                     role: EventRole::Ok,
                     task: "Goto".into(),
                     primitive: Some("GotoPrimitive".into()),
+                    call_sites: vec![],
                 }],
             }),
             Message::Welcome(Welcome { version: 1, last_seq: 4, last_event: 2, session: "s1".into(), aac: None }),
@@ -528,7 +557,7 @@ mod tests {
                 action: "enableGoto".into(),
                 primitive: "GotoPrimitive".into(),
                 command: "enable".into(),
-                params: serde_json::from_str(r#"{"way-point":[24,12]}"#).unwrap(),
+                params: serde_json::from_str(r#"{"way-point":[24,12],"speed":1}"#).unwrap(),
                 task: Some("Goto".into()),
                 call_site: Some(3),
             }),

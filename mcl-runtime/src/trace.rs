@@ -22,7 +22,7 @@ use std::sync::{Arc, Mutex, Weak};
 
 use mcl_net::{Net, SourceSpan};
 use serde::{Deserialize, Serialize};
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 use crate::player::Output;
 
@@ -57,8 +57,8 @@ pub enum RecordKind {
         primitive: String,
         /// Its command (`enable`, `disable`, ...).
         command: String,
-        /// Its parameters.
-        params: Map<String, Value>,
+        /// Its parameters, in the order the action declares them.
+        params: crate::params::Params,
         /// The call that sent it.
         #[serde(flatten)]
         call: Call,

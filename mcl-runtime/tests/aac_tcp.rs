@@ -23,7 +23,7 @@ fn action(seq: u64, name: &str) -> Action {
         action: name.into(),
         primitive: "GotoPrimitive".into(),
         command: "enable".into(),
-        params: serde_json::Map::new(),
+        params: Default::default(),
         task: Some("Goto".into()),
         call_site: Some(1),
     }
@@ -260,6 +260,21 @@ async fn duplicates_are_acknowledged_not_executed() {
     let w = c.hello(json!({"run":"r2"})).await;
     assert_eq!(w["last_seq"], 0);
     assert!(timeout(T, sessions.recv()).await.unwrap().is_some());
+
+    // A hello without `run` resumes nothing: each opens a new session,
+    // even after a run-less player's actions (docs/aac-protocol.md §2).
+    let mut ids = Vec::new();
+    for _ in 0..2 {
+        let mut c = Raw::connect(addr).await;
+        let w = c.hello(json!({"run": null})).await;
+        assert_eq!(w["last_seq"], 0, "{w}");
+        ids.push(w["session"].clone());
+        c.send(act(1)).await;
+        assert_eq!(c.recv().await.unwrap(), json!({"type":"ack","seq":1}));
+        let mut s = timeout(T, sessions.recv()).await.unwrap().unwrap();
+        assert_eq!(timeout(T, s.end.actions.recv()).await.unwrap().unwrap().seq, 1, "executed, not a duplicate");
+    }
+    assert_ne!(ids[0], ids[1]);
 }
 
 #[tokio::test]

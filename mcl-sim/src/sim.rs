@@ -750,10 +750,10 @@ impl VirtualVehicle for SimVehicle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::{json, Map};
+    use serde_json::json;
 
     fn action(seq: u64, name: &str, primitive: &str, command: &str, params: Value) -> Action {
-        let params: Map<String, Value> = serde_json::from_value(params).unwrap();
+        let params: mcl_runtime::params::Params = serde_json::from_value(params).unwrap();
         Action {
             seq,
             action: name.into(),

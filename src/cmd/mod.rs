@@ -14,6 +14,7 @@ pub mod new;
 pub mod plan;
 pub mod run;
 pub mod sim;
+pub mod trace_to_mcap;
 
 use std::path::{Path, PathBuf};
 

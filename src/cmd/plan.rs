@@ -394,6 +394,19 @@ impl mcl_plan::run::RecordSink for RunSink {
             let _ = out.flush();
         }
     }
+
+    fn record_typed(&mut self, record: &mcl_runtime::trace::Record, live: Option<String>) {
+        if let Some(w) = &mut self.trace {
+            if let Err(e) = w.write(record) {
+                self.error.get_or_insert(format!("cannot write the trace: {e}"));
+            }
+        }
+        if let (true, Some(line)) = (self.live, live) {
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(out, "{line}");
+            let _ = out.flush();
+        }
+    }
 }
 
 /// The run's side of the TCP link to a vehicle's AAC ([`mcl_runtime::tcp`]),

@@ -73,6 +73,9 @@ pub struct Options {
     /// Write an SVG chronogram of the run here.
     #[arg(long, value_name = "FILE")]
     pub chronogram: Option<PathBuf>,
+    /// Write the trace's records as an MCAP file here, for Foxglove (docs/mcap.md).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
     /// Journal every firing and received event here, to --resume after a crash.
     #[arg(long, value_name = "FILE")]
     pub journal: Option<PathBuf>,
@@ -152,6 +155,40 @@ pub enum Transport {
 pub struct LoadedMission {
     pub name: String,
     pub net: Net,
+    /// The names its calls pass as arguments (`Altitude( altitude, ... )`),
+    /// which `--set` gives values to; empty for a PNML file.
+    pub symbols: Vec<String>,
+}
+
+/// The symbolic arguments of each mission of `file`, by mission name
+/// (`scope::mission_names`): identifiers in call arguments, lists
+/// included, that are not the mission's own parameters.
+fn mission_symbols(file: &mcl_syntax::ast::SourceFile) -> BTreeMap<String, Vec<String>> {
+    use mcl_syntax::ast::{Item, StmtKind, Value as V, ValueKind};
+    fn idents(v: &V, params: &[String], out: &mut Vec<String>) {
+        match &v.kind {
+            ValueKind::Ident(n) if !params.contains(&n.text) && !out.contains(&n.text) => out.push(n.text.clone()),
+            ValueKind::List { items, .. } => items.iter().for_each(|i| idents(i, params, out)),
+            _ => {}
+        }
+    }
+    let names = mcl_compiler::scope::mission_names(file);
+    let missions = file.items.iter().filter_map(|i| match i {
+        Item::Mission(m) => Some(m),
+        _ => None,
+    });
+    let mut out = BTreeMap::new();
+    for (name, m) in names.into_iter().zip(missions) {
+        let params: Vec<String> = m.params.iter().map(|p| p.text.clone()).collect();
+        let mut syms = Vec::new();
+        mcl_syntax::visit::walk_block(&m.body, &mut |s| {
+            if let StmtKind::Call(c) = &s.kind {
+                c.args.iter().for_each(|a| idents(a, &params, &mut syms));
+            }
+        });
+        out.insert(name, syms);
+    }
+    out
 }
 
 /// Loads the missions of an `.mcl` file (compiled in memory) or a `.pnml`
@@ -169,7 +206,10 @@ pub fn load_missions(file: &Path, unverified: bool) -> Result<Vec<LoadedMission>
             eprintln!("error: `{}`: {e}", file.display());
             2u8
         })?;
-        return Ok(nets.into_iter().map(|net| LoadedMission { name: net.name().to_string(), net }).collect());
+        return Ok(nets
+            .into_iter()
+            .map(|net| LoadedMission { name: net.name().to_string(), net, symbols: Vec::new() })
+            .collect());
     }
     let db = Database::new();
     let f = super::source_file(&db, file).map_err(|e| {
@@ -185,7 +225,15 @@ pub fn load_missions(file: &Path, unverified: bool) -> Result<Vec<LoadedMission>
                     file.display()
                 );
             }
-            Ok(ms.into_iter().map(|m| LoadedMission { name: m.name, net: m.net }).collect())
+            let mut symbols = mission_symbols(&mcl_compiler::queries::parse(&db, f).file);
+            Ok(ms
+                .into_iter()
+                .map(|m| LoadedMission {
+                    symbols: symbols.remove(&m.name).unwrap_or_default(),
+                    name: m.name,
+                    net: m.net,
+                })
+                .collect())
         }
         Err(CompileError::HasErrors) => {
             let diags: Vec<_> = check_file(&db, f).iter().filter(|d| d.diag.is_error()).cloned().collect();
@@ -219,6 +267,20 @@ struct RunSink {
     quiet_replay: bool,
     records: Vec<Record>,
     error: Option<String>,
+    /// The last notice of the link to the AAC: `-q` prints none, but says
+    /// the last one when the run fails.
+    last_link: Option<String>,
+    /// `--mcap FILE`: the same records as MCAP messages.
+    mcap: Option<McapOut>,
+}
+
+type McapOut = mcl_mcap::McapTrace<std::io::BufWriter<std::fs::File>>;
+
+/// The MCAP writer of `--mcap FILE`.
+fn open_mcap(path: &Option<PathBuf>) -> Result<Option<McapOut>, u8> {
+    let Some(p) = path else { return Ok(None) };
+    let file = super::trace_to_mcap::create(p)?;
+    mcl_mcap::McapTrace::new(file).map(Some).map_err(|e| usage(&format!("`{}`: {e}", p.display())))
 }
 
 impl RunSink {
@@ -230,8 +292,16 @@ impl RunSink {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
             }
         }
+        if let Some(m) = self.mcap.take() {
+            if let Err(e) = m.finish() {
+                self.error.get_or_insert(e.to_string());
+            }
+        }
         let end = result.map_err(|e| {
             eprintln!("error: {e}");
+            if let Some(l) = self.last_link.as_ref().filter(|_| !self.live) {
+                eprintln!("  the link's last notice: {l}");
+            }
             2u8
         })?;
         if let Some(p) = chronogram {
@@ -255,6 +325,11 @@ impl Sink for RunSink {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
             }
         }
+        if let Some(m) = &mut self.mcap {
+            if let Err(e) = m.record(r) {
+                self.error.get_or_insert(e.to_string());
+            }
+        }
         if self.live && !self.quiet_replay {
             if let Some(line) = live_line(r, self.verbose) {
                 let mut out = std::io::stdout().lock();
@@ -263,9 +338,10 @@ impl Sink for RunSink {
             }
         } else if !self.live {
             match &r.kind {
-                // Even a quiet run says when it cannot reach the vehicle.
-                RecordKind::Link { message } if !self.quiet_replay => eprintln!("link: {message}"),
-                // ... and when it refuses a coordination message.
+                // A quiet run prints no link lines; it keeps the last one
+                // for the error of a run that fails (`finish`).
+                RecordKind::Link { message } if !self.quiet_replay => self.last_link = Some(message.clone()),
+                // It says when it refuses a coordination message.
                 RecordKind::CoordReject { message } => eprintln!("warning: coordination: refused {message}"),
                 _ => {}
             }
@@ -470,6 +546,20 @@ pub fn run(o: Options) -> u8 {
     }
     symbols.extend(scenario.symbols.clone());
     symbols.extend(sets);
+    // A real vehicle would receive a symbol's name as its value
+    // (docs/aac-protocol.md §11): say so before the run starts.
+    let unset: Vec<&str> = chosen.symbols.iter().filter(|s| !symbols.contains_key(*s)).map(String::as_str).collect();
+    if o.aac.is_some() && resume_entries.is_none() && !unset.is_empty() {
+        eprintln!(
+            "warning: symbolic argument{} without a value, sent to the vehicle as {} own name{}: {} (give {} with --set {}=VALUE)",
+            if unset.len() == 1 { "" } else { "s" },
+            if unset.len() == 1 { "its" } else { "their" },
+            if unset.len() == 1 { "" } else { "s" },
+            unset.join(", "),
+            if unset.len() == 1 { "it a value" } else { "each a value" },
+            unset[0]
+        );
+    }
     if let Some(entries) = &resume_entries {
         let Entry::Header { mission, seed: s, fingerprint: f, symbols: syms, mock_seed: ms, .. } = &entries[0] else {
             unreachable!("read_journal checks the header")
@@ -498,8 +588,20 @@ pub fn run(o: Options) -> u8 {
         Ok(t) => t,
         Err(code) => return code,
     };
-    let mut sink =
-        RunSink { trace, live: !o.quiet, verbose: o.verbose, quiet_replay: false, records: Vec::new(), error: None };
+    let mcap = match open_mcap(&o.mcap) {
+        Ok(m) => m,
+        Err(code) => return code,
+    };
+    let mut sink = RunSink {
+        trace,
+        live: !o.quiet,
+        verbose: o.verbose,
+        quiet_replay: false,
+        records: Vec::new(),
+        error: None,
+        last_link: None,
+        mcap,
+    };
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
         for e in &errors {
@@ -1017,6 +1119,10 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(t) => t,
         Err(code) => return code,
     };
+    let mcap = match open_mcap(&o.mcap) {
+        Ok(m) => m,
+        Err(code) => return code,
+    };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         trace,
         live: !o.quiet,
@@ -1024,6 +1130,8 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         quiet_replay: false,
         records: Vec::new(),
         error: None,
+        last_link: None,
+        mcap,
     }));
     let mut sources = SourceMap::new();
     let mut parts = Vec::new();

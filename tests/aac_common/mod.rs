@@ -283,6 +283,21 @@ pub fn conformance(aac: &Proc, token: &str, run: &str) {
     assert_eq!(c.recv_reply().unwrap(), json!({"type":"ack","seq":3}));
     std::thread::sleep(Duration::from_millis(100));
     assert_eq!(aac.executed().len() - before, 3, "{}", aac.log().join("\n"));
+    drop(c);
+    // A hello without `run` resumes nothing (§2): a new session each time,
+    // whose actions are executed from seq 1.
+    let mut sessions = Vec::new();
+    for _ in 0..2 {
+        let mut c = Raw::connect(addr);
+        let w = c.hello(json!({"token": token, "run": null}));
+        assert_eq!((w["type"].as_str(), w["last_seq"].as_u64()), (Some("welcome"), Some(0)), "{w}");
+        sessions.push(w["session"].clone());
+        c.send(act(1));
+        assert_eq!(c.recv_reply().unwrap(), json!({"type":"ack","seq":1}));
+    }
+    assert_ne!(sessions[0], sessions[1], "two run-less hellos, two sessions");
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(aac.executed().len() - before, 5, "{}", aac.log().join("\n"));
 }
 
 /// The path of a file under the repository root.

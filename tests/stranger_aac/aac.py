@@ -4,17 +4,17 @@
 Written from docs/aac-protocol.md alone (no other AAC implementation was
 read), as a check that the document suffices. Standard library only.
 
-    python3 aac.py HOST:PORT [--delay SECONDS] [--token T] [--silent PRIMITIVE]...
+    python3 aac.py HOST:PORT [--delay SECONDS] [--token T]
 
 Nominal vehicle: every primitive enabled (a command other than `disable`)
-answers after --delay with its `ok` event taken from the hello's `events`
-(role "ok", same `primitive`), carrying `activation` = the seq of the action
-that started that run (§6). Never answered: a primitive with no ok event
-there, a run disabled meanwhile, a run whose params say `"mode": "keep"`
-(a keep mode, §11; the docs give no other way to tell one), and the
---silent primitives (a monitor's condition: `monitor_condition` in `mcl
-interface FILE --format json`, §11; `hello.events` does not say it). Prints `listening on
-ADDR` first, then logs every message on stderr.
+answers after --delay with the `ok` event of the action's `task` taken from
+the hello's `events` (role "ok", §3, §11), carrying `activation` = the seq
+of the action that started that run (§6). Never answered (§11): an action
+whose task has no ok event there, a call listed with role "condition" (a
+monitor's condition: answering it would raise the alarm), a run disabled
+meanwhile, and a run whose params say `"mode": "keep"` (the keep mode of
+examples/vehicle.mcl, §11). Prints `listening on ADDR` first, then logs
+every message on stderr.
 """
 
 import hmac
@@ -47,7 +47,8 @@ class Session:
         self.n = 0              # last event number given
         self.outbox = []        # [(n, message)] not yet confirmed
         self.conn = None        # the Conn carrying it now
-        self.ok_event = {}      # primitive -> its ok event (from hello.events)
+        self.ok_event = {}      # task -> its ok event (from hello.events)
+        self.watched = {}       # task -> call sites that are a monitor's condition
         self.running = {}       # primitive -> activation (seq) of its current run
 
     def emit(self, msg):        # number, keep and send an event (under lock)
@@ -181,7 +182,8 @@ class Conn:
         if TOKEN is not None and not hmac.compare_digest(
                 str(msg.get("token") or "").encode(), TOKEN.encode()):
             return self.error("unauthorized", "this AAC requires a token", fatal=True)
-        key = (msg.get("mission") or "mission", msg.get("run") or "")
+        # §2: no `run`, nothing to resume: a session of its own.
+        key = (msg.get("mission") or "mission", msg.get("run") or uuid.uuid4().hex)
         s = sessions.get(key)
         if s is None:
             s = sessions[key] = Session()
@@ -190,8 +192,12 @@ class Conn:
         s.conn = self
         self.session = s
         for e in msg.get("events") or []:
-            if isinstance(e, dict) and e.get("role") == "ok" and e.get("primitive"):
-                s.ok_event.setdefault(e["primitive"], e["event"])
+            if not isinstance(e, dict) or not isinstance(e.get("task"), str):
+                continue
+            if e.get("role") == "ok":
+                s.ok_event.setdefault(e["task"], e["event"])
+            elif e.get("role") == "condition":
+                s.watched.setdefault(e["task"], set()).update(e.get("call_sites") or [])
         self.send({"type": "welcome", "version": 1, "last_seq": s.last_seq,
                    "last_event": s.n, "session": s.id, "aac": "stranger-aac/0.1"})
         if is_int(msg.get("last_event")):       # §4 step 4, §6
@@ -214,19 +220,20 @@ class Conn:
         if seq > s.last_seq:                    # §5: execute each seq once
             s.last_seq = seq
             params = msg.get("params") if isinstance(msg.get("params"), dict) else {}
-            self.execute(s, seq, msg["primitive"], msg["command"], params)
+            self.execute(s, seq, msg["primitive"], msg["command"], params,
+                         msg.get("task"), msg.get("call_site"))
         self.send({"type": "ack", "seq": seq})
 
-    def execute(self, s, seq, primitive, command, params):
+    def execute(self, s, seq, primitive, command, params, task, call_site):
         if command == "disable":
             s.running.pop(primitive, None)      # never answer that run (§6, §11)
             return
         if primitive in s.running:              # a reconfiguration of the same run
             return
         s.running[primitive] = seq
-        event = s.ok_event.get(primitive)
-        if event is None or primitive in SILENT or params.get("mode") == "keep":
-            return                              # detector, condition, keep mode: silent
+        event = s.ok_event.get(task)
+        if event is None or call_site in s.watched.get(task, ()) or params.get("mode") == "keep":
+            return                              # no ok end, condition, keep mode: silent
 
         def answer():
             with lock:
@@ -238,8 +245,8 @@ class Conn:
 
 
 def main(argv):
-    global DELAY, TOKEN, SILENT
-    DELAY, TOKEN, SILENT = 0.05, None, set()
+    global DELAY, TOKEN
+    DELAY, TOKEN = 0.05, None
     args = list(argv)
     addr = "127.0.0.1:7010"
     while args:
@@ -248,8 +255,6 @@ def main(argv):
             DELAY = float(args.pop(0))
         elif a == "--token":
             TOKEN = args.pop(0)
-        elif a == "--silent":
-            SILENT.add(args.pop(0))
         else:
             addr = a
     host, port = addr.rsplit(":", 1)

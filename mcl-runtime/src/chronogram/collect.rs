@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 use super::fmt_time;
 use crate::trace::{Call, Ends, Record, RecordKind};
@@ -145,7 +145,7 @@ impl Collector {
         action: &str,
         prim: &str,
         cmd: &str,
-        params: &Map<String, Value>,
+        params: &crate::params::Params,
         call: &Call,
     ) {
         if let Some(task) = &call.task {

@@ -379,8 +379,11 @@ async fn connection(inner: Arc<ServerInner>, stream: TcpStream, peer: SocketAddr
             return;
         }
     }
-    let key =
-        SessionKey { mission: hello.mission.clone().unwrap_or_default(), run: hello.run.clone().unwrap_or_default() };
+    // A `hello` without `run` names no run to resume: it opens a session of
+    // its own, never one that an earlier run-less player left (whose seqs
+    // would make this player's actions duplicates).
+    let run = hello.run.clone().unwrap_or_else(|| format!("unnamed-{}", super::new_id()));
+    let key = SessionKey { mission: hello.mission.clone().unwrap_or_default(), run };
     let (session, created) = session_for(&inner, &key, hello.player.clone());
     let conn_id = inner.next_conn.fetch_add(1, Ordering::Relaxed);
     {
