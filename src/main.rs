@@ -101,6 +101,19 @@ enum Command {
     /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
     /// flushed first).
     Run(Box<cmd::run::Options>),
+    /// Replay trace files in the browser: the monitor's page (docs/monitor.md) with a time slider,
+    /// play/pause, and jumps to the next event, failure or coordination message.
+    ///
+    /// Several traces show a fleet (records without a mission are named after their file). Prints
+    /// the page's URL on standard error, then serves until interrupted.
+    Monitor {
+        /// JSONL traces written by `mcl run --trace`.
+        #[arg(required = true)]
+        traces: Vec<PathBuf>,
+        /// Address to listen on (port 0: any free port).
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
+        listen: String,
+    },
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
         /// A JSONL trace.
@@ -247,6 +260,7 @@ fn main() -> ExitCode {
                 quiet,
             })
         }
+        Command::Monitor { traces, listen } => cmd::monitor::run(&traces, &listen),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)

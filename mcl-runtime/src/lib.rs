@@ -16,6 +16,7 @@ pub mod journal;
 pub mod link;
 pub mod mock;
 pub mod multi;
+pub mod operator;
 pub mod player;
 pub mod protocol;
 pub mod scenario;

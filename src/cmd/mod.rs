@@ -9,6 +9,7 @@ pub mod fmt;
 pub mod interface;
 pub mod lsp;
 pub mod mock_aac;
+pub mod monitor;
 pub mod new;
 pub mod plan;
 pub mod run;
