@@ -199,6 +199,16 @@ fn operator_abort_needs_the_token_and_is_traced_and_journaled() {
         "then the event input that --resume replays: {:?}",
         entries.get(k + 1)
     );
+    // Resumed (with the same --operator-token: the abort hook is part of the net), the run replays the abort.
+    let resumed = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--mock", "examples/survey.mcl", "--resume", journal.to_str().unwrap(), "-q"])
+        .args(["--monitor=127.0.0.1:0", "--operator-token", "s3cret"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert_eq!(resumed.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("mission `mission`: ABORTED"), "{stderr}");
 }
 
 /// The class of line `line` of `file` on the page.

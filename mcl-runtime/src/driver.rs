@@ -164,13 +164,8 @@ impl<'a> Session<'a> {
         if let (true, RecordKind::Action { queued, .. }) = (self.link_down, &mut r.kind) {
             *queued = true;
         }
-        // An aborted mission is left with nothing to fire: the operator's
-        // doing, not a stuck mission.
-        if let (true, RecordKind::Outcome { result, reason, .. }) = (self.operator_aborted, &mut r.kind) {
-            if result == "stuck" {
-                *result = "aborted".into();
-                *reason = Some("aborted by the operator".into());
-            }
+        if self.operator_aborted {
+            operator::mark_aborted(&mut r);
         }
         self.sink.record(&r);
     }

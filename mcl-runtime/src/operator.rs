@@ -71,6 +71,24 @@ pub fn with_abort_hook(net: &Net) -> Result<Net, String> {
     b.build().map_err(|e| format!("mission `{}`: {e}", net.name()))
 }
 
+/// Rewrites the `stuck` outcome of a mission the operator aborted (it is
+/// left with nothing to fire: the operator's doing, not a stuck mission)
+/// as `aborted`.
+pub fn mark_aborted(r: &mut crate::trace::Record) {
+    if let crate::trace::RecordKind::Outcome { result, reason, .. } = &mut r.kind {
+        if result == "stuck" {
+            *result = "aborted".into();
+            *reason = Some("aborted by the operator".into());
+        }
+    }
+}
+
+/// Whether a journal records an operator's abort (a resumed run's outcome
+/// is then `aborted`, [`mark_aborted`]).
+pub fn journal_aborted(entries: &[crate::journal::Entry]) -> bool {
+    entries.iter().any(|e| matches!(e, crate::journal::Entry::Operator { command: Command::Abort, .. }))
+}
+
 /// Whether `net` has the abort hook.
 pub fn has_abort_hook(net: &Net) -> bool {
     net.place_by_id(ABORT_ARMED).is_some()

@@ -567,12 +567,17 @@ pub fn run(o: Options) -> u8 {
     let mut resume_point = None;
     if let (Some(entries), Some(path)) = (&resume_entries, &o.resume) {
         sink.quiet_replay = true;
+        let aborted = mcl_runtime::operator::journal_aborted(entries);
         let replayed = journal::replay(&mut player, entries, |input, outs| {
             if let Some(m) = input.message() {
                 mock.take_delivered(&m);
             }
             for out in outs {
-                sink.record(&tracer.record(out));
+                let mut r = tracer.record(out);
+                if aborted {
+                    mcl_runtime::operator::mark_aborted(&mut r);
+                }
+                sink.record(&r);
                 if let Output::Send { t, action } = out {
                     mock.on_action(*t, action);
                 }
