@@ -281,6 +281,13 @@ fn the_replay_page_jumps_to_a_failure() {
     assert!(jump.as_str().unwrap().starts_with("failure at t=82.000: event eventWallInspectionFail"), "{jump}");
     b.wait_for(&format!("{} === 'line fail'", line_class("examples/dam-inspection.mcl", 27)), "line 27 marked failed");
     b.wait_for("document.querySelector('#log tr.current') !== null", "the failure in the log");
+    // The control-structure tree shows the same states.
+    let tree = |line: u32, kind: &str| {
+        format!("(document.querySelector('#tree .node[data-line=\"{line}\"][data-kind=\"{kind}\"] .st') || {{}}).textContent")
+    };
+    b.wait_for(&format!("{} === 'fail'", tree(27, "call")), "WallInspect failed in the tree");
+    assert_eq!(b.eval(&tree(41, "call")), "running", "the catch's Surface runs");
+    assert_eq!(b.eval("document.querySelector('#tree .node[data-kind=\"try-catch\"]') !== null"), true);
     b.screenshot(&root().join("docs/pictures/monitor-replay.png"));
     b.eval("document.getElementById('next-failure').click()");
     b.wait_for("document.getElementById('jump').textContent.startsWith('failure at t=82.000: fire')", "the catch");

@@ -263,9 +263,47 @@ function renderSources() {
   }
 }
 
-// ---- calls, in source order and indented as written (the control structure)
+// ---- the control-structure tree (/api/tree), with the calls' states
+
+let trees = [];
+
+function callMarks() {
+  const marks = new Map(); // "mission\nline" -> status
+  for (const c of st.calls.values()) {
+    if (c.runs === 0 || c.line === null) continue;
+    const k = c.mission + '\n' + c.line;
+    const prev = marks.get(k);
+    if (!prev || RANK[c.status] > RANK[prev]) marks.set(k, c.status);
+  }
+  return marks;
+}
+
+function treeNode(mission, part, n, marks, depth, out) {
+  let status = '';
+  if (n.kind === 'call') status = marks.get(mission + '\n' + n.line) || '';
+  const label = part && !/^[0-9]+$/.test(part) ? `<span class="muted">${esc(part)}:</span> ` : '';
+  const what = n.kind === 'call' ? esc(n.text) : `<b>${esc(n.kind)}</b>`;
+  out.push(`<div class="node" data-mission="${esc(mission)}" data-line="${n.line}" data-kind="${esc(n.kind)}"><span class="st ${status}">${status}</span>${'  '.repeat(depth)}${label}${what}  <span class="muted">line ${n.line}</span></div>`);
+  for (const [p, c] of n.children) treeNode(mission, p, c, marks, depth + 1, out);
+}
 
 function renderTree() {
+  if (trees.length > 0) {
+    const marks = callMarks();
+    const out = [];
+    for (const t of trees) {
+      out.push(`<div class="node"><b>mission ${esc(t.mission)}</b> <span class="muted">${esc(t.file)}</span></div>`);
+      treeNode(t.mission, '', t.root, marks, 1, out);
+    }
+    $('tree').innerHTML = out.join('');
+    return;
+  }
+  renderCalls();
+}
+
+// Without a tree (a run of a PNML file): the calls in source order,
+// indented as written.
+function renderCalls() {
   const calls = [...st.calls.values()].filter((c) => c.runs > 0);
   calls.sort((a, b) => a.mission.localeCompare(b.mission) || (a.file || '').localeCompare(b.file || '') ||
     (a.line || 0) - (b.line || 0) || a.site - b.site);
@@ -483,6 +521,7 @@ async function replay() {
 
 async function main() {
   info = await (await fetch('/api/info')).json();
+  trees = await (await fetch('/api/tree')).json();
   $('title').textContent = info.title;
   $('mode').textContent = info.mode;
   document.title = 'MCL monitor — ' + info.title;

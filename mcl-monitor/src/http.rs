@@ -35,6 +35,7 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/records", get(records))
         .route("/api/events", get(events))
         .route("/api/source", get(source))
+        .route("/api/tree", get(|State(hub): State<Arc<Hub>>| async move { Json(hub.trees()) }))
         .route("/api/operator", post(operator))
         .with_state(hub)
 }

@@ -60,6 +60,8 @@ struct Inner {
     finished: bool,
     /// Source files read so far (None: unreadable).
     sources: BTreeMap<String, Option<Arc<str>>>,
+    /// The missions' control-structure trees.
+    trees: Vec<crate::tree::MissionTree>,
 }
 
 /// Milliseconds since the Unix epoch.
@@ -81,6 +83,7 @@ impl Hub {
                 state: State::default(),
                 finished: mode == Mode::Replay,
                 sources: BTreeMap::new(),
+                trees: Vec::new(),
             }),
             changes: watch::channel((0, mode == Mode::Replay)).0,
         }
@@ -107,6 +110,24 @@ impl Hub {
             i.lines.len()
         };
         self.changes.send_modify(|c| c.0 = n);
+    }
+
+    /// Adds missions' control-structure trees (`GET /api/tree`).
+    pub fn add_trees(&self, trees: impl IntoIterator<Item = crate::tree::MissionTree>) {
+        self.inner().trees.extend(trees);
+    }
+
+    /// The missions' control-structure trees.
+    pub fn trees(&self) -> Vec<crate::tree::MissionTree> {
+        self.inner().trees.clone()
+    }
+
+    /// The files of the calls seen so far.
+    pub fn files(&self) -> Vec<String> {
+        let mut f: Vec<String> = self.inner().state.files().map(str::to_string).collect();
+        f.sort();
+        f.dedup();
+        f
     }
 
     /// The run is over: the pages are told, operator commands are refused.

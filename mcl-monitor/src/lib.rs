@@ -12,6 +12,7 @@
 //!   (running calls with their lines, outcomes, pause); sans-IO.
 //! * [`hub`]: the records of a run and its state, shared between the run
 //!   (which [`Hub::push`]es records) and the server.
+//! * [`tree`]: the control-structure tree of each mission, as plain data.
 //! * [`http`]: the HTTP API (`/api/state`, `/api/events` with server-sent
 //!   events, `/api/operator`, ...) and the page.
 //! * [`Monitor`]: the server on its own thread.
@@ -23,6 +24,7 @@
 pub mod http;
 pub mod hub;
 pub mod state;
+pub mod tree;
 
 mod server;
 
