@@ -152,7 +152,7 @@ fn operator_abort_needs_the_token_and_is_traced_and_journaled() {
         "--mock",
         "examples/survey.mcl",
         "--speed",
-        "2",
+        "1",
         "--monitor=127.0.0.1:0",
         "--monitor-linger",
         "2",
@@ -170,6 +170,15 @@ fn operator_abort_needs_the_token_and_is_traced_and_journaled() {
     assert_eq!(run.command(Some("s3creT"), abort).0, 401, "another token");
     assert_eq!(run.command(Some("s3cret"), "{\"command\":\"explode\"}").0, 400, "not a command");
     assert!(run.state()["outcome"].is_null(), "refused commands change nothing");
+    // Paused, the operator answers for InitializeVehicle (line 15, 5 s long).
+    assert_eq!(run.command(Some("s3cret"), r#"{"command":"pause"}"#).0, 202);
+    run.state_until("the pause", |s| s["paused"] == true);
+    let answer = r#"{"command":"answer","event":"eventInitializeVehicleOk"}"#;
+    assert_eq!(run.command(Some("s3cret"), answer).0, 202);
+    let s = run.state_until("the answer", |s| {
+        s["calls"].as_array().is_some_and(|c| c.iter().any(|c| c["line"] == 15 && c["status"] == "ok"))
+    });
+    assert!(s["running"].as_array().unwrap().iter().any(|c| c["line"] == 16), "Altitude starts: {s}");
     let (code, body) = run.command(Some("s3cret"), abort);
     assert_eq!(code, 202, "{body}");
     let s = run.state_until("the outcome", |s| !s["outcome"].is_null());
@@ -186,7 +195,8 @@ fn operator_abort_needs_the_token_and_is_traced_and_journaled() {
             _ => None,
         })
         .collect();
-    assert_eq!(ops, [&mcl_runtime::operator::Command::Abort]);
+    use mcl_runtime::operator::Command as Op;
+    assert_eq!(ops, [&Op::Pause, &Op::Answer { event: "eventInitializeVehicleOk".into() }, &Op::Abort]);
     let entries = mcl_runtime::journal::read_journal(&journal).unwrap();
     let k = entries
         .iter()

@@ -80,7 +80,8 @@ pub struct CallState {
 pub struct State {
     t: f64,
     records: usize,
-    calls: BTreeMap<(String, u32), CallState>,
+    /// Per mission, per call site.
+    calls: BTreeMap<String, BTreeMap<u32, CallState>>,
     outcomes: BTreeMap<String, String>,
     summary: Option<String>,
     paused: bool,
@@ -111,10 +112,10 @@ impl State {
     pub fn apply(&mut self, r: &Record) {
         self.records += 1;
         self.t = self.t.max(r.t);
-        let mission = mission_of(r).to_string();
+        let mission = mission_of(r);
         match &r.kind {
             RecordKind::Action { command, call, .. } => {
-                if let Some(c) = self.call(&mission, call) {
+                if let Some(c) = self.call(mission, call) {
                     let running = c.status == CallStatus::Running;
                     if command == "disable" {
                         if running {
@@ -131,13 +132,13 @@ impl State {
             }
             RecordKind::Event { call, ends: Some(e @ (Ends::Ok | Ends::Fail)), .. } => {
                 let status = if *e == Ends::Ok { CallStatus::Ok } else { CallStatus::Fail };
-                self.end(&mission, call, status, r.t);
+                self.end(mission, call, status, r.t);
             }
             RecordKind::Fire { call, ends: Some(Ends::Timeout), .. } => {
-                self.end(&mission, call, CallStatus::Fail, r.t);
+                self.end(mission, call, CallStatus::Fail, r.t);
             }
             RecordKind::Outcome { result, .. } => {
-                self.outcomes.insert(mission, result.clone());
+                self.outcomes.insert(mission.to_string(), result.clone());
             }
             RecordKind::CoordSummary { result, .. } => self.summary = Some(result.clone()),
             RecordKind::Operator { command: Command::Pause } => self.paused = true,
@@ -160,7 +161,12 @@ impl State {
     /// names a call site.
     fn call(&mut self, mission: &str, call: &Call) -> Option<&mut CallState> {
         let site = call.call_site?;
-        let c = self.calls.entry((mission.to_string(), site)).or_insert_with(|| CallState {
+        // No allocation for a mission already seen.
+        if !self.calls.contains_key(mission) {
+            self.calls.insert(mission.to_string(), BTreeMap::new());
+        }
+        let sites = self.calls.get_mut(mission)?;
+        let c = sites.entry(site).or_insert_with(|| CallState {
             mission: mission.to_string(),
             task: None,
             label: None,
@@ -188,12 +194,13 @@ impl State {
 
     /// Files named by the calls seen so far.
     pub fn files(&self) -> impl Iterator<Item = &str> {
-        self.calls.values().filter_map(|c| c.file.as_deref())
+        self.calls.values().flat_map(|m| m.values()).filter_map(|c| c.file.as_deref())
     }
 
     /// The answer of `GET /api/state`.
     pub fn json(&self) -> StateJson {
-        let calls: Vec<CallState> = self.calls.values().filter(|c| c.runs > 0).cloned().collect();
+        let calls: Vec<CallState> =
+            self.calls.values().flat_map(|m| m.values()).filter(|c| c.runs > 0).cloned().collect();
         let outcome = match (&self.summary, self.outcomes.len()) {
             (Some(s), _) => Some(s.clone()),
             (None, 1) if self.missions() <= 1 => self.outcomes.values().next().cloned(),
@@ -212,9 +219,7 @@ impl State {
 
     /// How many missions the calls belong to.
     fn missions(&self) -> usize {
-        let mut names: Vec<&str> = self.calls.keys().map(|(m, _)| m.as_str()).collect();
-        names.dedup();
-        names.len()
+        self.calls.len()
     }
 }
 
