@@ -52,7 +52,11 @@ pub struct Hub {
 }
 
 struct Inner {
-    /// Each record as its JSON text (serialized once, sent to every page).
+    /// The records, as the run pushed them.
+    records: Vec<Arc<Record>>,
+    /// The JSON texts of the first records (serialized once, on the
+    /// server's thread when a page first asks for them, then sent to every
+    /// page).
     lines: Vec<Arc<str>>,
     /// When each record was pushed (milliseconds since the Unix epoch).
     pushed_ms: Vec<f64>,
@@ -78,6 +82,7 @@ impl Hub {
             title,
             operator: None,
             inner: Mutex::new(Inner {
+                records: Vec::new(),
                 lines: Vec::new(),
                 pushed_ms: Vec::new(),
                 state: State::default(),
@@ -99,15 +104,16 @@ impl Hub {
         self.inner.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Adds a record (serialized here, once) and wakes the pages.
+    /// Adds a record and wakes the pages. The run's thread only keeps it
+    /// and updates the state: pages' requests serialize it (once).
     pub fn push(&self, r: &Record) {
-        let Ok(line) = serde_json::to_string(r) else { return };
+        let r = Arc::new(r.clone());
         let n = {
             let mut i = self.inner();
-            i.state.apply(r);
-            i.lines.push(line.into());
+            i.state.apply(&r);
+            i.records.push(r);
             i.pushed_ms.push(unix_ms());
-            i.lines.len()
+            i.records.len()
         };
         self.changes.send_modify(|c| c.0 = n);
     }
@@ -159,10 +165,26 @@ impl Hub {
     /// Records `from..` (at most `max`) as JSON texts, with the push time
     /// of the last one.
     pub fn records(&self, from: usize, max: usize) -> (Vec<Arc<str>>, Option<f64>) {
-        let i = self.inner();
-        let from = from.min(i.lines.len());
-        let to = from.saturating_add(max).min(i.lines.len());
-        (i.lines[from..to].to_vec(), to.checked_sub(1).filter(|_| to > from).map(|k| i.pushed_ms[k]))
+        let (from, to, done, todo) = {
+            let i = self.inner();
+            let from = from.min(i.records.len());
+            let to = from.saturating_add(max).min(i.records.len());
+            let done = i.lines.len();
+            (from, to, done, i.records[done.min(to)..to].to_vec())
+        };
+        // Serialized without the lock: the run goes on meanwhile.
+        let new: Vec<Arc<str>> =
+            todo.iter().map(|r| Arc::from(serde_json::to_string(&**r).unwrap_or_default())).collect();
+        // `new` holds the records start..to; another request may have
+        // cached some of them meanwhile.
+        let start = done.min(to);
+        let mut i = self.inner();
+        let cached = i.lines.len();
+        if (start..to).contains(&cached) {
+            i.lines.extend(new[cached - start..].iter().cloned());
+        }
+        let out = (from..to).map(|k| i.lines.get(k).cloned().unwrap_or_else(|| new[k - start].clone())).collect();
+        (out, to.checked_sub(1).filter(|_| to > from).map(|k| i.pushed_ms[k]))
     }
 
     /// The state (`GET /api/state`) and whether the run is over.
@@ -237,6 +259,9 @@ mod tests {
         assert_eq!(lines.len(), 1);
         assert!(lines[0].contains("\"link\"") && pushed.is_some());
         assert!(hub.records(5, 10).0.is_empty());
+        let (all, _) = hub.records(0, 10);
+        assert_eq!(all.len(), 2);
+        assert!(all[0].contains("\"warning\"") && Arc::ptr_eq(&all[1], &lines[0]), "serialized once");
         assert_eq!(hub.state().0.t, 2.0);
         assert!(hub.source("/etc/passwd").is_none(), "only the files of calls are served");
     }
