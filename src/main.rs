@@ -98,8 +98,8 @@ enum Command {
     /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
     /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
-    /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
-    /// flushed first).
+    /// 3 mission stuck, aborted by the operator or time limit passed, 130 after SIGINT and 143
+    /// after SIGTERM (the trace flushed first).
     Run(Box<cmd::run::Options>),
     /// Replay trace files in the browser: the monitor's page (docs/monitor.md) with a time slider,
     /// play/pause, and jumps to the next event, failure or coordination message.

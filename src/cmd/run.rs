@@ -2,7 +2,7 @@
 //! or a vehicle's AAC over TCP.
 //!
 //! Exit status: 0 mission ok, 1 mission fail, 2 usage, compile or I/O error,
-//! 3 mission stuck or time limit passed.
+//! 3 mission stuck, aborted by the operator (`--operator-token`) or time limit passed.
 //!
 //! With `--mock` or `--sim` and no `--mission`, a file with several missions runs every
 //! vehicle at once, coordinated by its constraints ([`run_coordinated`]).
