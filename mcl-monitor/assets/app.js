@@ -15,7 +15,7 @@ let finished = false;
 let playing = null;
 let jumpIndex = -1; // the record a jump went to (highlighted in the log)
 const sources = new Map(); // file -> { lines: [div], indents: [n] } or 'loading'
-const LOG_ROWS = 1500;
+const LOG_ROWS = 500;
 
 function newState() {
   return { t: 0, calls: new Map(), outcomes: new Map(), summary: null, paused: false,
@@ -295,10 +295,19 @@ function renderTree() {
       out.push(`<div class="node"><b>mission ${esc(t.mission)}</b> <span class="muted">${esc(t.file)}</span></div>`);
       treeNode(t.mission, '', t.root, marks, 1, out);
     }
-    $('tree').innerHTML = out.join('');
+    setHtml($('tree'), out.join(''));
     return;
   }
   renderCalls();
+}
+
+// Replaces an element's contents only when they change (a new tree of a
+// thousand nodes is a layout of the page).
+function setHtml(el, html) {
+  if (el.dataset.html !== html) {
+    el.innerHTML = html;
+    el.dataset.html = html;
+  }
 }
 
 // Without a tree (a run of a PNML file): the calls in source order,
@@ -316,7 +325,7 @@ function renderCalls() {
     const name = esc((c.task || '?') + (c.label ? ':' + c.label : ''));
     out.push(`<div class="node" data-call="${esc(c.key)}"><span class="st ${c.status}">${c.status}</span>${'  '.repeat(indent)}${name}  <span class="muted">line ${c.line ?? '?'}${c.runs > 1 ? ', ' + c.runs + ' runs' : ''}</span></div>`);
   }
-  $('tree').innerHTML = out.join('') || '<span class="muted">no call has started</span>';
+  setHtml($('tree'), out.join('') || '<span class="muted">no call has started</span>');
 }
 
 function esc(s) {
@@ -327,27 +336,52 @@ function esc(s) {
 
 const COLOR = { running: '#e0a800', ok: '#2e9d3a', fail: '#c0392b', stopped: '#9aa1ad' };
 
+// Widths of the drawing boxes, read once and on resize (reading them while
+// drawing would force a layout of the page each time).
+const widths = { chrono: 700, map: 600 };
+
+function measure() {
+  widths.chrono = Math.max(400, ($('chrono').clientWidth || 700) - 20);
+  widths.map = Math.max(400, ($('map-box').clientWidth || 600) - 20);
+}
+
+// A canvas: a thousand calls draw in a few milliseconds.
 function renderChrono(now) {
   const calls = [...st.calls.values()].filter((c) => c.runs > 0);
   calls.sort((a, b) => a.mission.localeCompare(b.mission) || (a.line || 0) - (b.line || 0) || a.site - b.site);
-  const W = Math.max(400, ($('chrono').clientWidth || 700) - 20);
-  const L = 200, H = 16;
+  const W = widths.chrono, L = 200, H = 16;
+  const h = 22 + calls.length * H;
+  let canvas = $('chrono').firstElementChild;
+  if (!canvas) { canvas = document.createElement('canvas'); $('chrono').appendChild(canvas); }
+  if (canvas.width !== W) canvas.width = W;
+  if (canvas.height !== h) canvas.height = h;
+  const g = canvas.getContext('2d');
+  g.clearRect(0, 0, W, h);
   const tmax = Math.max(now, 1e-9);
   const x = (t) => L + ((W - L - 10) * Math.min(t, tmax)) / tmax;
-  const parts = [];
+  g.font = '11px system-ui, sans-serif';
   calls.forEach((c, i) => {
     const y = 18 + i * H;
     const name = (st.missions.size > 1 ? c.mission + ' ' : '') + (c.task || '?') + (c.label ? ':' + c.label : '') + ' @' + (c.line ?? '?');
-    parts.push(`<text x="4" y="${y + 11}" font-size="11">${esc(name)}</text>`);
+    g.fillStyle = '#1d2330';
+    g.fillText(name, 4, y + 11, L - 8);
     for (const sp of c.spans) {
       const to = sp.to === null ? now : sp.to;
-      parts.push(`<rect x="${x(sp.from)}" y="${y + 2}" width="${Math.max(1.5, x(to) - x(sp.from))}" height="${H - 5}" fill="${COLOR[sp.status]}"><title>${esc(name)}: ${sp.status} ${sp.from}–${sp.to ?? '…'}</title></rect>`);
+      g.fillStyle = COLOR[sp.status];
+      g.fillRect(x(sp.from), y + 2, Math.max(1.5, x(to) - x(sp.from)), H - 5);
     }
   });
-  const h = 22 + calls.length * H;
-  parts.push(`<line x1="${x(now)}" x2="${x(now)}" y1="0" y2="${h}" stroke="#1d2330" stroke-dasharray="3,3"/>`);
-  parts.push(`<text x="${L}" y="11" font-size="10" fill="#6b7280">0 s</text><text x="${W - 10}" y="11" font-size="10" fill="#6b7280" text-anchor="end">${now.toFixed(1)} s</text>`);
-  $('chrono').innerHTML = `<svg width="${W}" height="${h}" xmlns="http://www.w3.org/2000/svg">${parts.join('')}</svg>`;
+  g.strokeStyle = '#1d2330';
+  g.setLineDash([3, 3]);
+  g.beginPath(); g.moveTo(x(now) + 0.5, 0); g.lineTo(x(now) + 0.5, h); g.stroke();
+  g.setLineDash([]);
+  g.fillStyle = '#6b7280';
+  g.font = '10px system-ui, sans-serif';
+  g.fillText('0 s', L, 11);
+  g.textAlign = 'end';
+  g.fillText(now.toFixed(1) + ' s', W - 10, 11);
+  g.textAlign = 'start';
+  canvas.dataset.rows = calls.length;
 }
 
 // ---- map
@@ -361,8 +395,8 @@ function renderMap() {
   for (const ps of st.poses.values()) for (const [x, y] of ps) { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); }
   // One scale on both axes, as large as the box allows.
   const pad = 24, xs = Math.max(x1 - x0, 1), ys = Math.max(y1 - y0, 1);
-  const k = Math.min((Math.max(400, ($('map').clientWidth || 600) - 20) - 2 * pad) / xs, (420 - 2 * pad) / ys);
-  const W = xs * k + 2 * pad + 60, H = ys * k + 2 * pad;
+  const k = Math.min((widths.map - 2 * pad - 60) / xs, (300 - 2 * pad) / ys);
+  const W = Math.max(xs * k + 2 * pad + 60, 280), H = ys * k + 2 * pad;
   const px = (x) => pad + (x - x0) * k, py = (y) => H - pad - (y - y0) * k;
   const span = Math.max(xs, ys);
   const parts = [`<rect width="${W}" height="${H}" fill="#eaf2fb"/>`];
@@ -540,6 +574,8 @@ async function main() {
     }
     follow();
   }
+  measure();
+  window.addEventListener('resize', () => { measure(); schedule(); });
   document.body.dataset.ready = '1';
 }
 
