@@ -109,9 +109,22 @@ enum Command {
     /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
     /// Exit status: 0 mission ok (every mission), 1 mission fail, 2 usage, compile or I/O error,
-    /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
-    /// flushed first).
+    /// 3 mission stuck, aborted by the operator or time limit passed, 130 after SIGINT and 143
+    /// after SIGTERM (the trace flushed first).
     Run(Box<cmd::run::Options>),
+    /// Replay trace files in the browser: the monitor's page (docs/monitor.md) with a time slider,
+    /// play/pause, and jumps to the next event, failure or coordination message.
+    ///
+    /// Several traces show a fleet (records without a mission are named after their file). Prints
+    /// the page's URL on standard error, then serves until interrupted.
+    Monitor {
+        /// JSONL traces written by `mcl run --trace`.
+        #[arg(required = true)]
+        traces: Vec<PathBuf>,
+        /// Address to listen on (port 0: any free port).
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
+        listen: String,
+    },
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
         /// A JSONL trace.
@@ -270,6 +283,7 @@ fn main() -> ExitCode {
                 quiet,
             })
         }
+        Command::Monitor { traces, listen } => cmd::monitor::run(&traces, &listen),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
         Command::Analyze { net, format, max_states, semantics, threads } => {

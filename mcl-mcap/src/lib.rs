@@ -44,7 +44,7 @@ pub const TOPICS: [Topic; 9] = [
     Topic {
         topic: "/mcl/coordination",
         schema: "mcl.Coordination",
-        kinds: &["coord_send", "coord_receive", "coord_reject"],
+        kinds: &["coord_send", "coord_receive", "coord_reject", "link_send", "link_lost", "link_deliver"],
     },
     Topic { topic: "/mcl/log", schema: "mcl.Log", kinds: &["warning", "link"] },
     Topic { topic: "/mcl/other", schema: "mcl.Record", kinds: &[] },
@@ -74,6 +74,10 @@ pub fn kind_name(kind: &RecordKind) -> &'static str {
         RecordKind::CoordReject { .. } => "coord_reject",
         RecordKind::CoordSummary { .. } => "coord_summary",
         RecordKind::Pose { .. } => "pose",
+        RecordKind::LinkSend { .. } => "link_send",
+        RecordKind::LinkLost { .. } => "link_lost",
+        RecordKind::LinkDeliver { .. } => "link_deliver",
+        RecordKind::Operator { .. } => "operator",
         RecordKind::Other => "other",
     }
 }

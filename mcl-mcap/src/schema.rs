@@ -80,14 +80,20 @@ pub fn schema_of(topic: &Topic) -> Value {
         }
         "mcl.Coordination" => {
             props.extend([
-                ("seq", integer),
+                ("seq", integer.clone()),
                 ("transition", string.clone()),
                 ("event", string.clone()),
                 ("to", string.clone()),
                 ("from", string.clone()),
                 ("message", string.clone()),
+                ("what", string.clone()),
+                ("bytes", integer.clone()),
+                ("json_bytes", integer.clone()),
+                ("attempt", integer.clone()),
+                ("reason", string.clone()),
+                ("status", string.clone()),
             ]);
-            ("A coordination message sent, received or refused", &[])
+            ("A coordination message sent, received or refused, or a frame of the modelled acoustic link", &[])
         }
         "mcl.Log" => {
             props.push(("message", string));

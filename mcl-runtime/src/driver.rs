@@ -14,12 +14,14 @@
 //!
 //! Both go through a [`Session`], which journals each input and its firings
 //! (synced before the input's actions are sent) and turns outputs into trace
-//! records for a [`Sink`].
+//! records for a [`Sink`]. In real time, a session may also take an
+//! operator's commands ([`Session::operator`], [`crate::operator`]).
 
 use crate::clock::Clock;
 use crate::journal::{Entry, Input, JournalWriter};
 use crate::link::{AacEnd, Action, Delivered, Inbound, Link};
 use crate::mock::MockVehicle;
+use crate::operator::{self, Command};
 use crate::player::{Outcome, Output, Player};
 use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::{Pose, VirtualVehicle};
@@ -128,6 +130,10 @@ pub struct Session<'a> {
     /// ([`Session::sync`]), who adds entries of its own to the same sync
     /// (a coordinated vehicle's messages).
     pub defer_sync: bool,
+    /// Operator commands for [`run_real_time`] (none: no operator).
+    pub operator: Option<operator::Receiver>,
+    /// The operator aborted the mission: its end is `aborted`.
+    operator_aborted: bool,
     syncs: u64,
 }
 
@@ -143,6 +149,8 @@ impl<'a> Session<'a> {
             link_down: false,
             delivered: Delivered::default(),
             defer_sync: false,
+            operator: None,
+            operator_aborted: false,
             syncs: 0,
         }
     }
@@ -155,6 +163,9 @@ impl<'a> Session<'a> {
         let mut r = self.tracer.record(o);
         if let (true, RecordKind::Action { queued, .. }) = (self.link_down, &mut r.kind) {
             *queued = true;
+        }
+        if self.operator_aborted {
+            operator::mark_aborted(&mut r);
         }
         self.sink.record(&r);
     }
@@ -575,11 +586,18 @@ pub async fn run_real_time(
         let out = s.step(Input::Start(clock.now()))?;
         send(link, out)?;
     }
+    let mut commands = s.operator.take();
+    // While paused: the mission time it was paused at, and the actions
+    // held until `resume`.
+    let mut paused: Option<f64> = None;
+    let mut held: Vec<Output> = Vec::new();
     loop {
         if let Some(o) = s.player.outcome() {
+            send(link, std::mem::take(&mut held))?;
             if let Some(j) = &mut s.journal {
                 j.sync()?;
             }
+            s.operator = commands;
             return Ok(End::Outcome(o));
         }
         let deadline = s.player.next_deadline();
@@ -587,21 +605,38 @@ pub async fn run_real_time(
             (Some(d), Some(l)) => Some(d.min(l)),
             (d, l) => d.or(l),
         };
-        let sleep = async {
-            match wake {
-                Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
+        let until = wake.map(|w| clock.instant_at(w));
+        let sleep = async move {
+            match until {
+                Some(i) => tokio::time::sleep_until(i).await,
                 None => std::future::pending::<()>().await,
             }
         };
         let actions = tokio::select! {
-            m = link.inbound.recv() => {
+            c = async {
+                match &mut commands {
+                    Some(c) => c.recv().await,
+                    None => std::future::pending().await,
+                }
+            } => match c {
+                // The operator's side is gone: no more commands.
+                None => {
+                    commands = None;
+                    Vec::new()
+                }
+                Some(c) => {
+                    let now = paused.unwrap_or_else(|| clock.now()).max(s.player.now());
+                    on_operator(s, now, c, &mut paused, &mut clock)?
+                }
+            },
+            m = link.inbound.recv(), if paused.is_none() => {
                 let now = clock.now().max(s.player.now());
                 match m {
                     None => return Err("the link to the AAC closed".into()),
                     Some(m) => on_inbound(s, now, m)?,
                 }
             }
-            _ = sleep => {
+            _ = sleep, if paused.is_none() => {
                 let w = wake.unwrap_or_default();
                 match deadline {
                     Some(d) if d <= w => s.step(Input::Timer(d.max(s.player.now())))?,
@@ -611,12 +646,85 @@ pub async fn run_real_time(
                         if let Some(j) = &mut s.journal {
                             j.sync()?;
                         }
+                        s.operator = commands;
                         return Ok(End::TimeLimit(limit));
                     }
                 }
             }
         };
-        send(link, actions)?;
+        if paused.is_some() {
+            held.extend(actions);
+        } else {
+            send(link, std::mem::take(&mut held))?;
+            send(link, actions)?;
+        }
+    }
+}
+
+/// Takes an operator's command at mission time `now`: traces and journals
+/// it, pauses or resumes the clock, and returns the outputs of the input it
+/// becomes (`abort`, `answer`), whose actions the caller sends (or holds,
+/// while paused).
+fn on_operator(
+    s: &mut Session<'_>,
+    now: f64,
+    c: Command,
+    paused: &mut Option<f64>,
+    clock: &mut Clock,
+) -> Result<Vec<Output>, String> {
+    let ignored = match &c {
+        Command::Pause => paused.is_some(),
+        Command::Resume => paused.is_none(),
+        Command::Abort | Command::Answer { .. } => false,
+    };
+    if ignored {
+        s.warn(
+            now,
+            format!(
+                "operator: {} ignored (the run is {})",
+                command_name(&c),
+                if paused.is_some() { "paused" } else { "running" }
+            ),
+        );
+        return Ok(Vec::new());
+    }
+    s.emit_record(Record::new(now, RecordKind::Operator { command: c.clone() }));
+    s.journal_entry(&Entry::Operator { t: now, command: c.clone() });
+    match c {
+        Command::Pause => {
+            *paused = Some(now);
+            s.sync()?;
+            Ok(Vec::new())
+        }
+        Command::Resume => {
+            let at = paused.take().unwrap_or(now);
+            *clock = Clock::new(clock.speed(), at);
+            s.sync()?;
+            Ok(Vec::new())
+        }
+        Command::Abort => {
+            if !operator::has_abort_hook(s.player.net()) {
+                s.sync()?;
+                s.warn(
+                    now,
+                    "operator: abort refused: the net has no abort hook (mcl run adds it with --operator-token)".into(),
+                );
+                return Ok(Vec::new());
+            }
+            s.operator_aborted = true;
+            s.step(Input::Event(now, operator::ABORT_EVENT.to_string(), None))
+        }
+        Command::Answer { event } => s.step(Input::Event(now, event, None)),
+    }
+}
+
+/// `pause`, `resume`, `abort` or `answer`.
+fn command_name(c: &Command) -> &'static str {
+    match c {
+        Command::Pause => "pause",
+        Command::Resume => "resume",
+        Command::Abort => "abort",
+        Command::Answer { .. } => "answer",
     }
 }
 

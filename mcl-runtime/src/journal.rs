@@ -185,6 +185,15 @@ pub enum Entry {
         /// Mission time.
         t: f64,
     },
+    /// An operator's command (informative: an `abort` or an `answer` is
+    /// followed by the event input it became, which resuming replays).
+    Operator {
+        /// Mission time.
+        t: f64,
+        /// The command.
+        #[serde(flatten)]
+        command: crate::operator::Command,
+    },
 }
 
 /// An input of the player.

@@ -18,6 +18,7 @@ pub mod link;
 pub mod mock;
 pub mod multi;
 pub mod params;
+pub mod operator;
 pub mod player;
 pub mod protocol;
 pub mod scenario;

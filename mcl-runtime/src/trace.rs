@@ -7,7 +7,7 @@
 //! ([`RecordKind`], one variant per kind: `action`, `event`, `fire`,
 //! `unexpected_event`, `stale_event`, `timer`, `perception`, `warning`,
 //! `link`, `outcome`, `coord_send`, `coord_receive`, `coord_reject`,
-//! `coord_summary`, `pose`). docs/scenarios.md (*Traces*) lists every kind
+//! `coord_summary`, `pose`, `operator`). docs/scenarios.md (*Traces*) lists every kind
 //! with its fields and their types. Kinds this version does not know (the
 //! planner's) are read as [`RecordKind::Other`] and ignored.
 //!
@@ -238,6 +238,14 @@ pub enum RecordKind {
         /// `new` (handed to the vehicle), `repeat` (already had it),
         /// `early` (kept until the frames before it arrive), `ack`.
         status: String,
+    },
+    /// An operator's command (`mcl run --operator-token`, docs/monitor.md),
+    /// taken by the real-time driver: `command` (`pause`, `resume`,
+    /// `abort`, `answer`) and, for `answer`, the `event` delivered.
+    Operator {
+        /// The command and its fields.
+        #[serde(flatten)]
+        command: crate::operator::Command,
     },
     /// A record of a kind this version does not know (the planner's `plan`,
     /// `step`... in a `mcl plan --run` trace): read, ignored by every
@@ -533,6 +541,19 @@ pub fn live_line(r: &Record, verbose: bool) -> Option<String> {
         RecordKind::Perception { name, value } => (format!("percept  {name} = {value}"), None),
         RecordKind::Warning { message } => (format!("warning  {message}"), None),
         RecordKind::CoordReject { message } => (format!("REFUSED  coordination: {message}"), None),
+        RecordKind::Operator { command } => (
+            match command {
+                crate::operator::Command::Answer { event } => format!("OPERATOR answers {event}"),
+                c => format!(
+                    "OPERATOR {}",
+                    serde_json::to_value(c)
+                        .ok()
+                        .and_then(|v| v["command"].as_str().map(str::to_uppercase))
+                        .unwrap_or_default()
+                ),
+            },
+            None,
+        ),
         RecordKind::Outcome { result, reason, via } => (
             format!(
                 "MISSION {}{}{}",
@@ -787,6 +808,20 @@ mod tests {
         assert_eq!(rs[0].kind, RecordKind::Other);
         assert_eq!(rs[1].kind, RecordKind::Link { message: "up".into() });
         assert!(live_line(&rs[0], true).is_none());
+    }
+
+    #[test]
+    fn operator_records_read_back() {
+        let r = Record::new(
+            2.5,
+            RecordKind::Operator { command: crate::operator::Command::Answer { event: "evOk".into() } },
+        );
+        let line = serde_json::to_string(&r).unwrap();
+        assert_eq!(line, r#"{"t":2.5,"kind":"operator","command":"answer","event":"evOk"}"#);
+        assert_eq!(parse_trace(&format!("{line}\n")).unwrap(), vec![r.clone()]);
+        assert_eq!(live_line(&r, false).unwrap(), "[     2.500] OPERATOR answers evOk");
+        let p = Record::new(1.0, RecordKind::Operator { command: crate::operator::Command::Pause });
+        assert_eq!(live_line(&p, false).unwrap(), "[     1.000] OPERATOR PAUSE");
     }
 
     #[test]

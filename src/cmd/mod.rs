@@ -10,6 +10,7 @@ pub mod interface;
 pub mod link_report;
 pub mod lsp;
 pub mod mock_aac;
+pub mod monitor;
 pub mod new;
 pub mod plan;
 pub mod run;

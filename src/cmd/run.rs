@@ -2,7 +2,7 @@
 //! or a vehicle's AAC over TCP.
 //!
 //! Exit status: 0 mission ok, 1 mission fail, 2 usage, compile or I/O error,
-//! 3 mission stuck or time limit passed.
+//! 3 mission stuck, aborted by the operator (`--operator-token`) or time limit passed.
 //!
 //! With `--mock` or `--sim` and no `--mission`, a file with several missions runs every
 //! vehicle at once, coordinated by its constraints ([`run_coordinated`]).
@@ -139,6 +139,19 @@ pub struct Options {
     /// Test hook: abort after N journal syncs, as a crash would.
     #[arg(long, hide = true)]
     pub crash_after: Option<u64>,
+    /// Serve a live view of the run in the browser at ADDR (`--monitor` alone: 127.0.0.1 on any
+    /// free port); the URL is printed on standard error (docs/monitor.md).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, require_equals = true, default_missing_value = "127.0.0.1:0")]
+    pub monitor: Option<String>,
+    /// With --monitor: once the run is over, keep serving its final state SECONDS longer (`inf`:
+    /// until interrupted).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    pub monitor_linger: f64,
+    /// With --monitor, in real time: take an operator's commands (pause, resume, abort, answer)
+    /// from requests that carry this token (`Authorization: Bearer TOKEN`). The mission's net gets
+    /// an abort hook: resume its journal with the same option.
+    #[arg(long, value_name = "TOKEN")]
+    pub operator_token: Option<String>,
 }
 
 /// How the vehicles of a coordinated run exchange messages.
@@ -272,6 +285,8 @@ struct RunSink {
     last_link: Option<String>,
     /// `--mcap FILE`: the same records as MCAP messages.
     mcap: Option<McapOut>,
+    /// The live monitor (`--monitor`).
+    monitor: Option<Arc<mcl_monitor::Hub>>,
 }
 
 type McapOut = mcl_mcap::McapTrace<std::io::BufWriter<std::fs::File>>;
@@ -346,6 +361,9 @@ impl Sink for RunSink {
                 _ => {}
             }
         }
+        if let Some(h) = &self.monitor {
+            h.push(r);
+        }
         self.records.push(r.clone());
     }
 
@@ -377,6 +395,12 @@ pub fn run(o: Options) -> u8 {
     // with 130 or 143.
     crate::interrupt::install();
     // Usage checks.
+    if o.operator_token.is_some() && (o.monitor.is_none() || o.virtual_time || o.sim) {
+        return usage("--operator-token takes commands through the monitor of a real-time run: give --monitor, with --mock or --aac, without --virtual-time");
+    }
+    if o.operator_token.as_deref().is_some_and(str::is_empty) {
+        return usage("--operator-token is empty");
+    }
     if [o.mock, o.sim, o.aac.is_some()].iter().filter(|b| **b).count() != 1 {
         return usage(
             "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle) and --aac HOST:PORT",
@@ -448,6 +472,9 @@ pub fn run(o: Options) -> u8 {
         }
     }
     if several && o.mission.is_none() && (o.mock || o.sim) && is_mcl {
+        if o.operator_token.is_some() {
+            return usage("--operator-token takes commands for one mission: pick it with --mission NAME");
+        }
         return run_coordinated(&o, sets);
     }
     if o.link.is_some() {
@@ -481,7 +508,14 @@ pub fn run(o: Options) -> u8 {
             chosen.name
         );
     }
-    let net = Arc::new(chosen.net);
+    // The operator's abort marks `mission.abort` through a hook in the net.
+    let net = match &o.operator_token {
+        Some(_) => match mcl_runtime::operator::with_abort_hook(&chosen.net) {
+            Ok(n) => Arc::new(n),
+            Err(e) => return usage(&e),
+        },
+        None => Arc::new(chosen.net),
+    };
     let mission_label = if several || chosen.name != "mission" { Some(chosen.name.clone()) } else { None };
 
     // Journal to resume.
@@ -592,6 +626,13 @@ pub fn run(o: Options) -> u8 {
         Ok(m) => m,
         Err(code) => return code,
     };
+    let mut live_monitor = match &o.monitor {
+        Some(addr) => match super::monitor::start_live(addr, o.file.display().to_string(), o.operator_token.clone()) {
+            Ok(m) => Some(m),
+            Err(code) => return code,
+        },
+        None => None,
+    };
     let mut sink = RunSink {
         trace,
         live: !o.quiet,
@@ -601,6 +642,7 @@ pub fn run(o: Options) -> u8 {
         error: None,
         last_link: None,
         mcap,
+        monitor: live_monitor.as_ref().map(|m| m.hub.clone()),
     };
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
@@ -630,6 +672,7 @@ pub fn run(o: Options) -> u8 {
         sink.quiet_replay = true;
         // A simulated vehicle is re-derived: the loop replayed against it (docs/simulator.md).
         let mut sim_error = None;
+        let aborted = mcl_runtime::operator::journal_aborted(entries);
         let replayed = journal::replay(&mut player, entries, |input, outs| {
             if let Some(v) = &mut sim_vehicle {
                 super::sim::replay_input(v, input, outs, &tracer, &mut sink, &mut sim_error);
@@ -639,7 +682,11 @@ pub fn run(o: Options) -> u8 {
                 mock.take_delivered(&m);
             }
             for out in outs {
-                sink.record(&tracer.record(out));
+                let mut r = tracer.record(out);
+                if aborted {
+                    mcl_runtime::operator::mark_aborted(&mut r);
+                }
+                sink.record(&r);
                 if let Output::Send { t, action } = out {
                     mock.on_action(*t, action);
                 }
@@ -698,6 +745,7 @@ pub fn run(o: Options) -> u8 {
     let mut session = Session::new(player, tracer, &mut sink);
     session.journal = journal_writer;
     session.crash_after = o.crash_after;
+    session.operator = live_monitor.as_mut().and_then(|m| m.commands.take());
     // Until the AAC welcomes the player, actions are queued.
     session.link_down = o.aac.is_some();
     // The events the run handled in its AAC session: told to the AAC once
@@ -794,10 +842,13 @@ pub fn run(o: Options) -> u8 {
         RecordKind::Outcome { via, .. } => Some(via.clone()),
         _ => None,
     });
+    // An operator's abort ends a mission that the player sees stuck.
+    let aborted =
+        sink.records.iter().rev().any(|r| matches!(&r.kind, RecordKind::Outcome { result, .. } if result == "aborted"));
     eprintln!(
         "mission `{}`: {}{} at t={end_time:.3} s ({} actions, {} events, {} unexpected events, {fired} firings)",
         chosen.name,
-        end.result().to_uppercase(),
+        if aborted { "ABORTED".to_string() } else { end.result().to_uppercase() },
         via.flatten().map(|v| format!(" through {v}")).unwrap_or_default(),
         counts.actions,
         counts.events,
@@ -807,6 +858,9 @@ pub fn run(o: Options) -> u8 {
         let stuck: Vec<String> =
             mcl_runtime::counterexample::is_stuck(&end).then(|| chosen.name.clone()).into_iter().collect();
         say_reproduced(expected, &[(chosen.name.clone(), kept_net.as_ref())], &sink.records, &stuck);
+    }
+    if let Some(m) = &live_monitor {
+        super::monitor::linger(&m.hub, o.monitor_linger);
     }
     end.exit_code()
 }
@@ -1123,6 +1177,13 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(m) => m,
         Err(code) => return code,
     };
+    let live_monitor = match &o.monitor {
+        Some(addr) => match super::monitor::start_live(addr, o.file.display().to_string(), None) {
+            Ok(m) => Some(m),
+            Err(code) => return code,
+        },
+        None => None,
+    };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         trace,
         live: !o.quiet,
@@ -1132,6 +1193,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         error: None,
         last_link: None,
         mcap,
+        monitor: live_monitor.as_ref().map(|m| m.hub.clone()),
     }));
     let mut sources = SourceMap::new();
     let mut parts = Vec::new();
@@ -1298,6 +1360,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             .collect();
         let nets: Vec<(String, &Net)> = kept_nets.iter().map(|(n, net)| (n.clone(), net.as_ref())).collect();
         say_reproduced(expected, &nets, &sink.records, &stuck);
+    }
+    if let Some(m) = &live_monitor {
+        super::monitor::linger(&m.hub, o.monitor_linger);
     }
     end.exit_code()
 }
