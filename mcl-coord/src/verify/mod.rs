@@ -62,6 +62,7 @@ mod lts;
 mod product;
 mod quotient;
 mod replay;
+mod stubborn;
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
 use rustc_hash::FxHashMap;
@@ -93,6 +94,9 @@ pub struct VerifyOptions {
     pub hunt_threshold: u64,
     /// Largest total number of random-walk steps.
     pub hunt_steps: usize,
+    /// Explore the product with stubborn sets of vehicles (partial-order
+    /// reduction, `stubborn.rs`); off, every interleaving is expanded.
+    pub reduction: bool,
 }
 
 impl Default for VerifyOptions {
@@ -104,6 +108,7 @@ impl Default for VerifyOptions {
             max_counter_cap: 32,
             hunt_threshold: 1_000_000,
             hunt_steps: 200_000,
+            reduction: true,
         }
     }
 }
