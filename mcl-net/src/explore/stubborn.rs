@@ -58,13 +58,17 @@ pub fn explore_por(net: &Net, max_states: usize) -> PorReport {
     index.insert(m0, 0);
     let mut report = PorReport { states: 0, edges: 0, complete: true, deadlock: false, dead_markings: 0 };
     let mut in_set = vec![false; nt];
+    let mut en_mask = vec![false; nt];
     let mut work: Vec<u32> = Vec::new();
     let mut best: Vec<u32> = Vec::new();
     let mut cand: Vec<u32> = Vec::new();
     let mut i = 0usize;
     while i < states.len() {
         let m = states[i].clone();
-        let enabled = |t: u32| is_enabled_with(net, TransitionId(t), |p: PlaceId| m[p.index()]);
+        for (t, e) in en_mask.iter_mut().enumerate() {
+            *e = is_enabled_with(net, TransitionId(t as u32), |p: PlaceId| m[p.index()]);
+        }
+        let enabled = |t: u32| en_mask[t as usize];
         let en: Vec<u32> = (0..nt as u32).filter(|&t| enabled(t)).collect();
         if en.is_empty() {
             report.deadlock = true;
