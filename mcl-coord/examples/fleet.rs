@@ -2,14 +2,16 @@
 //! `cargo run -p mcl-coord --example fleet -- VEHICLES SEED [deadlock]`.
 //! The text imports `vehicle.mcl` (copy `examples/vehicle.mcl` beside it).
 //! With `--analyze FILE` instead, analyzes FILE (an .mcl file) and prints
-//! the verdict, the sizes and the time (`--full`: without the reduction).
+//! the verdict, the sizes and the time (`--full`: without the reduction;
+//! `--no-walks`: no random walks first).
 
 use mcl_coord::gen::{fleet, FleetSpec};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().is_some_and(|a| a == "--analyze") {
-        analyze(args.get(1).map_or("", String::as_str), args.iter().any(|a| a == "--full"));
+        let has = |f: &str| args.iter().any(|a| a == f);
+        analyze(args.get(1).map_or("", String::as_str), has("--full"), has("--no-walks"));
         return;
     }
     let num = |i: usize, default: u64| args.get(i).and_then(|a| a.parse::<u64>().ok()).unwrap_or(default);
@@ -21,7 +23,7 @@ fn main() {
     print!("{}", fleet(&spec).text);
 }
 
-fn analyze(path: &str, full: bool) {
+fn analyze(path: &str, full: bool, no_walks: bool) {
     use mcl_compiler::{Database, Db};
     let db = Database::new();
     let (ms, cs) = match mcl_coord::source::load(&db, db.file(std::path::Path::new(path))) {
@@ -33,6 +35,9 @@ fn analyze(path: &str, full: bool) {
     };
     let mut opts = mcl_coord::check::options();
     opts.verify.reduction = !full;
+    if no_walks {
+        opts.verify.hunt_threshold = u64::MAX;
+    }
     let t = std::time::Instant::now();
     match mcl_coord::analyze_with(&ms, &cs, &opts) {
         Ok(r) => println!(

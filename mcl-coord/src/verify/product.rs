@@ -206,9 +206,7 @@ pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize, deps:
             for s in &seeds {
                 succ.clear();
                 p.successors(&st, s.iter().copied(), &mut succ, &mut g.over);
-                let proviso = |(x, v, ..): &Succ| {
-                    !d.cyclic(*v, st[*v]) || index.get(x).is_none_or(|&j| j as usize > i)
-                };
+                let proviso = |(x, v, ..): &Succ| !d.cyclic(*v, st[*v]) || index.get(x).is_none_or(|&j| j as usize > i);
                 if !succ.is_empty() && succ.iter().all(proviso) && best.as_ref().is_none_or(|b| succ.len() < b.len()) {
                     best = Some(std::mem::take(&mut succ));
                 }
