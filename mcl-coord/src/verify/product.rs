@@ -9,7 +9,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::lts::{lab_action, lab_blocked};
+use super::lts::{lab_action, lab_blocked, TAU};
 use super::quotient::Quotient;
 use super::stubborn::Deps;
 
@@ -188,10 +188,23 @@ pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize, deps:
         // keeps a fully expanded state (docs/coordination.md).
         let mut reduced = false;
         if let Some(d) = deps {
+            // A vehicle with a single silent, unguarded move is a stubborn
+            // set alone with one successor: nothing does better.
+            for v in 0..p.nv {
+                if let [(TAU, _)] = p.quots[v].out(st[v]) {
+                    succ.clear();
+                    p.successors(&st, v..v + 1, &mut succ, &mut g.over);
+                    let (x, ..) = &succ[0];
+                    if !d.cyclic(v, st[v]) || index.get(x).is_none_or(|&j| j as usize > i) {
+                        reduced = true;
+                        break;
+                    }
+                }
+            }
             // Each vehicle with an enabled move seeds a set; the set with
             // the fewest successors that meets the proviso is expanded.
             seeds.clear();
-            for v in 0..p.nv {
+            for v in (0..p.nv).filter(|_| !reduced) {
                 succ.clear();
                 p.successors(&st, v..v + 1, &mut succ, &mut g.over);
                 if succ.is_empty() {
@@ -211,10 +224,12 @@ pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize, deps:
                     best = Some(std::mem::take(&mut succ));
                 }
             }
-            succ.clear();
-            if let Some(b) = best {
-                succ = b;
-                reduced = true;
+            if !reduced {
+                succ.clear();
+                if let Some(b) = best {
+                    succ = b;
+                    reduced = true;
+                }
             }
         }
         if !reduced {
