@@ -7,7 +7,8 @@
 //! sync partners waiting: E0406 for almost any constraint). The calls of
 //! each mission sit in *slots* (call `i` of every mission in slot `i`):
 //! orders go from an earlier slot to a later one, syncs join calls of the
-//! same slot, mutexes join any two calls. Such a fleet is free of
+//! same slot, mutexes join any two calls (a fifth of the constraints
+//! mutexes, half orders, the rest syncs). Such a fleet is free of
 //! deadlock: a mutex is taken atomically with everything else a call
 //! waits for and given back when the call ends, and the waiting call of
 //! the lowest slot waits only for calls of lower slots, which do not wait.
