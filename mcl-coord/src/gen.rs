@@ -11,7 +11,8 @@
 //! mutexes, half orders, the rest syncs). Such a fleet is free of
 //! deadlock: a mutex is taken atomically with everything else a call
 //! waits for and given back when the call ends, and the waiting call of
-//! the lowest slot waits only for calls of lower slots, which do not wait.
+//! the lowest slot waits only for calls of lower slots, which do not wait
+//! (`tests/fleet.rs` confirms it at 4 and 8 vehicles).
 //! A fleet generated with `deadlock` adds a *backward* order, a cycle
 //! through two missions' sequences: vehicle `x` waits at an early call for
 //! a late call of `y`, which waits at an earlier call for a later call of
