@@ -103,6 +103,9 @@ enum Command {
         /// Worker threads (0: one per core).
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// Exploration method: every marking, or stubborn sets (deadlocks only).
+        #[arg(long, value_enum, default_value = "explicit")]
+        method: cmd::analyze::Method,
     },
     /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac).
     ///
@@ -286,8 +289,8 @@ fn main() -> ExitCode {
         Command::Monitor { traces, listen } => cmd::monitor::run(&traces, &listen),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
-        Command::Analyze { net, format, max_states, semantics, threads } => {
-            cmd::analyze::run(&net, format, max_states, semantics, threads)
+        Command::Analyze { net, format, max_states, semantics, threads, method } => {
+            cmd::analyze::run(&net, format, max_states, semantics, threads, method)
         }
         Command::Compile { file, link_report: true, format, frame_bytes, .. } => {
             cmd::link_report::run(&file, format, frame_bytes)

@@ -78,6 +78,25 @@ fn analyze_json_max_tokens_is_the_largest_place_bound() {
     assert!(v.get("max_tokens_in_place").is_none());
 }
 
+/// `--method por`: the stubborn-set exploration keeps the deadlock verdict
+/// and the dead markings of the full one with fewer states; the MCL rule
+/// is refused.
+#[test]
+fn analyze_method_por_keeps_the_deadlocks() {
+    let net = "tests/data/mcc/Philosophers-PT-000005.pnml";
+    let full: Value = serde_json::from_slice(&mcl(&["analyze", "--format", "json", net]).stdout).unwrap();
+    let o = mcl(&["analyze", "--format", "json", "--method", "por", net]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let por: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(por["deadlock"], true);
+    assert_eq!(por["complete"], true);
+    assert_eq!(por["dead_markings"], full["dead_markings"]);
+    assert!(por["states"].as_u64().unwrap() < full["states"].as_u64().unwrap(), "{por}");
+    let o = mcl(&["analyze", "--method", "por", "--semantics", "mcl", net]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("plain rule only"));
+}
+
 /// `--view structure` draws the mission's control structures and calls (a
 /// picture a person can read whole: tens of nodes where the net has
 /// hundreds); `--view task:NAME` draws one task's net; both need `--dot`.

@@ -49,6 +49,7 @@ pub mod compact;
 pub mod conflict;
 pub mod decentral;
 pub mod error;
+pub mod gen;
 pub mod interrupt;
 pub mod link_report;
 pub mod model;

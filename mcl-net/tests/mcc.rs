@@ -67,3 +67,32 @@ fn mcc_nets_match_oracle() {
 fn mcc_large_nets_match_oracle() {
     check(&|n| LARGE.contains(&n), &[(Semantics::Plain, 1)]);
 }
+
+/// `mcl analyze --method por`: the stubborn-set exploration gives the
+/// oracle's deadlock verdict on every net, with no more states than the
+/// full space, and (stubborn sets keep every dead marking) the number of
+/// dead markings of the full exploration on the nets small enough to
+/// explore here twice.
+#[test]
+fn mcc_deadlock_verdicts_with_stubborn_sets() {
+    let dir = mcc_dir();
+    let oracle: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("oracle.json")).unwrap()).unwrap();
+    let oracle = oracle.as_object().unwrap();
+    assert!(!oracle.is_empty());
+    for (name, expect) in oracle {
+        let text = std::fs::read_to_string(dir.join(format!("{name}.pnml"))).unwrap();
+        let net = read_pnml(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let start = std::time::Instant::now();
+        let r = mcl_net::explore::explore_por(&net, mcl_net::explore::DEFAULT_MAX_STATES);
+        let full = expect["states"].as_u64().unwrap();
+        eprintln!("{name} por: {} of {full} states in {:.2?}", r.states, start.elapsed());
+        assert!(r.complete, "{name}");
+        assert_eq!(r.deadlock, expect["deadlock"].as_bool().unwrap(), "{name} deadlock");
+        assert!(r.states <= full, "{name}: {} > {full}", r.states);
+        if !LARGE.contains(&name.as_str()) {
+            let e = analyze(&net, &Options::plain());
+            assert_eq!(r.dead_markings, e.dead_markings, "{name} dead markings");
+        }
+    }
+}

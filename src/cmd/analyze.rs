@@ -15,7 +15,24 @@ pub enum SemanticsChoice {
     Mcl,
 }
 
-pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsChoice, threads: usize) -> u8 {
+/// How to explore.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Every reachable marking (the full report).
+    Explicit,
+    /// Stubborn sets (plain rule only): the deadlock verdict and the number
+    /// of dead markings are exact, the state count is the reduced graph's.
+    Por,
+}
+
+pub fn run(
+    path: &Path,
+    format: Format,
+    max_states: usize,
+    semantics: SemanticsChoice,
+    threads: usize,
+    method: Method,
+) -> u8 {
     let text = match mcl_net::input::read_source(path) {
         Ok(t) => t,
         Err(e) => {
@@ -36,6 +53,9 @@ pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsC
         SemanticsChoice::Auto if net.has_non_immediate() => Semantics::Mcl,
         SemanticsChoice::Auto => Semantics::Plain,
     };
+    if method == Method::Por {
+        return run_por(&net, format, max_states, semantics);
+    }
     let opts = Options { semantics, max_states, threads, ..Options::default() };
     let r = analyze(&net, &opts);
     match format {
@@ -62,6 +82,28 @@ pub fn run(path: &Path, format: Format, max_states: usize, semantics: SemanticsC
                     if d.path_names.is_empty() { "no firing".into() } else { d.path_names.join(" → ") }
                 );
             }
+        }
+    }
+    0
+}
+
+/// `--method por`: the reduced exploration of `mcl_net::explore::explore_por`.
+fn run_por(net: &mcl_net::Net, format: Format, max_states: usize, semantics: Semantics) -> u8 {
+    if semantics != Semantics::Plain {
+        eprintln!("error: --method por explores with the plain rule only (give --semantics plain)");
+        return 2;
+    }
+    let r = mcl_net::explore::explore_por(net, max_states);
+    match format {
+        Format::Json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_else(|_| "{}".into())),
+        Format::Human => {
+            println!("net `{}`: {} places, {} transitions", net.name(), net.place_count(), net.transition_count());
+            let more =
+                if r.complete { String::new() } else { format!(" (stopped at the limit of {max_states} states)") };
+            println!("states of the reduced graph (stubborn sets): {}{more}", r.states);
+            println!("edges of the reduced graph: {}", r.edges);
+            println!("dead markings: {}", r.dead_markings);
+            println!("deadlock: {}", if r.deadlock { "yes" } else { "no" });
         }
     }
     0

@@ -9,6 +9,7 @@ use super::lts::Lts;
 use super::product::{explore_product, Effect, Product};
 use super::quotient::Quotient;
 use super::replay::{concretize, Replay, ReplayRules};
+use super::stubborn::Deps;
 use super::{VerifyOptions, VerifyStats, Witness, WitnessKind};
 use crate::central::Plant;
 use crate::supervisor::Supervisor;
@@ -117,15 +118,27 @@ pub(super) fn verify_group(
     // A large product: look for a deadlock by random walks first.
     let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
     if nv > 1 && estimate > opts.hunt_threshold as f64 {
-        let prod = Product { quots, can_end, effects: &effects, cap, nv };
+        let prod = Product { quots, effects: &effects, cap, nv };
         if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps) {
             stats.counter_cap = stats.counter_cap.max(cap);
             return GroupOutcome::Problems(vec![w]);
         }
     }
+    // The stubborn sets of vehicles, unless turned off; a blocked state
+    // found under the reduction is confirmed on the full product.
+    // The exact dependencies hold while no count passes K; when one does,
+    // the product is explored again with the coarse ones.
+    let mut reduce = opts.reduction;
+    let mut exact_deps = true;
+    let mut deps = reduce.then(|| Deps::new(quots, &effects, sups.len(), true));
     loop {
-        let prod = Product { quots, can_end, effects: &effects, cap, nv };
-        let g = explore_product(&prod, init_of(cap), opts.max_product_states);
+        let prod = Product { quots, effects: &effects, cap, nv };
+        let g = explore_product(&prod, init_of(cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
+        if reduce && exact_deps && g.over {
+            exact_deps = false;
+            deps = Some(Deps::new(quots, &effects, sups.len(), false));
+            continue;
+        }
         let states = g.states.len() / g.width.max(1);
         stats.counter_cap = stats.counter_cap.max(cap);
         if !g.complete {
@@ -194,6 +207,13 @@ pub(super) fn verify_group(
             (0..nv).any(|v| quots[v].gates[st[v] as usize].iter().any(|&t| !prod.allowed(st, t)))
         };
         let mut picks: Vec<(u32, WitnessKind)> = dead.iter().take(8).map(|&s| (s, WitnessKind::Dead)).collect();
+        // Under the reduction, a state that cannot reach the end in the
+        // reduced graph may reach it in the full one: only the full
+        // product decides (dead states are exact either way).
+        if picks.is_empty() && reduce {
+            reduce = false;
+            continue;
+        }
         // A dead marking explains itself; a blocked one is reported only
         // when there is none.
         if picks.is_empty() {

@@ -1,5 +1,6 @@
 //! Step 3: the reduced vehicle graphs run together with the supervisor
-//! places, explored breadth-first with a partial-order reduction.
+//! places, explored breadth-first, with a partial-order reduction
+//! (stubborn sets of vehicles, `stubborn.rs`) or without.
 //!
 //! A supervisor place holds 0..=K tokens exactly, or `>K` (consuming from
 //! `>K` may leave `K` or `>K`): every reachable marking of the real system
@@ -10,6 +11,11 @@ use rustc_hash::FxHashMap;
 
 use super::lts::{lab_action, lab_blocked, TAU};
 use super::quotient::Quotient;
+use super::stubborn::Deps;
+
+/// A successor: the next state, the vehicle that moved, the label, and
+/// whether the step is pessimistic.
+pub(super) type Succ = (Vec<u32>, usize, u32, bool);
 
 /// The supervisor arcs of one transition: (supervisor, weight) consumed and
 /// produced, and the supervisors it takes one token back from when they
@@ -25,7 +31,6 @@ pub(super) struct Effect {
 /// (counted exactly up to `cap`, then `cap + 1` for `>K`).
 pub(super) struct Product<'a> {
     pub(super) quots: &'a [&'a Quotient],
-    pub(super) can_end: &'a [bool],
     pub(super) effects: &'a [Effect],
     pub(super) cap: u32,
     pub(super) nv: usize,
@@ -37,25 +42,12 @@ impl Product<'_> {
         self.effects[effect as usize].consume.iter().all(|&(s, w)| st[self.nv + s] >= w)
     }
 
-    /// Successors of `st`: (next state, vehicle, label, pessimistic).
-    /// A vehicle whose moves form a persistent set in `st`: not ended, able
-    /// to end alone, and every move of its class a silent unguarded step
-    /// (independent of every other vehicle and of the supervisor places,
-    /// and never disabled by them).
-    pub(super) fn ample_vehicle(&self, st: &[u32]) -> Option<usize> {
-        (0..self.nv).find(|&v| {
-            let q = &self.quots[v];
-            let c = st[v];
-            self.can_end[v] && !q.fin[c as usize] && !q.out(c).is_empty() && q.out(c).iter().all(|&(l, _)| l == TAU)
-        })
-    }
-
     /// Successors of `st` by the moves of the vehicles in `vehicles`.
     pub(super) fn successors(
         &self,
         st: &[u32],
-        vehicles: std::ops::Range<usize>,
-        out: &mut Vec<(Vec<u32>, usize, u32, bool)>,
+        vehicles: impl IntoIterator<Item = usize>,
+        out: &mut Vec<Succ>,
         over: &mut bool,
     ) {
         for v in vehicles {
@@ -171,30 +163,73 @@ impl ProductGraph {
     }
 }
 
-/// Explores the product breadth-first from `init`, up to `max` states.
-pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize) -> ProductGraph {
+/// Explores the product breadth-first from `init`, up to `max` states;
+/// with `deps`, expanding in each state only the moves of a stubborn set of
+/// vehicles (`stubborn.rs`) when one satisfies the cycle proviso.
+pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize, deps: Option<&Deps>) -> ProductGraph {
     let mut index: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
     let mut g = ProductGraph::rooted(&init);
     index.insert(init, 0);
     let mut i = 0usize;
     let mut succ = Vec::new();
+    let mut seeds: Vec<Vec<usize>> = Vec::new();
+    let mut set: Vec<usize> = Vec::new();
     while i < index.len() {
         if i % 4096 == 0 {
             crate::interrupt::poll();
         }
         let st = g.state(i as u32).to_vec();
         succ.clear();
-        // Partial-order reduction: the moves of one vehicle only, when they
-        // form a persistent set and all lead to new states (which keeps
-        // every cycle through a fully expanded state). Dead states and the
-        // reachability of the end are preserved (docs/coordination.md).
+        // Partial-order reduction: the moves of a stubborn set of vehicles
+        // only (`stubborn.rs`), when one of them is enabled and every
+        // successor by a move on a cycle of its vehicle's graph is a state
+        // not yet expanded (index above `i`): a reduced edge then lies on
+        // no cycle or goes up in the order of expansion, so every cycle
+        // keeps a fully expanded state (docs/coordination.md).
         let mut reduced = false;
-        if let Some(v) = p.ample_vehicle(&st) {
-            p.successors(&st, v..v + 1, &mut succ, &mut g.over);
-            if succ.iter().all(|(x, ..)| !index.contains_key(x)) {
-                reduced = true;
-            } else {
+        if let Some(d) = deps {
+            // A vehicle with a single silent, unguarded move is a stubborn
+            // set alone with one successor: nothing does better.
+            for v in 0..p.nv {
+                if let [(TAU, _)] = p.quots[v].out(st[v]) {
+                    succ.clear();
+                    p.successors(&st, v..v + 1, &mut succ, &mut g.over);
+                    let (x, ..) = &succ[0];
+                    if !d.cyclic(v, st[v]) || index.get(x).is_none_or(|&j| j as usize > i) {
+                        reduced = true;
+                        break;
+                    }
+                }
+            }
+            // Each vehicle with an enabled move seeds a set; the set with
+            // the fewest successors that meets the proviso is expanded.
+            seeds.clear();
+            for v in (0..p.nv).filter(|_| !reduced) {
                 succ.clear();
+                p.successors(&st, v..v + 1, &mut succ, &mut g.over);
+                if succ.is_empty() {
+                    continue;
+                }
+                d.closure(p, &st, v, &mut set);
+                if set.len() < p.nv && !seeds.iter().any(|s: &Vec<usize>| s == &set) {
+                    seeds.push(set.clone());
+                }
+            }
+            let mut best: Option<Vec<Succ>> = None;
+            for s in &seeds {
+                succ.clear();
+                p.successors(&st, s.iter().copied(), &mut succ, &mut g.over);
+                let proviso = |(x, v, ..): &Succ| !d.cyclic(*v, st[*v]) || index.get(x).is_none_or(|&j| j as usize > i);
+                if !succ.is_empty() && succ.iter().all(proviso) && best.as_ref().is_none_or(|b| succ.len() < b.len()) {
+                    best = Some(std::mem::take(&mut succ));
+                }
+            }
+            if !reduced {
+                succ.clear();
+                if let Some(b) = best {
+                    succ = b;
+                    reduced = true;
+                }
             }
         }
         if !reduced {

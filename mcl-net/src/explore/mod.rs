@@ -12,7 +12,9 @@
 //! open-addressing table with the packed marking stored inline (`fixed.rs`
 //! specialises it for markings of up to 8 words). With [`Options::threads`]
 //! above 1, `parallel.rs` partitions the states by hash over worker threads
-//! and numbers them exactly as the sequential search does.
+//! and numbers them exactly as the sequential search does. `stubborn.rs`
+//! explores with stubborn sets instead ([`explore_por`]: deadlocks exact,
+//! fewer states).
 
 use std::fmt;
 
@@ -23,6 +25,9 @@ use crate::model::{Marking, Net, PlaceId, TransitionId};
 mod engine;
 mod fixed;
 mod parallel;
+mod stubborn;
+
+pub use stubborn::{explore_por, PorReport};
 
 use engine::Layout;
 
