@@ -35,6 +35,7 @@ fn analyze(path: &str, full: bool, no_walks: bool) {
     };
     let mut opts = mcl_coord::check::options();
     opts.verify.reduction = !full;
+    opts.verify.reduction_threshold = 0;
     if no_walks {
         opts.verify.hunt_threshold = u64::MAX;
     }

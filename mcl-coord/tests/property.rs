@@ -140,7 +140,10 @@ fn hunting() -> AnalyzeOptions {
 }
 
 fn compile(text: &str, seed: u64) -> (Vec<Mission>, Vec<mcl_coord::Constraint>) {
-    let dir = std::env::temp_dir().join(format!("mcl-coord-prop-{}-{seed}", std::process::id()));
+    // One folder per call: tests run in parallel and may use the same seed.
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("mcl-coord-prop-{}-{seed}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let vehicle = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/vehicle.mcl");
     std::fs::copy(vehicle, dir.join("vehicle.mcl")).unwrap();

@@ -128,7 +128,7 @@ pub(super) fn verify_group(
     // found under the reduction is confirmed on the full product.
     // The exact dependencies hold while no count passes K; when one does,
     // the product is explored again with the coarse ones.
-    let mut reduce = opts.reduction;
+    let mut reduce = opts.reduction && estimate > opts.reduction_threshold as f64;
     let mut exact_deps = true;
     let mut deps = reduce.then(|| Deps::new(quots, &effects, sups.len(), true));
     loop {

@@ -98,6 +98,12 @@ pub struct VerifyOptions {
     /// Explore the product with stubborn sets of vehicles (partial-order
     /// reduction, `stubborn.rs`); off, every interleaving is expanded.
     pub reduction: bool,
+    /// The reduction is used only above this many combinations of the
+    /// vehicles' reduced states (the product of their class counts): a
+    /// smaller product is explored whole, every interleaving, so that its
+    /// counterexamples are the shortest ones and the dry-run scenarios built
+    /// from them replay as often as before the reduction existed.
+    pub reduction_threshold: u64,
 }
 
 impl Default for VerifyOptions {
@@ -110,6 +116,7 @@ impl Default for VerifyOptions {
             hunt_threshold: 1_000_000,
             hunt_steps: 200_000,
             reduction: true,
+            reduction_threshold: 100_000,
         }
     }
 }
