@@ -298,3 +298,37 @@ fn a_counterexample_that_needs_a_late_start_replays() {
     }
     assert!(late > 0, "no scenario needed a late start: {written:?}\n{err}");
 }
+
+/// A counterexample that needs a coordination message delivered late
+/// (found by random seeds): the scenario's `[[counterexample.delay]]`
+/// holds `b`'s first message to `a` until after `b`'s first event; the
+/// dry run reproduces it, and the same scenario without the delay does not.
+#[test]
+fn a_late_message_replays_a_counterexample_that_needs_one() {
+    let dir = out_dir("delay");
+    std::fs::copy("examples/vehicle.mcl", dir.join("vehicle.mcl")).unwrap();
+    let src = dir.join("m.mcl");
+    std::fs::write(
+        &src,
+        "import \"vehicle.mcl\";\n\
+         mission : a { monitor { parallel { GotoTarget() : l1 } and { Deploy() : l2 } } condition ( Alarm() ) do { Surface() } }\n\
+         mission : b { parallel { Deploy() : l1 } and { parallel { Surface() : l2 } and { Goto( p ) : l3 } } }\n\
+         constraints {\n sync { a:l2, b:l2 }\n mutex { a:l1, b:l1 } = 1\n mutex { a:l1, b:l2 } = 1\n}\n",
+    )
+    .unwrap();
+    let out = dir.join("cex.toml");
+    let o = mcl(&["check", src.to_str().unwrap(), "--counterexample-scenario", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains("[[counterexample.delay]]"), "{text}");
+    let (code, err, _) = run(src.to_str().unwrap(), &out);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(err.contains(": reproduced"), "{err}");
+    // Without the late message, the dry run ends elsewhere.
+    let start = text.find("\n[[counterexample.delay]]").unwrap();
+    let end = text[start + 1..].find("\n\n").map_or(text.len(), |k| start + 1 + k);
+    let undelayed = dir.join("undelayed.toml");
+    std::fs::write(&undelayed, format!("{}{}", &text[..start], &text[end..])).unwrap();
+    let (_, err, _) = run(src.to_str().unwrap(), &undelayed);
+    assert!(!err.contains(": reproduced"), "{err}");
+}

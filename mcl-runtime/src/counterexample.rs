@@ -83,6 +83,29 @@ pub struct Expected {
     /// first steps after another's events.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub start: BTreeMap<String, f64>,
+    /// Coordination messages that arrive late (`[[counterexample.delay]]`,
+    /// virtual time only): a counterexample may need a vehicle to receive a
+    /// message only after another vehicle's event, as over a real link.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub delay: Vec<Delay>,
+}
+
+/// One late coordination message of a counterexample scenario: message
+/// number `seq` from mission `from` to mission `to` (numbered from 1 per
+/// receiver, as the trace's `coord_send` records number them) reaches `to`
+/// at `at` seconds of virtual time, and the later messages of that link
+/// after it (`multi::Vehicle::delaying`).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Delay {
+    /// The sending mission.
+    pub from: String,
+    /// The receiving mission.
+    pub to: String,
+    /// The message's number on the link `from` → `to`.
+    pub seq: u64,
+    /// When it is delivered, in seconds of virtual time.
+    pub at: f64,
 }
 
 /// A firing sequence to replay.
@@ -241,6 +264,21 @@ pub enum LateStart {
 /// only at the point `when` of the path, at an instant of its own
 /// ([`Schedule::start`]); the others begin at 0.
 pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: LateStart) -> Result<Schedule, String> {
+    schedule_with(cx, seed, late, when, false)
+}
+
+/// [`schedule_late`]; with `lenient`, the events and timers of the path
+/// that the player cannot take are kept (an event at its instant) or passed
+/// over instead of failing: the schedule of a path that needs a late
+/// message ([`Delay`]), which the player on the net of `cx`, where every
+/// vehicle sees every firing at once, cannot follow.
+fn schedule_with(
+    cx: &Counterexample<'_>,
+    seed: u64,
+    late: &[String],
+    when: LateStart,
+    lenient: bool,
+) -> Result<Schedule, String> {
     let net = Arc::new(if late.is_empty() { cx.net.clone() } else { gated(cx.net, late)? });
     // Each late mission's start, where `when` says.
     let mut path: Vec<TransitionId> = Vec::with_capacity(cx.path.len() + late.len());
@@ -301,7 +339,7 @@ pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: 
                     Output::Event { transition, .. } => Some(*transition),
                     _ => None,
                 });
-                if fired != Some(t) {
+                if fired != Some(t) && !lenient {
                     return Err(match fired {
                         Some(x) => format!("step {}: event `{e}` fired `{}`, not `{}`", i + 1, name(x), tr.id),
                         None => format!("step {}: event `{e}` found `{}` not enabled", i + 1, tr.id),
@@ -320,6 +358,9 @@ pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: 
             }
             TransitionKind::Timed(_) => {
                 let Some(&(_, due)) = player.timers().iter().find(|(x, _)| *x == t) else {
+                    if lenient {
+                        continue;
+                    }
                     return Err(format!("step {}: the timer of `{}` is not running", i + 1, tr.id));
                 };
                 let outs = player.on_timer(due);
@@ -328,6 +369,7 @@ pub fn schedule_late(cx: &Counterexample<'_>, seed: u64, late: &[String], when: 
                     Some(k) => {
                         pending.remove(k);
                     }
+                    None if lenient => {}
                     None => return Err(format!("step {}: timer `{}` did not fire at {due} s", i + 1, tr.id)),
                 }
             }
@@ -375,6 +417,10 @@ pub fn scenario_text(schedule: &Schedule, tasks: &[String], expected: &Expected,
         for (m, t) in &expected.start {
             let _ = writeln!(s, "{} = {t:?}", key(m));
         }
+    }
+    for d in &expected.delay {
+        let _ = writeln!(s, "\n[[counterexample.delay]]");
+        let _ = writeln!(s, "from = {}\nto = {}\nseq = {}\nat = {:?}", q(&d.from), q(&d.to), d.seq, d.at);
     }
     for t in tasks {
         let _ = writeln!(s, "\n[tasks.{}]\noutcome = \"never\"", key(t));
@@ -430,20 +476,90 @@ pub fn build(
             Err(e) => format!("{first}; and later: {e}"),
         }
     };
+    let why = match build_other(cx, tasks, expected, per_mission, &check) {
+        Ok(text) => return Ok(text),
+        Err(e) => format!("{why}; {e}"),
+    };
+    if !cx.centralized {
+        return Err(why);
+    }
+    build_delayed(cx, tasks, expected, &check, &late).map_err(|e| format!("{why}; with a late message: {e}"))
+}
+
+/// [`build`] along the shortest path of the same net to the same marking.
+fn build_other(
+    cx: &Counterexample<'_>,
+    tasks: &[String],
+    expected: &Expected,
+    per_mission: bool,
+    check: &impl Fn(&str) -> Result<(), String>,
+) -> Result<String, String> {
     let ss = mcl_net::explore(cx.net, &mcl_net::Options { max_states: SEARCH_STATES, ..Default::default() });
     let target = ss
         .states()
         .find(|&s| !ss.is_vanishing(s) && same_marking(&expected.marking, &cx.marked(&ss.marking(s))).is_ok());
     let Some(target) = target else {
         return Err(format!(
-            "{why}; and no run {}reaches that marking when every vehicle starts at once",
+            "and no run {}reaches that marking when every vehicle starts at once",
             if ss.complete() { "" } else { "within the markings explored " }
         ));
     };
     let path = ss.path_to(target);
     let other = Counterexample { path: &path, ..*cx };
-    build_on(&other, tasks, expected, per_mission, &check, (&[], LateStart::First))
-        .map_err(|e| format!("{why}; and along another run: {e}"))
+    build_on(&other, tasks, expected, per_mission, check, (&[], LateStart::First))
+        .map_err(|e| format!("and along another run: {e}"))
+}
+
+/// A centralized `cx` whose path no player follows: the schedule of its
+/// events ([`schedule_with`], lenient; every vehicle at once, then those of
+/// `late` starting late as in [`build_on`]) with one coordination message
+/// delivered late ([`Delay`]): each message of each link, number 1 up to
+/// the sender's steps in the path, at each instant halfway between two
+/// inputs of the schedule (or [`STEP`] / 2 after the last), until `check`
+/// accepts one. The verifier lets a vehicle leave a transition unfired that
+/// a message allowed while another vehicle's event withdraws what allowed
+/// it; a real link that delivers that message after the event does the same.
+fn build_delayed(
+    cx: &Counterexample<'_>,
+    tasks: &[String],
+    expected: &Expected,
+    check: &impl Fn(&str) -> Result<(), String>,
+    late: &[String],
+) -> Result<String, String> {
+    let missions: Vec<String> = cx.missions().into_iter().collect();
+    let mut why = String::from("no schedule of the events");
+    let ways = [(&[][..], LateStart::First), (late, LateStart::First), (late, LateStart::FirstWait)];
+    for (k, &(l, when)) in ways.iter().enumerate() {
+        if k > 0 && l.is_empty() {
+            continue;
+        }
+        let Some(sch) = (0..SEEDS).find_map(|seed| schedule_with(cx, seed, l, when, true).ok()) else { continue };
+        let mut inputs: Vec<f64> = sch.events.iter().map(|e| e.0).chain(sch.start.values().copied()).collect();
+        inputs.sort_by(f64::total_cmp);
+        inputs.dedup();
+        let mut ats: Vec<f64> = inputs.windows(2).map(|w| (w[0] + w[1]) / 2.0).collect();
+        ats.extend(inputs.last().map(|t| t + STEP / 2.0));
+        for from in &missions {
+            let prefix = format!("{from}{SEP}");
+            let steps =
+                cx.path.iter().filter(|&&t| cx.net.transition(t).is_some_and(|x| x.id.starts_with(&prefix))).count()
+                    as u64;
+            for to in missions.iter().filter(|t| *t != from) {
+                for seq in 1..=steps {
+                    for &at in &ats {
+                        let delay = vec![Delay { from: from.clone(), to: to.clone(), seq, at }];
+                        let want = Expected { start: sch.start.clone(), delay, ..expected.clone() };
+                        let text = scenario_text(&sch, tasks, &want, true);
+                        match check(&text) {
+                            Ok(()) => return Ok(text),
+                            Err(e) => why = format!("no late message makes a dry run reproduce it ({e})"),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Err(why)
 }
 
 /// Largest number of markings [`build`] explores to find another path.
@@ -642,7 +758,11 @@ pub fn check_vehicles(nets: &[(String, Arc<Net>)], text: &str) -> Result<(), Str
         let mut vs = Vec::new();
         for ((name, net, opts, tracer, mock), tr) in parts.into_iter().zip(crate::coord::in_process(&names)) {
             let start = expected.start.get(&name).copied().unwrap_or(0.0);
-            vs.push(crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?.starting_at(start));
+            let mut v = crate::multi::Vehicle::new(&name, net, opts, tracer, mock, Box::new(tr))?.starting_at(start);
+            for d in expected.delay.iter().filter(|d| d.from == name) {
+                v = v.delaying(&d.to, d.seq, d.at);
+            }
+            vs.push(v);
         }
         crate::multi::run_virtual(vs, shared, Limits::virtual_time(None)).await
     })?;
@@ -709,6 +829,21 @@ mod tests {
         };
         let e = build(&cx, &[], &nowhere, false, |t| check_single(&net, "m", t)).unwrap_err();
         assert!(e.contains("no run reaches that marking"), "{e}");
+    }
+
+    #[test]
+    fn late_messages_are_written_and_read_back() {
+        let expected = Expected {
+            code: "E0406".into(),
+            at: "x:1".into(),
+            marking: BTreeMap::from([("b".to_string(), vec!["p".to_string()])]),
+            delay: vec![Delay { from: "a".into(), to: "b".into(), seq: 2, at: 2.5 }],
+            ..Default::default()
+        };
+        let s = Schedule { seed: 0, events: Vec::new(), marking: BTreeMap::new(), start: BTreeMap::new() };
+        let text = scenario_text(&s, &[], &expected, true);
+        assert!(text.contains("[[counterexample.delay]]\nfrom = \"a\"\nto = \"b\"\nseq = 2\nat = 2.5"), "{text}");
+        assert_eq!(expected_of(&text).unwrap(), expected);
     }
 
     #[test]

@@ -103,6 +103,7 @@ pub struct Vehicle {
     resume: Option<Vec<Entry>>,
     crash_after: Option<u64>,
     start_at: f64,
+    delays: Vec<(String, u64, f64)>,
 }
 
 impl Vehicle {
@@ -136,6 +137,7 @@ impl Vehicle {
             resume: None,
             crash_after: None,
             start_at: 0.0,
+            delays: Vec::new(),
         })
     }
 
@@ -143,6 +145,19 @@ impl Vehicle {
     /// ([`run_virtual`]; 0, the default: at once), not before.
     pub fn starting_at(mut self, t: f64) -> Self {
         self.start_at = if t.is_finite() { t.max(0.0) } else { 0.0 };
+        self
+    }
+
+    /// In [`run_virtual`] without a modelled link, the vehicle's message
+    /// number `seq` to mission `to` (numbered from 1 per receiver, as
+    /// [`CoordMessage::seq`]) reaches `to` only at `until` seconds of
+    /// virtual time (a counterexample scenario's `[[counterexample.delay]]`:
+    /// a late message of a real link), and the later messages to `to`
+    /// after it (delivered in order).
+    pub fn delaying(mut self, to: &str, seq: u64, until: f64) -> Self {
+        if until.is_finite() {
+            self.delays.push((to.to_string(), seq, until));
+        }
         self
     }
 
@@ -227,6 +242,8 @@ struct Live<'a> {
     peers_ended: usize,
     /// When its mission begins (virtual time).
     start_at: f64,
+    /// Its messages delivered late ([`Vehicle::delaying`]).
+    delays: Vec<(String, u64, f64)>,
 }
 
 impl Live<'_> {
@@ -698,6 +715,7 @@ fn live(vehicles: Vec<Vehicle>, handles: &mut [SharedHandle]) -> Vec<Live<'_>> {
             ended_sent: false,
             peers_ended: 0,
             start_at: v.start_at,
+            delays: v.delays,
         })
         .collect()
 }
@@ -775,7 +793,7 @@ pub async fn run_virtual_with_link(
     let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
     let vs = live(vehicles, &mut handles);
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
-    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel };
+    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel, held: Vec::new() };
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings; those given a later start time
     // start then (`Due::Start`).
@@ -844,10 +862,16 @@ struct Fleet<'a> {
     now: f64,
     /// The modelled link, when messages travel over one.
     channel: Option<Channel>,
+    /// Without one, the messages delivered late ([`Vehicle::delaying`]),
+    /// in the order sent, each with its delivery time.
+    held: Vec<(f64, CoordMessage)>,
 }
 
 /// The [`Discrete`] source of the modelled link's events.
 const LINK: (usize, Due) = (usize::MAX, Due::Link);
+
+/// The [`Discrete`] source of the messages delivered late.
+const HELD: (usize, Due) = (usize::MAX, Due::Held);
 
 impl Fleet<'_> {
     /// Settles the consequences of the last inputs, messages included, at
@@ -875,9 +899,12 @@ impl Fleet<'_> {
                         Incoming::Message(got) => {
                             match &mut self.channel {
                                 Some(c) => c.offer(now, got)?,
-                                None => {
-                                    self.vs[j].received(got, now.max(m.t))?;
-                                }
+                                None => match self.held_until(i, &got) {
+                                    Some(until) if until > now => self.held.push((until, got)),
+                                    _ => {
+                                        self.vs[j].received(got, now.max(m.t))?;
+                                    }
+                                },
                             }
                             break;
                         }
@@ -896,6 +923,15 @@ impl Fleet<'_> {
         }
         Ok(())
     }
+
+    /// When the message `m` that vehicle `i` sent is delivered, if late:
+    /// the time its sender's delays give it, and not before a message
+    /// still held on the same link (messages arrive in order).
+    fn held_until(&self, i: usize, m: &CoordMessage) -> Option<f64> {
+        let own = self.vs[i].delays.iter().filter(|(to, seq, _)| *to == m.to && *seq == m.seq).map(|d| d.2);
+        let before = self.held.iter().filter(|(_, h)| h.from == m.from && h.to == m.to).map(|h| h.0);
+        own.chain(before).reduce(f64::max)
+    }
 }
 
 /// What is due for a vehicle of a virtual-time run.
@@ -909,6 +945,8 @@ enum Due {
     Start,
     /// The modelled link's deliveries ([`LINK`], not a vehicle's).
     Link,
+    /// The deliveries of messages held late ([`HELD`], not a vehicle's).
+    Held,
 }
 
 impl Discrete for Fleet<'_> {
@@ -934,13 +972,22 @@ impl Discrete for Fleet<'_> {
             out.extend(v.mock.next_deadline().map(|t| (t, (i, Due::Vehicle))));
         }
         out.extend(self.channel.as_ref().and_then(Channel::next_deadline).map(|t| (t, LINK)));
+        out.extend(self.held.iter().map(|h| h.0).reduce(f64::min).map(|t| (t, HELD)));
     }
 
     async fn step(&mut self, t: f64, (i, due): (usize, Due)) -> Result<(), String> {
         self.now = self.now.max(t);
-        if due == Due::Link {
-            let Some(c) = &mut self.channel else { return Ok(()) };
-            for m in c.step(t)? {
+        if due == Due::Link || due == Due::Held {
+            let arrived = match &mut self.channel {
+                Some(c) if due == Due::Link => c.step(t)?,
+                Some(_) => Vec::new(),
+                None => {
+                    let (due_now, later): (Vec<_>, Vec<_>) = self.held.drain(..).partition(|h| h.0 <= t);
+                    self.held = later;
+                    due_now.into_iter().map(|h| h.1).collect()
+                }
+            };
+            for m in arrived {
                 let j = *self.index.get(&m.to).ok_or_else(|| format!("a message for an unknown mission `{}`", m.to))?;
                 self.vs[j].received(m, t)?;
             }

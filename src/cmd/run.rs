@@ -1282,6 +1282,11 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             if let Some(t) = counterexample.as_ref().and_then(|e| e.start.get(&name)).filter(|_| o.virtual_time) {
                 v = v.starting_at(*t);
             }
+            // ... and deliver given messages late (`[[counterexample.delay]]`).
+            let delays = counterexample.as_ref().filter(|_| o.virtual_time).map(|e| e.delay.as_slice()).unwrap_or(&[]);
+            for d in delays.iter().filter(|d| d.from == name) {
+                v = v.delaying(&d.to, d.seq, d.at);
+            }
             vs.push(match journal_writer.take() {
                 Some(w) => v.with_journal(w, resume_entries.clone(), o.crash_after),
                 None => v,
