@@ -301,7 +301,7 @@ fn a_counterexample_that_needs_a_late_start_replays() {
 
 /// A counterexample that needs a coordination message delivered late
 /// (found by random seeds): the scenario's `[[counterexample.delay]]`
-/// holds `b`'s first message to `a` until after `b`'s first event; the
+/// holds a message until after the other vehicle's event; the
 /// dry run reproduces it, and the same scenario without the delay does not.
 #[test]
 fn a_late_message_replays_a_counterexample_that_needs_one() {
@@ -311,15 +311,18 @@ fn a_late_message_replays_a_counterexample_that_needs_one() {
     std::fs::write(
         &src,
         "import \"vehicle.mcl\";\n\
-         mission : a { monitor { parallel { GotoTarget() : l1 } and { Deploy() : l2 } } condition ( Alarm() ) do { Surface() } }\n\
-         mission : b { parallel { Deploy() : l1 } and { parallel { Surface() : l2 } and { Goto( p ) : l3 } } }\n\
-         constraints {\n sync { a:l2, b:l2 }\n mutex { a:l1, b:l1 } = 1\n mutex { a:l1, b:l2 } = 1\n}\n",
+         mission : a { try { try { SendData() : l1 } catch { SendData() : l2 } } catch { Surface() : l3 ; GotoTarget() : l4 } }\n\
+         mission : b { monitor { Goto( p ) : l1 } condition ( Alarm() ) do { Surface() } }\n\
+         constraints {\n sync { a:l1, b:l1 }\n sync { a:l4, b:l1 }\n}\n",
     )
     .unwrap();
     let out = dir.join("cex.toml");
     let o = mcl(&["check", src.to_str().unwrap(), "--counterexample-scenario", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let text = std::fs::read_to_string(&out).unwrap();
+    // Two problems, one scenario each (`cex-1.toml`, `cex-2.toml`): the
+    // first (`a:l1` waits for ever) needs the late message.
+    let out = dir.join("cex-1.toml");
+    let text = std::fs::read_to_string(&out).unwrap_or_else(|e| panic!("{e}: {}", stderr(&o)));
     assert!(text.contains("[[counterexample.delay]]"), "{text}");
     let (code, err, _) = run(src.to_str().unwrap(), &out);
     assert_eq!(code, Some(3), "{err}");

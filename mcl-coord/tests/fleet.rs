@@ -26,7 +26,12 @@ fn opts(reduction: bool) -> AnalyzeOptions {
     AnalyzeOptions {
         structure: false,
         // No random walks: the exhaustive product alone decides.
-        verify: VerifyOptions { reduction, reduction_threshold: 0, hunt_threshold: u64::MAX, ..VerifyOptions::default() },
+        verify: VerifyOptions {
+            reduction,
+            reduction_threshold: 0,
+            hunt_threshold: u64::MAX,
+            ..VerifyOptions::default()
+        },
         ..AnalyzeOptions::default()
     }
 }
