@@ -15,7 +15,7 @@
 //! Sans-IO: nothing here opens a socket. Only the binary and the tests that
 //! need it link this crate.
 
-
+pub mod bridge;
 pub mod cdr;
 pub mod idl;
 pub mod path;
