@@ -1,4 +1,5 @@
-//! Field paths into messages: `data`, `pose.position.x`, `ranges[3]`; what
+//! Field paths into messages: `data`, `pose.position.x`, `ranges[3]` (and
+//! `[1]` into an array value); what
 //! type a path names in a message type ([`kind_at`]), and the value it
 //! names in a decoded message ([`get`]).
 
@@ -15,15 +16,19 @@ pub enum Step {
 /// The steps of `path`, or why it is not a path.
 pub fn parse(path: &str) -> Result<Vec<Step>, String> {
     let mut steps = Vec::new();
-    for part in path.split('.') {
+    for (k, part) in path.split('.').enumerate() {
         let (name, mut rest) = match part.find('[') {
             Some(i) => (&part[..i], &part[i..]),
             None => (part, ""),
         };
-        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-            return Err(format!("`{path}` is not a field path (`a.b`, `a[2].b`)"));
+        // A path may start with an index (`[1]`, into an array value).
+        let leading_index = k == 0 && name.is_empty() && !rest.is_empty();
+        if !leading_index {
+            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+                return Err(format!("`{path}` is not a field path (`a.b`, `a[2].b`)"));
+            }
+            steps.push(Step::Field(name.to_string()));
         }
-        steps.push(Step::Field(name.to_string()));
         while !rest.is_empty() {
             let close = rest.find(']').ok_or_else(|| format!("`{path}`: expected `]`"))?;
             let n: usize =

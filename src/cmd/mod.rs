@@ -11,6 +11,7 @@ pub mod lsp;
 pub mod mock_aac;
 pub mod new;
 pub mod plan;
+pub mod ros2;
 pub mod run;
 pub mod sim;
 

@@ -17,7 +17,7 @@
 //! [primitives.GotoPrimitive.action]
 //! name = "/goto"
 //! type = "nav/action/GoTo"
-//! goal = { "target.x" = "$way-point.x", speed = 0.5 }
+//! goal = { "target.x" = "$way-point[0]", "target.y" = "$way-point[1]", speed = 0.5 }
 //! succeeded = "eventGotoOk"
 //! aborted = "eventGotoFail"
 //! ```

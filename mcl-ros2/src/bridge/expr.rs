@@ -4,7 +4,7 @@
 //! action goal holds) is a TOML boolean or number (a constant), a string
 //! (a constant; `$$` at the start is a literal `$`), or a string starting
 //! with `$`: an MCL parameter of the command, optionally a path into it and
-//! a unit scaling, `"$depth"`, `"$way-point.x"`, `"$depth * 0.01"`,
+//! a unit scaling, `"$depth"`, `"$way-point[0]"`, `"$target.x"`, `"$depth * 0.01"`,
 //! `"$heading + 90"`.
 //!
 //! A **condition** (when a message raises an event) compares a field of the
@@ -79,8 +79,9 @@ fn parse_param(text: &str) -> Result<Source, String> {
         None => (text.trim(), None),
     };
     // MCL parameter names may hold `-` (`way-point`); the path starts at the first `.`.
-    let (name, path) = match head.split_once('.') {
-        Some((n, p)) => (n, Some(p.to_string())),
+    let (name, path) = match head.find(['.', '[']) {
+        Some(i) if head[i..].starts_with('.') => (&head[..i], Some(head[i + 1..].to_string())),
+        Some(i) => (&head[..i], Some(head[i..].to_string())),
         None => (head, None),
     };
     if name.is_empty() || !name.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '-') {
@@ -188,6 +189,9 @@ mod tests {
         assert_eq!(s.eval(&p).unwrap(), json!(2.5));
         let s = Source::parse(&toml::Value::String("$way-point.x".into())).unwrap();
         assert_eq!(s.eval(&p).unwrap(), json!(3.0));
+        let q = json!({"way-point": [24, 12]}).as_object().unwrap().clone();
+        let s = Source::parse(&toml::Value::String("$way-point[1] * 2".into())).unwrap();
+        assert_eq!(s.eval(&q).unwrap(), json!(24.0));
         let s = Source::parse(&toml::Value::String("$depth - 50".into())).unwrap();
         assert_eq!(s.eval(&p).unwrap(), json!(200.0));
         assert_eq!(Source::parse(&toml::Value::String("$$5".into())).unwrap(), Source::Const(json!("$5")));
