@@ -60,9 +60,26 @@ fn join(path: &str, name: &str) -> String {
 
 /// `value` as the message `full` (`pkg/msg/Name`), header included.
 pub fn encode(reg: &Registry, full: &str, value: &Value) -> Result<Vec<u8>, CdrError> {
-    let mut w = Writer { buf: HEADER_LE.to_vec() };
+    let mut w = Writer { buf: HEADER_LE.to_vec(), base: 4, offset: 0 };
     w.message(reg, full, value, "", 0)?;
     Ok(w.buf)
+}
+
+/// The body of `value` as the message `full` (little endian, no header),
+/// aligned as if it started `offset` octets into the stream: a message
+/// nested in another one that is encoded elsewhere (an action's result
+/// after its `int8 status` starts at offset 1).
+pub fn encode_body(reg: &Registry, full: &str, value: &Value, offset: usize) -> Result<Vec<u8>, CdrError> {
+    let mut w = Writer { buf: Vec::new(), base: 0, offset };
+    w.message(reg, full, value, "", 0)?;
+    Ok(w.buf)
+}
+
+/// The message `full` read from a little-endian body without header that
+/// starts `offset` octets into its stream (see [`encode_body`]).
+pub fn decode_body(reg: &Registry, full: &str, body: &[u8], offset: usize) -> Result<Value, CdrError> {
+    let mut r = Reader { buf: body, pos: 0, little: true, offset };
+    r.message(reg, full, "", 0)
 }
 
 /// The message `full` read from `bytes` (header included).
@@ -73,7 +90,7 @@ pub fn decode(reg: &Registry, full: &str, bytes: &[u8]) -> Result<Value, CdrErro
         (0x00, 0x00) => false,
         (a, b) => return Err(error("", format!("encapsulation {a:02x} {b:02x} is not plain CDR"))),
     };
-    let mut r = Reader { buf: body, pos: 0, little };
+    let mut r = Reader { buf: body, pos: 0, little, offset: 0 };
     r.message(reg, full, "", 0)
 }
 
@@ -118,11 +135,15 @@ fn default_base(reg: &Registry, owner: &str, base: &BaseType, depth: usize) -> V
 
 struct Writer {
     buf: Vec<u8>,
+    /// Octets of `buf` before the stream (the header).
+    base: usize,
+    /// Where `buf`'s stream starts in the whole stream.
+    offset: usize,
 }
 
 impl Writer {
     fn align(&mut self, n: usize) {
-        while !(self.buf.len() - 4).is_multiple_of(n) {
+        while !(self.buf.len() - self.base + self.offset).is_multiple_of(n) {
             self.buf.push(0);
         }
     }
@@ -272,6 +293,8 @@ struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
     little: bool,
+    /// Where `buf` starts in the whole stream.
+    offset: usize,
 }
 
 impl Reader<'_> {
@@ -287,7 +310,7 @@ impl Reader<'_> {
     }
 
     fn align(&mut self, n: usize, path: &str) -> Result<(), CdrError> {
-        let pad = (n - self.pos % n) % n;
+        let pad = (n - (self.pos + self.offset) % n) % n;
         self.take(pad, path).map(|_| ())
     }
 

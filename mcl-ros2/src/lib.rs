@@ -10,7 +10,10 @@
 //!   encapsulation header) of a JSON value against a registered type;
 //! - [`bridge`]: the bridge file `BRIDGE.toml` that maps each primitive of a
 //!   vehicle file to topics, services and actions, checked against the
-//!   vehicle file and the message types with file and line.
+//!   vehicle file and the message types with file and line, and the
+//!   bridge as a sans-IO state machine;
+//! - [`raw`]: an encoded body carried through a CDR serde serializer (the
+//!   typed API of `ros2-client`/`rustdds`).
 //!
 //! Sans-IO: nothing here opens a socket. Only the binary and the tests that
 //! need it link this crate.
@@ -19,3 +22,4 @@ pub mod bridge;
 pub mod cdr;
 pub mod idl;
 pub mod path;
+pub mod raw;
