@@ -15,11 +15,13 @@
 //! - [`raw`]: an encoded body carried through a CDR serde serializer (the
 //!   typed API of `ros2-client`/`rustdds`).
 //!
-//! Sans-IO: nothing here opens a socket. Only the binary and the tests that
+//! All of it is sans-IO but [`node`], the ROS 2 node of `mcl run --ros2`
+//! (on `ros2-client`: topics for now). Only the binary and the tests that
 //! need it link this crate.
 
 pub mod bridge;
 pub mod cdr;
 pub mod idl;
+pub mod node;
 pub mod path;
 pub mod raw;

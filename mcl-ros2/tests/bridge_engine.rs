@@ -28,8 +28,10 @@ perceptions = [{ topic = "/alarm", type = "std_msgs/msg/Bool", field = "data", n
 enable = { call = "/captain/depth", type = "std_srvs/srv/SetBool", fields = { data = true }, on_response = [{ when = "success == false", event = "eventDepthFail" }] }
 "#;
 
-fn engine() -> Engine {
-    let dir = std::env::temp_dir().join(format!("mcl-ros2-engine-{}", std::process::id()));
+/// The engine of `BRIDGE`, from a folder of its own per test (`name`):
+/// the tests run in parallel.
+fn engine(name: &str) -> Engine {
+    let dir = std::env::temp_dir().join(format!("mcl-ros2-engine-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("interfaces/nav/action")).unwrap();
     std::fs::write(
@@ -62,7 +64,7 @@ fn params(v: Value) -> Map<String, Value> {
 
 #[test]
 fn an_action_primitive_sends_goals_cancels_and_maps_ends() {
-    let mut e = engine();
+    let mut e = engine("action");
     let out = e.on_command("GotoPrimitive", "enable", &params(json!({"way-point": [24, 12], "speed": 2})));
     assert_eq!(
         out,
@@ -100,7 +102,7 @@ fn an_action_primitive_sends_goals_cancels_and_maps_ends() {
 
 #[test]
 fn topic_events_only_while_enabled_and_perceptions_always() {
-    let mut e = engine();
+    let mut e = engine("topic");
     assert_eq!(e.subscriptions().get("/alarm").map(String::as_str), Some("std_msgs/msg/Bool"));
     let alarm = json!({"data": true});
     assert_eq!(e.on_message("/alarm", &alarm), [Out::Perception { name: "alarm".into(), value: json!(true) }]);
@@ -117,7 +119,7 @@ fn topic_events_only_while_enabled_and_perceptions_always() {
 
 #[test]
 fn service_responses_raise_their_events_and_failures_warn() {
-    let mut e = engine();
+    let mut e = engine("service");
     let out = e.on_command("DepthPrimitive", "enable", &params(json!({"depth": 10})));
     let Out::Call { call, service, request, .. } = &out[0] else { panic!("{out:?}") };
     assert_eq!((service.as_str(), request), ("/captain/depth", &json!({"data": true})));

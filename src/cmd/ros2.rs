@@ -1,6 +1,8 @@
-//! The ROS 2 bridge file in `mcl check --ros2 BRIDGE.toml`: the vehicle
-//! that the checked programs describe (`mcl_compiler::interface`), and the
-//! bridge's errors against it (`mcl_ros2::bridge`).
+//! The ROS 2 bridge in the commands: `mcl check --ros2 BRIDGE.toml` (the
+//! vehicle that the checked programs describe, `mcl_compiler::interface`,
+//! and the bridge's errors against it, `mcl_ros2::bridge`) and `mcl run
+//! --ros2 BRIDGE.toml` (the bridge's engine, and its ROS 2 node on a thread
+//! of its own, `mcl_ros2::node`).
 
 use mcl_compiler::interface::vehicle_interface;
 use mcl_compiler::{Database, SourceFile};
@@ -53,4 +55,48 @@ pub fn to_json(e: &BridgeError) -> serde_json::Value {
         "code": "ros2",
         "message": e.message,
     })
+}
+
+/// The bridge engine of `mcl run --ros2 BRIDGE FILE`, or the exit status
+/// after its errors are printed (2: the bridge does not fit the vehicle).
+pub fn engine_for(bridge: &Path, file: &Path) -> Result<mcl_ros2::bridge::engine::Engine, u8> {
+    if file.extension().is_none_or(|e| e != "mcl") {
+        eprintln!("error: --ros2 needs the .mcl file, whose vehicle the bridge is checked against");
+        return Err(2);
+    }
+    let db = Database::new();
+    let root = super::source_file(&db, file).map_err(|e| {
+        eprintln!("error: {e}");
+        2u8
+    })?;
+    match mcl_ros2::bridge::load(bridge, &vehicle_of(&db, &[root])) {
+        Ok(loaded) => Ok(mcl_ros2::bridge::engine::Engine::new(loaded)),
+        Err(es) => {
+            for e in es {
+                eprintln!("{e}");
+            }
+            Err(2)
+        }
+    }
+}
+
+/// Starts the ROS 2 node serving `end` on a thread of its own (none
+/// without an engine).
+pub fn spawn_node(
+    engine: Option<mcl_ros2::bridge::engine::Engine>,
+    end: mcl_runtime::link::AacEnd,
+) -> Option<std::thread::JoinHandle<()>> {
+    let engine = engine?;
+    Some(std::thread::spawn(move || {
+        if let Err(e) = mcl_ros2::node::serve(engine, end, |w| eprintln!("warning: {w}")) {
+            eprintln!("error: {e}");
+        }
+    }))
+}
+
+/// Waits for the node to leave (after the player closed its link).
+pub fn join_node(node: Option<std::thread::JoinHandle<()>>) {
+    if let Some(n) = node {
+        let _ = n.join();
+    }
 }
