@@ -53,6 +53,10 @@ enum Command {
         /// in the order of the diagnostics (docs/scenarios.md, "Counterexamples").
         #[arg(long, value_name = "OUT.toml")]
         counterexample_scenario: Option<PathBuf>,
+        /// Also check this ROS 2 bridge file (docs/ros2.md) against the vehicle the checked
+        /// files describe and the message types it uses; its errors have file and line.
+        #[arg(long, value_name = "BRIDGE.toml")]
+        ros2: Option<PathBuf>,
     },
     /// Compile the missions of a file to Petri nets (PNML 2009), and optionally Graphviz.
     ///
@@ -262,8 +266,8 @@ fn main() -> ExitCode {
         }
     };
     let code = match cli.command {
-        Command::Check { paths, format, color, counterexample_scenario } => {
-            cmd::check::run(&paths, format, color, counterexample_scenario.as_deref())
+        Command::Check { paths, format, color, counterexample_scenario, ros2 } => {
+            cmd::check::run(&paths, format, color, counterexample_scenario.as_deref(), ros2.as_deref())
         }
         Command::Explain { code } => cmd::explain::run(code.as_deref()),
         Command::Interface { file, format } => cmd::interface::run(&file, format),

@@ -4,7 +4,9 @@
 //! is reported on standard error and the others are checked (exit status 2).
 //! With `--counterexample-scenario OUT.toml`, the counterexamples of the
 //! deadlocks reported are written as scenarios for `mcl run`
-//! (`mcl_coord::replay`; messages on standard error).
+//! (`mcl_coord::replay`; messages on standard error). With `--ros2
+//! BRIDGE.toml`, the ROS 2 bridge file is checked against the vehicle of the
+//! checked files (`src/cmd/ros2.rs`).
 
 use crate::{ColorChoice, Format};
 use mcl_compiler::diagnostics::{render_human, to_json};
@@ -13,7 +15,13 @@ use mcl_syntax::Severity;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
-pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice, scenario_out: Option<&Path>) -> u8 {
+pub fn run(
+    paths: &[PathBuf],
+    format: Format,
+    color: ColorChoice,
+    scenario_out: Option<&Path>,
+    ros2: Option<&Path>,
+) -> u8 {
     let files = match super::collect_mcl_files(paths) {
         Ok(f) => f,
         Err(e) => {
@@ -51,12 +59,24 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice, scenario_out: 
         // (E0406, W0407); nothing while the program has errors.
         diags.extend(mcl_coord::coordination_diagnostics(&db, f).iter().cloned());
     }
-    let errors = diags.iter().filter(|d| d.diag.severity == Severity::Error).count();
+    // The ROS 2 bridge file, against the vehicle of the checked programs
+    // (only once they have no errors: their interface is then complete).
+    let program_errors = diags.iter().any(|d| d.diag.severity == Severity::Error);
+    let bridge_errors = match ros2 {
+        Some(b) if !program_errors => super::ros2::check_bridge(b, &super::ros2::vehicle_of(&db, &roots)),
+        Some(b) => {
+            eprintln!("note: `{}` is checked once the program has no errors", b.display());
+            Vec::new()
+        }
+        None => Vec::new(),
+    };
+    let errors = diags.iter().filter(|d| d.diag.severity == Severity::Error).count() + bridge_errors.len();
     let warnings = diags.iter().filter(|d| d.diag.severity == Severity::Warning).count();
     let mut stdout = std::io::stdout().lock();
     let written = match format {
         Format::Json => {
-            let arr: Vec<_> = diags.iter().map(|d| to_json(&db, d)).collect();
+            let mut arr: Vec<_> = diags.iter().map(|d| to_json(&db, d)).collect();
+            arr.extend(bridge_errors.iter().map(super::ros2::to_json));
             writeln!(stdout, "{}", serde_json::to_string_pretty(&arr).unwrap_or_else(|_| "[]".into()))
         }
         Format::Human => {
@@ -66,6 +86,9 @@ pub fn run(paths: &[PathBuf], format: Format, color: ColorChoice, scenario_out: 
                 ColorChoice::Auto => std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
             };
             let mut s = render_human(&db, &diags, use_color);
+            for e in &bridge_errors {
+                s.push_str(&format!("{e}\n"));
+            }
             let n = to_check.len();
             s.push_str(&format!(
                 "checked {n} file{}: {errors} error{}, {warnings} warning{}{}\n",

@@ -13,6 +13,7 @@ pub mod mock_aac;
 pub mod monitor;
 pub mod new;
 pub mod plan;
+pub mod ros2;
 pub mod run;
 pub mod sim;
 pub mod trace_to_mcap;

@@ -49,6 +49,10 @@ pub struct Options {
     /// Play against the AAC listening at HOST:PORT.
     #[arg(long, value_name = "HOST:PORT")]
     pub aac: Option<String>,
+    /// Play against a ROS 2 vehicle: the player is a ROS 2 node whose topics are mapped to
+    /// the vehicle file's primitives by this bridge file (docs/ros2.md; topics for now).
+    #[arg(long, value_name = "BRIDGE.toml")]
+    pub ros2: Option<PathBuf>,
     /// Shared secret for the AAC.
     #[arg(long)]
     pub token: Option<String>,
@@ -401,11 +405,19 @@ pub fn run(o: Options) -> u8 {
     if o.operator_token.as_deref().is_some_and(str::is_empty) {
         return usage("--operator-token is empty");
     }
-    if [o.mock, o.sim, o.aac.is_some()].iter().filter(|b| **b).count() != 1 {
+    if [o.mock, o.sim, o.aac.is_some(), o.ros2.is_some()].iter().filter(|b| **b).count() != 1 {
         return usage(
-            "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle) and --aac HOST:PORT",
+            "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle), --aac HOST:PORT and --ros2 BRIDGE.toml",
         );
     }
+    // The ROS 2 bridge, checked against the file's vehicle before anything runs.
+    let mut ros2_engine = match &o.ros2 {
+        Some(b) => match super::ros2::engine_for(b, &o.file) {
+            Ok(e) => Some(e),
+            Err(code) => return code,
+        },
+        None => None,
+    };
     if !o.sim && (o.world.is_some() || !o.vehicle_model.is_empty() || o.trajectory.is_some()) {
         return usage("--world, --vehicle-model and --trajectory go with --sim");
     }
@@ -776,6 +788,15 @@ pub fn run(o: Options) -> u8 {
         rt.block_on(async {
             let clock = Clock::new(speed, offset);
             match aac {
+                None if ros2_engine.is_some() => {
+                    let (mut link, end) = mcl_runtime::link::pair();
+                    let node = super::ros2::spawn_node(ros2_engine.take(), end);
+                    let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
+                    // Closing the link ends the node.
+                    drop(link);
+                    super::ros2::join_node(node);
+                    r
+                }
                 None => {
                     let (mut link, end) = mcl_runtime::link::pair();
                     let server = tokio::spawn(driver::serve_mock(mock, end, clock, |w| eprintln!("warning: {w}")));
