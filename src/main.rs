@@ -93,7 +93,7 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         threads: usize,
     },
-    /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac).
+    /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac) or Zenoh (--zenoh).
     ///
     /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
@@ -101,6 +101,18 @@ enum Command {
     /// 3 mission stuck or time limit passed, 130 after SIGINT and 143 after SIGTERM (the trace
     /// flushed first).
     Run(Box<cmd::run::Options>),
+    /// Run a Zenoh router for vehicles that meet through one (docs/zenoh.md). Runs until killed.
+    ZenohRouter {
+        /// Listen on this endpoint, e.g. tcp/127.0.0.1:7447 (repeatable).
+        #[arg(long, value_name = "ENDPOINT")]
+        listen: Vec<String>,
+        /// Connect to this endpoint, e.g. another router (repeatable).
+        #[arg(long, value_name = "ENDPOINT")]
+        connect: Vec<String>,
+        /// Start from this Zenoh configuration file (JSON5).
+        #[arg(long, value_name = "FILE")]
+        config: Option<PathBuf>,
+    },
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
         /// A JSONL trace.
@@ -247,6 +259,7 @@ fn main() -> ExitCode {
                 quiet,
             })
         }
+        Command::ZenohRouter { listen, connect, config } => cmd::zenoh_router::run(listen, connect, config),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::Analyze { net, format, max_states, semantics, threads } => {
             cmd::analyze::run(&net, format, max_states, semantics, threads)

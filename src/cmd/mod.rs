@@ -13,6 +13,7 @@ pub mod new;
 pub mod plan;
 pub mod run;
 pub mod sim;
+pub mod zenoh_router;
 
 use std::path::{Path, PathBuf};
 
