@@ -380,10 +380,19 @@ fn the_survey_against_the_python_reference_vehicle_over_zenoh() {
     let mut first = String::new();
     BufReader::new(aac.stdout.take().unwrap()).read_line(&mut first).unwrap();
     assert!(first.starts_with("listening on"), "{first}");
+    // A shore station: subscribes to the vehicle's status.
+    let shore = mcl_zenoh::Node::open(&mcl_zenoh::ZenohOptions {
+        connect: vec![endpoint(port)],
+        listen: vec!["tcp/127.0.0.1:0".into()],
+        ..Default::default()
+    })
+    .unwrap();
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    let mut statuses = rt.block_on(shore.subscribe("mcl/sparus/status")).unwrap();
     let tp = tmp("survey.jsonl");
     let child = Command::new(env!("CARGO_BIN_EXE_mcl"))
         .args(["run", "--zenoh", "examples/survey.mcl", "--vehicle-name", "sparus"])
-        .args(["--zenoh-connect", &endpoint(port), "--connect-timeout", "30"])
+        .args(["--zenoh-connect", &endpoint(port), "--zenoh-listen", "tcp/127.0.0.1:0", "--connect-timeout", "30"])
         .args(["--set", "timeout=60", "--set", "altitude=2.5", "--set", "velocity=0.5", "-q", "--trace"])
         .arg(&tp)
         .current_dir(root())
@@ -416,6 +425,20 @@ fn the_survey_against_the_python_reference_vehicle_over_zenoh() {
         ),
         "the alarm never fires\n{ctx}"
     );
+    // The shore station saw the calls run, then the outcome.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let mut seen: Vec<mcl_zenoh::Status> = Vec::new();
+    while seen.last().is_none_or(|s| s.outcome.is_none()) && Instant::now() < deadline {
+        match statuses.try_recv() {
+            Ok(r) => seen.push(serde_json::from_slice(&r.payload).unwrap()),
+            Err(_) => std::thread::sleep(Duration::from_millis(20)),
+        }
+    }
+    let last = seen.last().unwrap_or_else(|| panic!("no status on mcl/sparus/status\n{ctx}"));
+    assert_eq!((last.mission.as_str(), last.outcome.as_deref()), ("mission", Some("ok")), "{ctx}");
+    assert!(last.running.is_empty(), "{ctx}");
+    assert!(seen.iter().any(|s| s.running.iter().any(|c| c.task == "Trajectory")), "{seen:?}");
+    assert_eq!(last.actions as usize, sent.len(), "{ctx}");
     // Every action executed exactly once, in order.
     let executed: Vec<u64> = aac_log
         .lines()

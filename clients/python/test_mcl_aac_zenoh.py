@@ -43,7 +43,7 @@ class ZenohAacTest(unittest.TestCase):
         self.logs = []
         self.aac = mcl_aac_zenoh.ZenohAac("v1", listen=[endpoint], log=self.logs.append,
                                           on_action=mcl_aac.TrivialVehicle({}, 0.05)).start()
-        self.player = zenoh.open(mcl_aac_zenoh.config(connect=[endpoint]))
+        self.player = zenoh.open(mcl_aac_zenoh.config(connect=[endpoint], listen=["tcp/127.0.0.1:0"]))
         self.inbox = queue.Queue()
         self.player.declare_subscriber(
             "mcl/v1/aac/vehicle/*", lambda s: self.inbox.put(json.loads(s.payload.to_bytes())))

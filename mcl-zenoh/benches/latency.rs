@@ -64,7 +64,8 @@ fn main() {
         let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
         let ep = format!("tcp/127.0.0.1:{port}");
         let na = mcl_zenoh::ZenohOptions { listen: vec![ep.clone()], ..Default::default() };
-        let nb = mcl_zenoh::ZenohOptions { connect: vec![ep], ..Default::default() };
+        let nb =
+            mcl_zenoh::ZenohOptions { connect: vec![ep], listen: vec!["tcp/127.0.0.1:0".into()], ..Default::default() };
         let (na, nb) = (Arc::new(mcl_zenoh::Node::open(&na).unwrap()), Arc::new(mcl_zenoh::Node::open(&nb).unwrap()));
         let auth = mcl_runtime::coord::Auth::random().unwrap();
         let none = Default::default();

@@ -18,7 +18,10 @@ fn free_endpoint() -> String {
     format!("tcp/127.0.0.1:{port}")
 }
 
+/// A session on loopback only (a peer given no endpoint to listen on would
+/// listen on every interface).
 fn node(listen: &[&str], connect: &[&str]) -> Arc<Node> {
+    let listen = if listen.is_empty() { &["tcp/127.0.0.1:0"][..] } else { listen };
     let o = ZenohOptions {
         listen: listen.iter().map(|s| s.to_string()).collect(),
         connect: connect.iter().map(|s| s.to_string()).collect(),

@@ -548,7 +548,7 @@ pub fn run(o: Options) -> u8 {
         if let Err(e) = mcl_zenoh::keys::check_chunk("--vehicle-name", &zenoh_vehicle) {
             return usage(&e);
         }
-        sink.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), Some(&zenoh_vehicle)));
+        sink.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), Some((&zenoh_vehicle, &chosen.name))));
     }
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
