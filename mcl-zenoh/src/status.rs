@@ -112,6 +112,17 @@ impl StatusTracker {
                 self.status.pose = Some(Pose { x: *x, y: *y, z: *z, yaw: *yaw });
                 true
             }
+            // A vehicle that reports its pose as a perception `pose`
+            // (`{"x":…,"y":…,"z":…,"yaw":…}`).
+            RecordKind::Perception { name, value } if name == "pose" => {
+                match serde_json::from_value::<Pose>(value.clone()) {
+                    Ok(p) => {
+                        self.status.pose = Some(p);
+                        true
+                    }
+                    Err(_) => false,
+                }
+            }
             _ => false,
         };
         if changed {
@@ -199,9 +210,13 @@ mod tests {
         assert_eq!(s.status().running[0].since, 2.0);
         assert!(s.record(&Record::new(4.0, RecordKind::Pose { x: 1.0, y: 2.0, z: 3.0, yaw: 0.0 })));
         assert!(!s.record(&Record::new(4.5, RecordKind::Warning { message: "w".into() })));
+        let pose = serde_json::json!({"x": 5.0, "y": 6.0, "z": 7.0, "yaw": 1.0});
+        assert!(s.record(&Record::new(4.6, RecordKind::Perception { name: "pose".into(), value: pose })));
+        let bad = serde_json::json!({"x": "far"});
+        assert!(!s.record(&Record::new(4.7, RecordKind::Perception { name: "pose".into(), value: bad })));
         assert!(s.record(&Record::new(5.0, RecordKind::Outcome { result: "ok".into(), reason: None, via: None })));
         let st = s.status();
         assert_eq!((st.outcome.as_deref(), st.running.len(), st.actions, st.events, st.t), (Some("ok"), 0, 2, 1, 5.0));
-        assert_eq!(st.pose.map(|p| p.z), Some(3.0));
+        assert_eq!(st.pose.map(|p| p.z), Some(7.0));
     }
 }
