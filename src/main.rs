@@ -111,7 +111,7 @@ enum Command {
         #[arg(long, value_enum, default_value = "explicit")]
         method: cmd::analyze::Method,
     },
-    /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac).
+    /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac) or Zenoh (--zenoh).
     ///
     /// FILE is an .mcl file (compiled in memory) or a compiled .pnml. With --mock and no --mission,
     /// a file with several missions runs every vehicle at once, coordinated by its constraints.
@@ -131,6 +131,18 @@ enum Command {
         /// Address to listen on (port 0: any free port).
         #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
         listen: String,
+    },
+    /// Run a Zenoh router for vehicles that meet through one (docs/zenoh.md). Runs until killed.
+    ZenohRouter {
+        /// Listen on this endpoint, e.g. tcp/127.0.0.1:7447 (repeatable).
+        #[arg(long, value_name = "ENDPOINT")]
+        listen: Vec<String>,
+        /// Connect to this endpoint, e.g. another router (repeatable).
+        #[arg(long, value_name = "ENDPOINT")]
+        connect: Vec<String>,
+        /// Start from this Zenoh configuration file (JSON5).
+        #[arg(long, value_name = "FILE")]
+        config: Option<PathBuf>,
     },
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
@@ -291,6 +303,7 @@ fn main() -> ExitCode {
             })
         }
         Command::Monitor { traces, listen } => cmd::monitor::run(&traces, &listen),
+        Command::ZenohRouter { listen, connect, config } => cmd::zenoh_router::run(listen, connect, config),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
         Command::Analyze { net, format, max_states, semantics, threads, method } => {

@@ -19,7 +19,7 @@
 //! the sender keeps every message until it is acknowledged and re-sends
 //! the unacknowledged ones on every new connection and every second.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -33,6 +33,8 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::mpsc;
 
 use crate::coord::{CoordMessage, CoordTransport, Incoming, RecvFuture};
+pub use crate::coord_seq::RESEND_AFTER;
+use crate::coord_seq::{Offer, RecvWindow, SendWindow};
 use crate::protocol::{Line, LineReader, MAX_LINE};
 
 /// Version of the link protocol (`hello`'s `version`).
@@ -42,8 +44,6 @@ pub const LINK_VERSION: u32 = 1;
 pub const MAX_REPORTED_REFUSALS: usize = 100;
 /// How long each side waits for the other's handshake line.
 pub const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(5);
-/// Unacknowledged messages are written again after this long.
-pub const RESEND_AFTER: Duration = Duration::from_secs(1);
 
 type HmacSha256 = Hmac<Sha256>;
 
@@ -214,10 +214,9 @@ impl Session {
 /// The receiving side's state for one sender.
 #[derive(Default)]
 struct FromPeer {
-    /// The next sequence number to deliver.
-    next: u64,
-    /// Every message up to this one is durable (acknowledged).
-    durable: u64,
+    /// The next sequence number to deliver, and the last durable one
+    /// (acknowledged).
+    window: RecvWindow,
     /// The sender's run whose messages these are.
     run: Option<String>,
     /// The current connection from this sender: its id, session and acks.
@@ -237,7 +236,7 @@ struct Receiver {
 
 impl Receiver {
     fn peer(&mut self, from: &str) -> &mut FromPeer {
-        self.peers.entry(from.to_string()).or_insert_with(|| FromPeer { next: 1, ..Default::default() })
+        self.peers.entry(from.to_string()).or_default()
     }
 
     fn reject(&mut self, why: String) {
@@ -255,10 +254,8 @@ impl Receiver {
     fn ack(&mut self, from: &str) {
         let auth = self.auth.clone();
         let p = self.peer(from);
-        if let Some((_, s, out)) = &p.conn {
-            if p.durable > 0 {
-                let _ = out.send(Wire::Ack { seq: p.durable, mac: s.ack_mac(&auth, p.durable) }.line());
-            }
+        if let (Some((_, s, out)), Some(seq)) = (&p.conn, p.window.ack()) {
+            let _ = out.send(Wire::Ack { seq, mac: s.ack_mac(&auth, seq) }.line());
         }
     }
 }
@@ -317,7 +314,7 @@ impl TcpEnd {
         let (tx, inbox) = mpsc::unbounded_channel();
         let mut peers = HashMap::new();
         for (from, &seq) in received {
-            peers.insert(from.clone(), FromPeer { next: seq + 1, durable: seq, run: None, conn: None });
+            peers.insert(from.clone(), FromPeer { window: RecvWindow::resumed(seq), run: None, conn: None });
         }
         let recv = Arc::new(Mutex::new(Receiver {
             mission: mission.to_string(),
@@ -431,8 +428,7 @@ impl CoordTransport for TcpEnd {
 
     fn delivered(&mut self, msg: &CoordMessage) {
         let mut r = locked(&self.recv);
-        let p = r.peer(&msg.from);
-        p.durable = p.durable.max(msg.seq);
+        r.peer(&msg.from).window.made_durable(msg.seq);
         r.ack(&msg.from);
     }
 
@@ -569,13 +565,13 @@ async fn serve_connection(stream: TcpStream, peer: SocketAddr, recv: Shared<Rece
                         match serde_json::from_str::<CoordMessage>(&body) {
                             Ok(m) if m.from == from && m.to == me && m.seq == seq => {
                                 let mut r = locked(&recv);
-                                let p = r.peer(&from);
-                                if seq == p.next {
-                                    p.next += 1;
-                                    let _ = r.tx.send(Incoming::Message(m));
-                                } else if seq <= p.durable {
+                                match r.peer(&from).window.offer(seq) {
+                                    Offer::Deliver => {
+                                        let _ = r.tx.send(Incoming::Message(m));
+                                    }
                                     // A re-send of a durable message: acknowledge it again.
-                                    r.ack(&from);
+                                    Offer::Durable => r.ack(&from),
+                                    Offer::Delivered | Offer::Gap => {}
                                 }
                                 continue;
                             }
@@ -657,7 +653,7 @@ impl SendLink {
         Ok(Conn { session: Session { from: self.from.clone(), to: self.to.clone(), cn, ln }, lines, wr })
     }
 
-    async fn write_all(conn: &mut Conn, auth: &Auth, outbox: &VecDeque<(u64, String)>) -> bool {
+    async fn write_all<'a>(conn: &mut Conn, auth: &Auth, outbox: impl IntoIterator<Item = &'a (u64, String)>) -> bool {
         let mut buf = Vec::new();
         for (seq, body) in outbox {
             let mac = conn.session.msg_mac(auth, *seq, body);
@@ -667,7 +663,7 @@ impl SendLink {
     }
 
     async fn run(self, mut rx: mpsc::UnboundedReceiver<(u64, String)>) {
-        let mut outbox: VecDeque<(u64, String)> = VecDeque::new();
+        let mut outbox: SendWindow<String> = SendWindow::new();
         let mut conn: Option<Conn> = None;
         let mut last_error: Option<String> = None;
         let mut last_write = tokio::time::Instant::now();
@@ -677,7 +673,7 @@ impl SendLink {
                 match self.connect().await {
                     Ok(mut c) => {
                         last_error = None;
-                        if SendLink::write_all(&mut c, &self.auth, &outbox).await {
+                        if SendLink::write_all(&mut c, &self.auth, outbox.pending()).await {
                             last_write = tokio::time::Instant::now();
                             conn = Some(c);
                         }
@@ -695,9 +691,9 @@ impl SendLink {
                 }
                 // Take the queued messages first.
                 while let Ok((seq, body)) = rx.try_recv() {
-                    outbox.push_back((seq, body.clone()));
+                    outbox.push(seq, body.clone());
                     if let Some(c) = &mut conn {
-                        if !SendLink::write_all(c, &self.auth, &VecDeque::from([(seq, body)])).await {
+                        if !SendLink::write_all(c, &self.auth, &[(seq, body)]).await {
                             conn = None;
                         }
                     }
@@ -711,9 +707,9 @@ impl SendLink {
             tokio::select! {
                 m = rx.recv(), if open => match m {
                     Some((seq, body)) => {
-                        outbox.push_back((seq, body.clone()));
+                        outbox.push(seq, body.clone());
                         if let Some(c) = &mut conn {
-                            if SendLink::write_all(c, &self.auth, &VecDeque::from([(seq, body)])).await {
+                            if SendLink::write_all(c, &self.auth, &[(seq, body)]).await {
                                 last_write = tokio::time::Instant::now();
                             } else {
                                 conn = None;
@@ -732,11 +728,7 @@ impl SendLink {
                     match line {
                         Ok(Line::Text(bytes)) => match serde_json::from_slice::<Wire>(&bytes) {
                             Ok(Wire::Ack { seq, mac }) if c.session.ack_ok(&self.auth, seq, &mac) => {
-                                let mut acked = 0;
-                                while outbox.front().is_some_and(|(s, _)| *s <= seq) {
-                                    outbox.pop_front();
-                                    acked += 1;
-                                }
+                                let acked = outbox.acked(seq);
                                 let mut u = locked(&self.unacked);
                                 *u = u.saturating_sub(acked);
                             }
@@ -756,7 +748,7 @@ impl SendLink {
                 _ = tick => {
                     if let Some(c) = &mut conn {
                         if !outbox.is_empty() && last_write.elapsed() >= RESEND_AFTER {
-                            if SendLink::write_all(c, &self.auth, &outbox).await {
+                            if SendLink::write_all(c, &self.auth, outbox.pending()).await {
                                 last_write = tokio::time::Instant::now();
                             } else {
                                 conn = None;

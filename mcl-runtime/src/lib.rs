@@ -11,6 +11,7 @@ pub mod chronogram;
 pub mod clock;
 pub mod coord;
 pub mod coord_link;
+pub mod coord_seq;
 pub mod counterexample;
 pub mod driver;
 pub mod journal;

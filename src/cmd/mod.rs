@@ -17,6 +17,7 @@ pub mod ros2;
 pub mod run;
 pub mod sim;
 pub mod trace_to_mcap;
+pub mod zenoh_router;
 
 use std::path::{Path, PathBuf};
 

@@ -56,6 +56,25 @@ pub struct Options {
     /// Shared secret for the AAC.
     #[arg(long)]
     pub token: Option<String>,
+    /// Play against the vehicle's AAC over Zenoh: the AAC protocol's messages under
+    /// `mcl/<vehicle>/aac/...` (docs/zenoh.md).
+    #[arg(long)]
+    pub zenoh: bool,
+    /// With --zenoh: the vehicle's name in the Zenoh keys (default: the mission's name).
+    #[arg(long, value_name = "NAME")]
+    pub vehicle_name: Option<String>,
+    /// Zenoh: connect to this endpoint (a router or a peer), e.g. tcp/127.0.0.1:7447 (repeatable).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub zenoh_connect: Vec<String>,
+    /// Zenoh: listen on this endpoint, e.g. tcp/127.0.0.1:7448 (repeatable).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub zenoh_listen: Vec<String>,
+    /// Zenoh: start from this Zenoh configuration file (JSON5; peer mode by default).
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+    /// Zenoh: the fleet name in the coordination keys `mcl/<fleet>/...` (default: the file's stem).
+    #[arg(long, value_name = "NAME")]
+    pub zenoh_fleet: Option<String>,
     /// How the mock vehicle answers (TOML, see docs/scenarios.md). A scenario written by
     /// `mcl check --counterexample-scenario` (its `[counterexample]` table) also runs a program
     /// whose only errors are verification errors (E06xx, deadlocking constraints), and the run
@@ -166,6 +185,8 @@ pub enum Transport {
     InProcess,
     /// JSON lines over TCP (one listener per vehicle).
     Tcp,
+    /// Zenoh publications (docs/zenoh.md; --zenoh-connect, --zenoh-listen, --zenoh-config).
+    Zenoh,
 }
 
 /// A loaded mission.
@@ -278,6 +299,8 @@ pub fn parse_set(s: &str) -> Result<(String, Value), String> {
 
 /// Trace file, live log and the records kept for the chronogram.
 struct RunSink {
+    /// Publishes each vehicle's mission state over Zenoh (`mcl/<vehicle>/status`).
+    status: Option<mcl_zenoh::StatusPublisher>,
     trace: Option<TraceWriter>,
     live: bool,
     verbose: bool,
@@ -339,6 +362,9 @@ impl RunSink {
 
 impl Sink for RunSink {
     fn record(&mut self, r: &Record) {
+        if let Some(s) = &mut self.status {
+            s.record(r);
+        }
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.write(r) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
@@ -405,10 +431,19 @@ pub fn run(o: Options) -> u8 {
     if o.operator_token.as_deref().is_some_and(str::is_empty) {
         return usage("--operator-token is empty");
     }
-    if [o.mock, o.sim, o.aac.is_some(), o.ros2.is_some()].iter().filter(|b| **b).count() != 1 {
+    if [o.mock, o.sim, o.aac.is_some(), o.ros2.is_some(), o.zenoh].iter().filter(|b| **b).count() != 1 {
         return usage(
-            "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle), --aac HOST:PORT and --ros2 BRIDGE.toml",
+            "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle), --aac HOST:PORT, --ros2 BRIDGE.toml and --zenoh",
         );
+    }
+    let zenoh_flags = !o.zenoh_connect.is_empty() || !o.zenoh_listen.is_empty() || o.zenoh_config.is_some();
+    if (zenoh_flags || o.zenoh_fleet.is_some()) && !o.zenoh && o.transport != Transport::Zenoh {
+        return usage(
+            "--zenoh-connect, --zenoh-listen, --zenoh-config and --zenoh-fleet go with --zenoh or --transport zenoh",
+        );
+    }
+    if o.vehicle_name.is_some() && !o.zenoh {
+        return usage("--vehicle-name goes with --zenoh");
     }
     // The ROS 2 bridge, checked against the file's vehicle before anything runs.
     let mut ros2_engine = match &o.ros2 {
@@ -420,6 +455,9 @@ pub fn run(o: Options) -> u8 {
     };
     if !o.sim && (o.world.is_some() || !o.vehicle_model.is_empty() || o.trajectory.is_some()) {
         return usage("--world, --vehicle-model and --trajectory go with --sim");
+    }
+    if o.virtual_time && o.transport == Transport::Zenoh {
+        return usage("--transport zenoh runs in real time (virtual time needs no transport)");
     }
     if o.virtual_time && !o.mock && !o.sim {
         return usage("--virtual-time needs --mock or --sim (a real AAC runs in real time)");
@@ -545,7 +583,7 @@ pub fn run(o: Options) -> u8 {
             Entry::Header { run, .. } => run.clone(),
             _ => None,
         },
-        None => o.aac.is_some().then(mcl_runtime::tcp::new_id),
+        None => (o.aac.is_some() || o.zenoh).then(mcl_runtime::tcp::new_id),
     };
 
     // Scenario, seeds and symbols.
@@ -646,6 +684,7 @@ pub fn run(o: Options) -> u8 {
         None => None,
     };
     let mut sink = RunSink {
+        status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,
@@ -656,6 +695,18 @@ pub fn run(o: Options) -> u8 {
         mcap,
         monitor: live_monitor.as_ref().map(|m| m.hub.clone()),
     };
+    // The AAC over Zenoh: the vehicle's name in the keys, the session, the status.
+    let zenoh_vehicle = o.vehicle_name.clone().unwrap_or_else(|| chosen.name.clone());
+    let zenoh_node = match o.zenoh.then(|| open_zenoh(&o)).transpose() {
+        Ok(n) => n,
+        Err(code) => return code,
+    };
+    if let Some(n) = &zenoh_node {
+        if let Err(e) = mcl_zenoh::keys::check_chunk("--vehicle-name", &zenoh_vehicle) {
+            return usage(&e);
+        }
+        sink.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), Some((&zenoh_vehicle, &chosen.name))));
+    }
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
         for e in &errors {
@@ -759,7 +810,7 @@ pub fn run(o: Options) -> u8 {
     session.crash_after = o.crash_after;
     session.operator = live_monitor.as_mut().and_then(|m| m.commands.take());
     // Until the AAC welcomes the player, actions are queued.
-    session.link_down = o.aac.is_some();
+    session.link_down = o.aac.is_some() || o.zenoh;
     // The events the run handled in its AAC session: told to the AAC once
     // journaled, and, when resuming, where the AAC takes up again.
     let delivered = match &resume_point {
@@ -787,6 +838,24 @@ pub fn run(o: Options) -> u8 {
         let mission_name = chosen.name.clone();
         rt.block_on(async {
             let clock = Clock::new(speed, offset);
+            if let Some(node) = zenoh_node.clone() {
+                let opts = mcl_zenoh::AacOptions {
+                    mission: mission_name.clone(),
+                    run: run_id.clone().unwrap_or_else(mcl_runtime::tcp::new_id),
+                    token: token.clone(),
+                    delivered: delivered.clone(),
+                    events: mcl_runtime::protocol::EventEnd::of_net(session.player.net()),
+                    linger: std::time::Duration::from_secs(10),
+                };
+                let (mut link, handle) = mcl_zenoh::connect(node, &zenoh_vehicle, opts).await?;
+                let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
+                // Let the last actions reach the vehicle before leaving.
+                let mcl_runtime::link::Link { actions, inbound } = link;
+                drop(actions);
+                let _ = handle.await;
+                drop(inbound);
+                return r;
+            }
             match aac {
                 None if ros2_engine.is_some() => {
                     let (mut link, end) = mcl_runtime::link::pair();
@@ -974,6 +1043,18 @@ fn coord_auth(o: &Options) -> Result<mcl_runtime::coord::Auth, u8> {
     })
 }
 
+/// The Zenoh session of `--zenoh` or `--transport zenoh` (peer mode unless
+/// the configuration file says otherwise).
+fn open_zenoh(o: &Options) -> Result<Arc<mcl_zenoh::Node>, u8> {
+    let opts = mcl_zenoh::ZenohOptions {
+        mode: mcl_zenoh::Mode::Peer,
+        connect: o.zenoh_connect.clone(),
+        listen: o.zenoh_listen.clone(),
+        config_file: o.zenoh_config.clone(),
+    };
+    mcl_zenoh::Node::open(&opts).map(Arc::new).map_err(|e| usage(&e))
+}
+
 /// What the header of a vehicle's journal records.
 struct Recorded {
     scenario: Option<String>,
@@ -1074,6 +1155,24 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(a) => a,
         Err(code) => return code,
     };
+    let zenoh = o.transport == Transport::Zenoh;
+    if zenoh && (o.coord_listen.is_some() || !o.coord_peer.is_empty()) {
+        return usage(
+            "--coord-listen and --coord-peer are TCP addresses; over Zenoh give --zenoh-listen and --zenoh-connect",
+        );
+    }
+    let fleet = o.zenoh_fleet.clone().unwrap_or_else(|| {
+        o.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "fleet".into())
+    });
+    let zenoh_node = match zenoh.then(|| open_zenoh(o)).transpose() {
+        Ok(n) => n,
+        Err(code) => return code,
+    };
+    if zenoh {
+        if let Err(e) = mcl_zenoh::keys::check_chunk("fleet", &fleet) {
+            return usage(&format!("{e}: give another with --zenoh-fleet NAME"));
+        }
+    }
     let resume_entries = match &o.resume {
         Some(p) => match journal::read_journal(p) {
             Ok(e) => Some(e),
@@ -1132,7 +1231,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         let v = vehicles.swap_remove(k);
         let missing: Vec<&String> =
             v.send.iter().map(|(_, to)| to).filter(|to| !peers.iter().any(|(n, _)| n == *to)).collect();
-        if let Some(to) = missing.first() {
+        if let (Some(to), false) = (missing.first(), zenoh) {
             return usage(&format!(
                 "`{me}` sends coordination messages to `{to}`: give its address with --coord-peer {to}=HOST:PORT"
             ));
@@ -1206,6 +1305,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         None => None,
     };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
+        status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,
@@ -1261,9 +1361,25 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(l) => l,
         Err(code) => return code,
     };
+    if let (Some(n), Ok(mut s)) = (&zenoh_node, sink.lock()) {
+        s.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), None));
+    }
     let shared: mcl_runtime::multi::SharedSink = sink.clone();
     let result: Result<mcl_runtime::multi::MultiEnd, String> = rt.block_on(async {
-        let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = if let Some(me) = &o.vehicle {
+        let transports: Vec<Box<dyn mcl_runtime::coord::CoordTransport>> = if let (Some(me), Some(node)) =
+            (&o.vehicle, &zenoh_node)
+        {
+            let received: std::collections::HashMap<String, u64> =
+                resume_entries.as_deref().map(journal::received_seqs).unwrap_or_default().into_iter().collect();
+            let mut end = mcl_zenoh::ZenohEnd::open(node.clone(), &fleet, me, auth.clone(), &received).await?;
+            end.accept_from(&all_names);
+            end.set_run(&run_id);
+            for n in &all_names {
+                end.add_peer(n)?;
+            }
+            eprintln!("coordination: `{me}` on Zenoh, fleet `{fleet}` (keys mcl/{fleet}/{me}/coord/...)");
+            vec![Box::new(end)]
+        } else if let Some(me) = &o.vehicle {
             let listen = o.coord_listen.clone().unwrap_or_else(|| format!("{}:0", o.coord_host));
             let received: std::collections::HashMap<String, u64> =
                 resume_entries.as_deref().map(journal::received_seqs).unwrap_or_default().into_iter().collect();
@@ -1294,6 +1410,14 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
                     }
                     Err(e) => return Err(format!("cannot listen on `{}` for the TCP transport: {e}", o.coord_host)),
                 },
+                Transport::Zenoh => {
+                    let node = zenoh_node.clone().ok_or("no Zenoh session")?;
+                    mcl_zenoh::zenoh_mesh(node, &fleet, &names)
+                        .await?
+                        .into_iter()
+                        .map(|e| Box::new(e) as Box<dyn mcl_runtime::coord::CoordTransport>)
+                        .collect()
+                }
             }
         };
         let mut vs = Vec::new();
@@ -1319,7 +1443,11 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             // Simulated vehicles: the virtual-time run, paced by the clock.
             mcl_runtime::multi::run_virtual_with_link(vs, shared, limits, link, Some(Clock::new(o.speed, 0.0))).await
         } else {
-            let peers: Vec<String> = peers.iter().map(|(n, _)| n.clone()).collect();
+            let peers: Vec<String> = if zenoh && o.vehicle.is_some() {
+                all_names.clone()
+            } else {
+                peers.iter().map(|(n, _)| n.clone()).collect()
+            };
             // A resumed vehicle's clock goes on from its last journaled input.
             let offset = resume_entries.as_deref().map(journal::last_time).unwrap_or(0.0);
             mcl_runtime::multi::run_real_time_with_peers(vs, shared, Clock::new(o.speed, offset), limits, &peers).await
@@ -1371,6 +1499,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         end.ends.len(),
         end.messages,
         match o.transport {
+            Transport::Zenoh => "Zenoh",
             _ if o.vehicle.is_some() => "TCP",
             _ if o.link.is_some() => "acoustic link model over the in-process",
             Transport::InProcess => "in-process",

@@ -1,0 +1,463 @@
+//! MCL over a real Zenoh (issue 16, items 1-3; docs/zenoh.md): the AUV and
+//! ASC of examples/auv-asc.mcl as two `mcl run --vehicle` processes over
+//! `--transport zenoh`, also with one of them killed and resumed, and
+//! through a Zenoh router (`mcl zenoh-router`) restarted mid-run; the
+//! survey against the Python reference vehicle over Zenoh
+//! (clients/python/mcl_aac_zenoh.py). Explicit loopback endpoints, no
+//! multicast scouting. Every process is bounded in time.
+
+use mcl_runtime::trace::{Record, RecordKind};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Read};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mcl-zenoh-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn trace(path: &Path) -> Vec<Record> {
+    mcl_runtime::trace::read_trace(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn lines(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("bad line {l}: {e}")))
+        .collect()
+}
+
+/// A free loopback port (bound then released).
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+fn endpoint(port: u16) -> String {
+    format!("tcp/127.0.0.1:{port}")
+}
+
+/// Waits for `child`, killing it after `limit` (then panics).
+fn wait(mut child: Child, limit: Duration, what: &str) -> (ExitStatus, String) {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let mut err = String::new();
+            if let Some(mut e) = child.stderr.take() {
+                let _ = e.read_to_string(&mut err);
+            }
+            return (status, err);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let mut err = String::new();
+            if let Some(mut e) = child.stderr.take() {
+                let _ = e.read_to_string(&mut err);
+            }
+            panic!("{what} still runs after {limit:?}: {err}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+const AUV_ASC: &str = "examples/auv-asc.mcl";
+const SCENARIO: &str = "examples/scenarios/auv-asc.toml";
+const LIMIT: Duration = Duration::from_secs(90);
+
+/// One test of this file at a time: each runs vehicles in real time at
+/// `--speed 50`, where a scheduler stall of a loaded machine is seconds of
+/// mission time (and the mock's answers then come at other moments than
+/// in the dry run they are compared with).
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// How one vehicle process meets the others.
+#[derive(Clone)]
+struct Net {
+    listen: Vec<String>,
+    connect: Vec<String>,
+    config: Option<PathBuf>,
+}
+
+impl Net {
+    fn args(&self) -> Vec<String> {
+        let mut a = Vec::new();
+        for l in &self.listen {
+            a.extend(["--zenoh-listen".to_string(), l.clone()]);
+        }
+        for c in &self.connect {
+            a.extend(["--zenoh-connect".to_string(), c.clone()]);
+        }
+        if let Some(c) = &self.config {
+            a.extend(["--zenoh-config".to_string(), c.display().to_string()]);
+        }
+        a
+    }
+}
+
+/// One vehicle of examples/auv-asc.mcl in its own process over Zenoh,
+/// journaled, aborted after `crash_after` journal syncs (as `kill -9`
+/// would) and then resumed until it ends. Returns its exit status, the
+/// trace of its last run (the replay rebuilds the whole run) and its
+/// journal.
+fn vehicle(me: &str, net: &Net, crash_after: Option<u64>, tag: &str) -> (i32, Vec<Record>, Vec<Value>) {
+    let journal = tmp(&format!("{tag}-{me}.journal"));
+    let mut crash = crash_after;
+    for life in 0.. {
+        let trace_path = tmp(&format!("{tag}-{me}-{life}.jsonl"));
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_mcl"));
+        cmd.args(["run", "--mock", AUV_ASC, "--scenario", SCENARIO, "--vehicle", me, "--transport", "zenoh"])
+            .args(net.args())
+            .args(["--zenoh-fleet", tag, "--coord-token", "fleet secret"])
+            .args(["--speed", "50", "--time-limit", "3000", "-q", "--trace", trace_path.to_str().unwrap()])
+            .args([if life == 0 { "--journal" } else { "--resume" }, journal.to_str().unwrap()]);
+        if let Some(n) = crash.take() {
+            cmd.args(["--crash-after", &n.to_string()]);
+        }
+        let child = cmd.current_dir(root()).stderr(Stdio::piped()).stdout(Stdio::null()).spawn().expect("run mcl");
+        let (status, err) = wait(child, LIMIT, me);
+        match status.code() {
+            Some(code) => {
+                assert!(life <= 1, "{me}: more lives than crashes");
+                assert!(err.contains("Zenoh transport"), "{me}: {err}");
+                return (code, trace(&trace_path), lines(&journal));
+            }
+            None => assert!(crash_after.is_some() && life == 0, "{me} died unexpectedly: {err}"),
+        }
+    }
+    unreachable!()
+}
+
+/// Both vehicles at once, each listening on its own port and connecting
+/// to the other's (whichever restarts finds the other).
+fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, Vec<Record>, Vec<Value>); 2] {
+    let (pa, pc) = (free_port(), free_port());
+    let auv = Net { listen: vec![endpoint(pa)], connect: vec![endpoint(pc)], config: None };
+    let asc = Net { listen: vec![endpoint(pc)], connect: vec![endpoint(pa)], config: None };
+    let tag2 = tag.to_string();
+    let c = std::thread::spawn(move || vehicle("asc", &asc, asc_crash, &tag2));
+    let a = vehicle("auv", &auv, auv_crash, tag);
+    [a, c.join().unwrap()]
+}
+
+fn call(tr: &[Record], label: &str, what: &str) -> Vec<usize> {
+    tr.iter()
+        .enumerate()
+        .filter(|(_, r)| match &r.kind {
+            RecordKind::Fire { transition: t, call, .. } => {
+                call.label.as_deref() == Some(label) && t.starts_with("call") && t.ends_with(what)
+            }
+            _ => false,
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
+fn fired(r: &Record) -> &str {
+    match &r.kind {
+        RecordKind::Fire { transition, .. } => transition,
+        k => panic!("not a firing: {k:?}"),
+    }
+}
+
+fn sends(tr: &[Record]) -> Vec<&str> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordSend { transition, .. } => Some(transition.as_str()),
+            _ => None,
+        })
+        .collect()
+}
+
+fn receives(tr: &[Record]) -> Vec<(&str, &str)> {
+    tr.iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::CoordReceive { from, transition, .. } => Some((from.as_str(), transition.as_str())),
+            _ => None,
+        })
+        .collect()
+}
+
+fn received(tr: &[Record], from: &str, transition: &str) -> Option<usize> {
+    tr.iter().position(
+        |r| matches!(&r.kind, RecordKind::CoordReceive { from: f, transition: t, .. } if f == from && t == transition),
+    )
+}
+
+fn actions(tr: &[Record]) -> BTreeMap<String, Vec<String>> {
+    let mut out: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for r in tr {
+        if let RecordKind::Action { primitive, command, call, .. } = &r.kind {
+            out.entry(format!("{primitive}@{:?}", call.call_site)).or_default().push(command.clone());
+        }
+    }
+    out
+}
+
+/// Enable actions per primitive and call site of each vehicle in a dry
+/// run (virtual time, same scenario: the same calls happen).
+fn reference() -> BTreeMap<String, BTreeMap<String, usize>> {
+    let tp = tmp("reference.jsonl");
+    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--mock", "--virtual-time", AUV_ASC, "--scenario", SCENARIO, "-q", "--trace"])
+        .arg(&tp)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let tr = trace(&tp);
+    let mut by = BTreeMap::new();
+    for m in ["auv", "asc"] {
+        let mine: Vec<Record> = tr.iter().filter(|r| r.mission.as_deref() == Some(m)).cloned().collect();
+        let counts =
+            actions(&mine).into_iter().map(|(k, v)| (k, v.iter().filter(|c| *c == "enable").count())).collect();
+        by.insert(m.to_string(), counts);
+    }
+    by
+}
+
+/// Both end ok once; every constraint of the file held; every message
+/// taken once, in order, and what one sent the other received.
+fn check(runs: &[(i32, Vec<Record>, Vec<Value>); 2], reference: &BTreeMap<String, BTreeMap<String, usize>>, tag: &str) {
+    let [(ca, auv, ja), (cc, asc, jc)] = runs;
+    assert_eq!((*ca, *cc), (0, 0), "{tag}: both end ok");
+    for (m, tr) in [("auv", auv), ("asc", asc)] {
+        let o: Vec<&str> = tr
+            .iter()
+            .filter_map(|r| match &r.kind {
+                RecordKind::Outcome { result, .. } => Some(result.as_str()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(o, ["ok"], "{tag}: {m} ends once, ok");
+        for (k, cmds) in actions(tr) {
+            for w in cmds.windows(2) {
+                assert!(!(w[0] == "enable" && w[1] == "enable"), "{tag}: {m} {k} enabled twice: {cmds:?}");
+            }
+            let enables = cmds.iter().filter(|c| *c == "enable").count();
+            assert_eq!(Some(&enables), reference[m].get(&k), "{tag}: {m} {k}: {cmds:?}");
+        }
+    }
+    // order { asc:deploy_auv, auv:deploy_auv }
+    let (asc_end, auv_start) = (call(asc, "deploy_auv", ".release"), call(auv, "deploy_auv", ".start"));
+    assert_eq!((asc_end.len(), auv_start.len()), (1, 1), "{tag}");
+    let tr_end = fired(&asc[asc_end[0]]);
+    let got = received(auv, "asc", tr_end).unwrap_or_else(|| panic!("{tag}: auv never heard of asc's {tr_end}"));
+    assert!(got < auv_start[0], "{tag}: auv's deploy_auv started before asc's ended");
+    // sync { auv:send_data, asc:send_data }
+    for (me, other, tr_me) in [("auv", "asc", auv), ("asc", "auv", asc)] {
+        let starts = call(tr_me, "send_data", ".start");
+        assert_eq!(starts.len(), 1, "{tag}: {me}'s send_data starts once");
+        assert!(
+            receives(&tr_me[..starts[0]]).iter().any(|(from, _)| *from == other),
+            "{tag}: {me}'s send_data started without a message from {other}"
+        );
+    }
+    for (from, to, jto) in [("auv", "asc", jc), ("asc", "auv", ja)] {
+        let seqs: Vec<u64> = jto
+            .iter()
+            .filter(|e| e["j"] == "coord_receive" && e["from"] == from)
+            .map(|e| e["seq"].as_u64().unwrap())
+            .collect();
+        assert_eq!(seqs, (1..=seqs.len() as u64).collect::<Vec<_>>(), "{tag}: {from} -> {to}");
+        let tr_from = if from == "auv" { auv } else { asc };
+        let tr_to = if to == "auv" { auv } else { asc };
+        let got: Vec<&str> = receives(tr_to).into_iter().filter(|(f, _)| *f == from).map(|(_, t)| t).collect();
+        assert_eq!(sends(tr_from), got, "{tag}: {from} -> {to}");
+        assert!(!got.is_empty(), "{tag}: {from} -> {to} carried messages");
+    }
+}
+
+#[test]
+fn auv_and_asc_over_zenoh_keep_every_constraint() {
+    let _one = serial();
+    let reference = reference();
+    let runs = auv_asc(None, None, "zplain");
+    check(&runs, &reference, "zplain");
+}
+
+#[test]
+fn a_vehicle_killed_and_resumed_over_zenoh_keeps_every_constraint() {
+    let _one = serial();
+    let reference = reference();
+    // The ASC right after the AUV arrived at the send_data sync, then the
+    // AUV while it waits for the ASC at the sync.
+    for (auv_crash, asc_crash, tag) in [(None, Some(6), "zasc"), (Some(7), None, "zauv")] {
+        let runs = auv_asc(auv_crash, asc_crash, tag);
+        check(&runs, &reference, tag);
+        for (k, crash) in [auv_crash, asc_crash].iter().enumerate() {
+            if crash.is_some() {
+                assert!(
+                    runs[k].1.iter().any(|r| matches!(&r.kind,
+                        RecordKind::Link { message } if message.starts_with("resumed from the journal"))),
+                    "{tag}"
+                );
+            }
+        }
+    }
+}
+
+/// `mcl zenoh-router --listen ENDPOINT`, once it says it listens.
+fn router(port: u16) -> Child {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["zenoh-router", "--listen", &endpoint(port)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run mcl zenoh-router");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert!(first.starts_with("zenoh router listening on"), "{first}");
+    child
+}
+
+#[test]
+fn auv_and_asc_through_a_router() {
+    let _one = serial();
+    let reference = reference();
+    // Peers that only know the router: it tells each where the other
+    // listens (loopback, a port of the system's choice).
+    let pr = free_port();
+    let mut r = router(pr);
+    let net = Net { listen: vec!["tcp/127.0.0.1:0".into()], connect: vec![endpoint(pr)], config: None };
+    let n2 = net.clone();
+    let c = std::thread::spawn(move || vehicle("asc", &n2, None, "zrpeer"));
+    let a = vehicle("auv", &net, None, "zrpeer");
+    let runs = [a, c.join().unwrap()];
+    let _ = r.kill();
+    let _ = r.wait();
+    check(&runs, &reference, "zrpeer");
+}
+
+#[test]
+fn auv_and_asc_through_a_router_restarted_mid_run() {
+    let _one = serial();
+    let reference = reference();
+    let pr = free_port();
+    // Clients: everything goes through the router.
+    let config = tmp("client.json5");
+    std::fs::write(&config, r#"{ mode: "client", scouting: { multicast: { enabled: false } } }"#).unwrap();
+    let net = Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config) };
+    let mut first = router(pr);
+    let n2 = net.clone();
+    let c = std::thread::spawn(move || vehicle("asc", &n2, None, "zrclient"));
+    let a = std::thread::spawn(move || vehicle("auv", &net, None, "zrclient"));
+    // The router goes down for a while mid-run (the mission lasts ~8 s of
+    // wall-clock time at --speed 50), then comes back on the same port.
+    std::thread::sleep(Duration::from_millis(3000));
+    let _ = first.kill();
+    let _ = first.wait();
+    std::thread::sleep(Duration::from_millis(700));
+    let mut second = router(pr);
+    let runs = [a.join().unwrap(), c.join().unwrap()];
+    let _ = second.kill();
+    let _ = second.wait();
+    check(&runs, &reference, "zrclient");
+}
+
+/// `python3` with the Zenoh binding, or None: the test is then skipped,
+/// unless `MCL_REQUIRE_ZENOH_PY=1` (CI) makes its absence a failure.
+fn python_zenoh() -> bool {
+    let found = mcl_testutil::runs("python3", &["-c", "import zenoh"]);
+    mcl_testutil::have_tool("zenoh_py", found, "pip install eclipse-zenoh")
+}
+
+#[test]
+fn the_survey_against_the_python_reference_vehicle_over_zenoh() {
+    let _one = serial();
+    if !python_zenoh() {
+        return;
+    }
+    let port = free_port();
+    let map = tmp("survey-map.json");
+    std::fs::write(&map, r#"{"AlarmPrimitive": "", "TakeImagesPrimitive": ""}"#).unwrap();
+    let mut aac = Command::new("python3")
+        .arg(root().join("clients/python/mcl_aac_zenoh.py"))
+        .args(["--vehicle", "sparus", "--listen", &endpoint(port), "--delay", "0.05"])
+        .args(["--map-file", map.to_str().unwrap(), "--map", "AltitudePrimitive=eventAltitudeOk"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run python3");
+    let mut first = String::new();
+    BufReader::new(aac.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert!(first.starts_with("listening on"), "{first}");
+    // A shore station: subscribes to the vehicle's status.
+    let shore = mcl_zenoh::Node::open(&mcl_zenoh::ZenohOptions {
+        connect: vec![endpoint(port)],
+        listen: vec!["tcp/127.0.0.1:0".into()],
+        ..Default::default()
+    })
+    .unwrap();
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    let mut statuses = rt.block_on(shore.subscribe("mcl/sparus/status")).unwrap();
+    let tp = tmp("survey.jsonl");
+    let child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--zenoh", "examples/survey.mcl", "--vehicle-name", "sparus"])
+        .args(["--zenoh-connect", &endpoint(port), "--zenoh-listen", "tcp/127.0.0.1:0", "--connect-timeout", "30"])
+        .args(["--set", "timeout=60", "--set", "altitude=2.5", "--set", "velocity=0.5", "-q", "--trace"])
+        .arg(&tp)
+        .current_dir(root())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let (status, err) = wait(child, LIMIT, "mcl run --zenoh");
+    let _ = aac.kill();
+    let mut aac_log = String::new();
+    let _ = aac.wait();
+    if let Some(mut e) = aac.stderr.take() {
+        let _ = e.read_to_string(&mut aac_log);
+    }
+    let ctx = format!("stderr:\n{err}\nAAC:\n{aac_log}");
+    assert_eq!(status.code(), Some(0), "{ctx}");
+    assert!(err.contains("mission `mission`: OK"), "{ctx}");
+    let tr = trace(&tp);
+    let sent: Vec<u64> = tr
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { seq, .. } => Some(*seq),
+            _ => None,
+        })
+        .collect();
+    assert!(!sent.is_empty(), "{ctx}");
+    assert!(
+        !tr.iter().any(
+            |r| matches!(&r.kind, RecordKind::Action { primitive, .. } if primitive == "EmergencySurfacePrimitive")
+        ),
+        "the alarm never fires\n{ctx}"
+    );
+    // The shore station saw the calls run, then the outcome.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let mut seen: Vec<mcl_zenoh::Status> = Vec::new();
+    while seen.last().is_none_or(|s| s.outcome.is_none()) && Instant::now() < deadline {
+        match statuses.try_recv() {
+            Ok(r) => seen.push(serde_json::from_slice(&r.payload).unwrap()),
+            Err(_) => std::thread::sleep(Duration::from_millis(20)),
+        }
+    }
+    let last = seen.last().unwrap_or_else(|| panic!("no status on mcl/sparus/status\n{ctx}"));
+    assert_eq!((last.mission.as_str(), last.outcome.as_deref()), ("mission", Some("ok")), "{ctx}");
+    assert!(last.running.is_empty(), "{ctx}");
+    assert!(seen.iter().any(|s| s.running.iter().any(|c| c.task == "Trajectory")), "{seen:?}");
+    assert_eq!(last.actions as usize, sent.len(), "{ctx}");
+    // Every action executed exactly once, in order.
+    let executed: Vec<u64> = aac_log
+        .lines()
+        .filter_map(|l| l.split("executed seq=").nth(1)?.split_whitespace().next()?.parse().ok())
+        .collect();
+    assert_eq!(executed, sent, "{ctx}");
+}
