@@ -243,12 +243,26 @@ fn check(runs: &[(i32, Vec<Record>, Vec<Value>); 2], reference: &BTreeMap<String
             })
             .collect();
         assert_eq!(o, ["ok"], "{tag}: {m} ends once, ok");
-        for (k, cmds) in actions(tr) {
+        // The calls of the dry run, each enabled and never twice in a row.
+        // How many times a call inside the ASC's loop runs depends on when
+        // the AUV's message comes, which wall-clock scheduling decides in a
+        // real-time run (a stall of a loaded machine is seconds of mission
+        // time at --speed 50): counts are compared only outside loops, where
+        // the dry run gives exactly one.
+        let got = actions(tr);
+        let calls: Vec<&String> = got.keys().collect();
+        let want: Vec<&String> = reference[m].keys().collect();
+        assert_eq!(calls, want, "{tag}: {m}: the calls of the dry run");
+        for (k, cmds) in got.iter() {
             for w in cmds.windows(2) {
                 assert!(!(w[0] == "enable" && w[1] == "enable"), "{tag}: {m} {k} enabled twice: {cmds:?}");
             }
             let enables = cmds.iter().filter(|c| *c == "enable").count();
-            assert_eq!(Some(&enables), reference[m].get(&k), "{tag}: {m} {k}: {cmds:?}");
+            if reference[m][k] == 1 {
+                assert_eq!(enables, 1, "{tag}: {m} {k}: {cmds:?}");
+            } else {
+                assert!(enables >= 1, "{tag}: {m} {k}: {cmds:?}");
+            }
         }
     }
     // order { asc:deploy_auv, auv:deploy_auv }
