@@ -3,9 +3,10 @@
 //! (issue 12, items 2 and 3; docs/coordination.md, *Crashes* and *The TCP
 //! link*). Every process is bounded in time: a test that hangs fails.
 
+mod auv_asc_common;
+use auv_asc_common::{actions, call, check, fired, received, receives, sends, AUV_ASC, SCENARIO};
 use mcl_runtime::trace::{Record, RecordKind};
 use serde_json::Value;
-use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
@@ -69,8 +70,6 @@ fn wait(mut child: Child, limit: Duration, what: &str) -> (ExitStatus, String, S
     }
 }
 
-const AUV_ASC: &str = "examples/auv-asc.mcl";
-const SCENARIO: &str = "examples/scenarios/auv-asc.toml";
 const LIMIT: Duration = Duration::from_secs(40);
 
 /// One vehicle of `examples/auv-asc.mcl` in its own process, journaled,
@@ -136,149 +135,9 @@ fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, 
     [auv, asc.join().unwrap()]
 }
 
-/// The fire records of the start (`callN.start`) and end (`callN.release`)
-/// of the calls labelled `label`, as indices in the trace.
-fn call(tr: &[Record], label: &str, what: &str) -> Vec<usize> {
-    tr.iter()
-        .enumerate()
-        .filter(|(_, r)| match &r.kind {
-            RecordKind::Fire { transition: t, call, .. } => {
-                call.label.as_deref() == Some(label) && t.starts_with("call") && t.ends_with(what)
-            }
-            _ => false,
-        })
-        .map(|(i, _)| i)
-        .collect()
-}
-
-/// The transition of a `fire` record.
-fn fired(r: &Record) -> &str {
-    match &r.kind {
-        RecordKind::Fire { transition, .. } => transition,
-        k => panic!("not a firing: {k:?}"),
-    }
-}
-
-/// The `transition` of every `coord_send`.
-fn sends(tr: &[Record]) -> Vec<&str> {
-    tr.iter()
-        .filter_map(|r| match &r.kind {
-            RecordKind::CoordSend { transition, .. } => Some(transition.as_str()),
-            _ => None,
-        })
-        .collect()
-}
-
-/// (`from`, `transition`) of every `coord_receive`.
-fn receives(tr: &[Record]) -> Vec<(&str, &str)> {
-    tr.iter()
-        .filter_map(|r| match &r.kind {
-            RecordKind::CoordReceive { from, transition, .. } => Some((from.as_str(), transition.as_str())),
-            _ => None,
-        })
-        .collect()
-}
-
-/// The first `coord_receive` of `transition` from `from`.
-fn received(tr: &[Record], from: &str, transition: &str) -> Option<usize> {
-    tr.iter().position(
-        |r| matches!(&r.kind, RecordKind::CoordReceive { from: f, transition: t, .. } if f == from && t == transition),
-    )
-}
-
-/// Enable and disable actions per primitive and call site, in order.
-fn actions(tr: &[Record]) -> BTreeMap<String, Vec<String>> {
-    let mut out: BTreeMap<String, Vec<String>> = BTreeMap::new();
-    for r in tr {
-        if let RecordKind::Action { primitive, command, call, .. } = &r.kind {
-            out.entry(format!("{primitive}@{:?}", call.call_site)).or_default().push(command.clone());
-        }
-    }
-    out
-}
-
-/// The reference: enable actions of each vehicle in a run without crash
-/// (virtual time, same scenario: the same calls happen).
-fn reference() -> BTreeMap<String, BTreeMap<String, usize>> {
-    let tp = tmp("reference.jsonl");
-    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
-        .args(["run", "--mock", "--virtual-time", AUV_ASC, "--scenario", SCENARIO, "-q", "--trace"])
-        .arg(&tp)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let tr = trace(&tp);
-    let mut by = BTreeMap::new();
-    for m in ["auv", "asc"] {
-        let mine: Vec<Record> = tr.iter().filter(|r| r.mission.as_deref() == Some(m)).cloned().collect();
-        let counts =
-            actions(&mine).into_iter().map(|(k, v)| (k, v.iter().filter(|c| *c == "enable").count())).collect();
-        by.insert(m.to_string(), counts);
-    }
-    by
-}
-
-/// Every check of a crashed and resumed AUV/ASC run.
-fn check(runs: &[(i32, Vec<Record>, Vec<Value>); 2], reference: &BTreeMap<String, BTreeMap<String, usize>>, tag: &str) {
-    let [(ca, auv, ja), (cc, asc, jc)] = runs;
-    assert_eq!((*ca, *cc), (0, 0), "{tag}: both end ok");
-    for (m, tr) in [("auv", auv), ("asc", asc)] {
-        let o: Vec<&str> = tr
-            .iter()
-            .filter_map(|r| match &r.kind {
-                RecordKind::Outcome { result, .. } => Some(result.as_str()),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(o, ["ok"], "{tag}: {m} ends once, ok");
-        // No primitive enabled twice: enable and disable alternate, and
-        // as many enables as without a crash.
-        for (k, cmds) in actions(tr) {
-            for w in cmds.windows(2) {
-                assert!(!(w[0] == "enable" && w[1] == "enable"), "{tag}: {m} {k} enabled twice: {cmds:?}");
-            }
-            let enables = cmds.iter().filter(|c| *c == "enable").count();
-            assert_eq!(Some(&enables), reference[m].get(&k), "{tag}: {m} {k}: {cmds:?}");
-        }
-    }
-    // order { asc:deploy_auv, auv:deploy_auv }: asc's call ended, told auv,
-    // and only then did auv's call start.
-    let (asc_end, auv_start) = (call(asc, "deploy_auv", ".release"), call(auv, "deploy_auv", ".start"));
-    assert_eq!((asc_end.len(), auv_start.len()), (1, 1), "{tag}");
-    let tr_end = fired(&asc[asc_end[0]]);
-    let got = received(auv, "asc", tr_end).unwrap_or_else(|| panic!("{tag}: auv never heard of asc's {tr_end}"));
-    assert!(got < auv_start[0], "{tag}: auv's deploy_auv started before asc's ended");
-    // sync { auv:send_data, asc:send_data }: each starts once, after the
-    // other's arrival message.
-    for (me, other, tr_me) in [("auv", "asc", auv), ("asc", "auv", asc)] {
-        let starts = call(tr_me, "send_data", ".start");
-        assert_eq!(starts.len(), 1, "{tag}: {me}'s send_data starts once");
-        assert!(
-            receives(&tr_me[..starts[0]]).iter().any(|(from, _)| *from == other),
-            "{tag}: {me}'s send_data started without a message from {other}"
-        );
-    }
-    // Exactly once: every message sent is journaled once by its receiver,
-    // numbered 1, 2, … on each link; what one sends the other receives.
-    for (from, to, jto) in [("auv", "asc", jc), ("asc", "auv", ja)] {
-        let seqs: Vec<u64> = jto
-            .iter()
-            .filter(|e| e["j"] == "coord_receive" && e["from"] == from)
-            .map(|e| e["seq"].as_u64().unwrap())
-            .collect();
-        assert_eq!(seqs, (1..=seqs.len() as u64).collect::<Vec<_>>(), "{tag}: {from} -> {to}");
-        let tr_from = if from == "auv" { auv } else { asc };
-        let tr_to = if to == "auv" { auv } else { asc };
-        let sent = sends(tr_from);
-        let got: Vec<&str> = receives(tr_to).into_iter().filter(|(f, _)| *f == from).map(|(_, t)| t).collect();
-        assert_eq!(sent, got, "{tag}: {from} -> {to}");
-    }
-}
-
 #[test]
 fn vehicles_killed_and_resumed_keep_every_constraint() {
-    let reference = reference();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
     // Crash points (journal syncs; the exact moment varies a little with
     // the timing of the messages): asc right after the AUV arrived at the
     // send_data sync (the AUV waits for it), asc once its own arrival is

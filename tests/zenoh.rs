@@ -6,9 +6,10 @@
 //! (clients/python/mcl_aac_zenoh.py). Explicit loopback endpoints, no
 //! multicast scouting. Every process is bounded in time.
 
+mod auv_asc_common;
+use auv_asc_common::{check, AUV_ASC, SCENARIO};
 use mcl_runtime::trace::{Record, RecordKind};
 use serde_json::Value;
-use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -70,8 +71,6 @@ fn wait(mut child: Child, limit: Duration, what: &str) -> (ExitStatus, String) {
     }
 }
 
-const AUV_ASC: &str = "examples/auv-asc.mcl";
-const SCENARIO: &str = "examples/scenarios/auv-asc.toml";
 const LIMIT: Duration = Duration::from_secs(90);
 
 /// One test of this file at a time: each runs vehicles in real time at
@@ -153,152 +152,10 @@ fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, 
     [a, c.join().unwrap()]
 }
 
-fn call(tr: &[Record], label: &str, what: &str) -> Vec<usize> {
-    tr.iter()
-        .enumerate()
-        .filter(|(_, r)| match &r.kind {
-            RecordKind::Fire { transition: t, call, .. } => {
-                call.label.as_deref() == Some(label) && t.starts_with("call") && t.ends_with(what)
-            }
-            _ => false,
-        })
-        .map(|(i, _)| i)
-        .collect()
-}
-
-fn fired(r: &Record) -> &str {
-    match &r.kind {
-        RecordKind::Fire { transition, .. } => transition,
-        k => panic!("not a firing: {k:?}"),
-    }
-}
-
-fn sends(tr: &[Record]) -> Vec<&str> {
-    tr.iter()
-        .filter_map(|r| match &r.kind {
-            RecordKind::CoordSend { transition, .. } => Some(transition.as_str()),
-            _ => None,
-        })
-        .collect()
-}
-
-fn receives(tr: &[Record]) -> Vec<(&str, &str)> {
-    tr.iter()
-        .filter_map(|r| match &r.kind {
-            RecordKind::CoordReceive { from, transition, .. } => Some((from.as_str(), transition.as_str())),
-            _ => None,
-        })
-        .collect()
-}
-
-fn received(tr: &[Record], from: &str, transition: &str) -> Option<usize> {
-    tr.iter().position(
-        |r| matches!(&r.kind, RecordKind::CoordReceive { from: f, transition: t, .. } if f == from && t == transition),
-    )
-}
-
-fn actions(tr: &[Record]) -> BTreeMap<String, Vec<String>> {
-    let mut out: BTreeMap<String, Vec<String>> = BTreeMap::new();
-    for r in tr {
-        if let RecordKind::Action { primitive, command, call, .. } = &r.kind {
-            out.entry(format!("{primitive}@{:?}", call.call_site)).or_default().push(command.clone());
-        }
-    }
-    out
-}
-
-/// Enable actions per primitive and call site of each vehicle in a dry
-/// run (virtual time, same scenario: the same calls happen).
-fn reference() -> BTreeMap<String, BTreeMap<String, usize>> {
-    let tp = tmp("reference.jsonl");
-    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
-        .args(["run", "--mock", "--virtual-time", AUV_ASC, "--scenario", SCENARIO, "-q", "--trace"])
-        .arg(&tp)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let tr = trace(&tp);
-    let mut by = BTreeMap::new();
-    for m in ["auv", "asc"] {
-        let mine: Vec<Record> = tr.iter().filter(|r| r.mission.as_deref() == Some(m)).cloned().collect();
-        let counts =
-            actions(&mine).into_iter().map(|(k, v)| (k, v.iter().filter(|c| *c == "enable").count())).collect();
-        by.insert(m.to_string(), counts);
-    }
-    by
-}
-
-/// Both end ok once; every constraint of the file held; every message
-/// taken once, in order, and what one sent the other received.
-fn check(runs: &[(i32, Vec<Record>, Vec<Value>); 2], reference: &BTreeMap<String, BTreeMap<String, usize>>, tag: &str) {
-    let [(ca, auv, ja), (cc, asc, jc)] = runs;
-    assert_eq!((*ca, *cc), (0, 0), "{tag}: both end ok");
-    for (m, tr) in [("auv", auv), ("asc", asc)] {
-        let o: Vec<&str> = tr
-            .iter()
-            .filter_map(|r| match &r.kind {
-                RecordKind::Outcome { result, .. } => Some(result.as_str()),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(o, ["ok"], "{tag}: {m} ends once, ok");
-        // The calls of the dry run, each enabled and never twice in a row.
-        // How many times a call inside the ASC's loop runs depends on when
-        // the AUV's message comes, which wall-clock scheduling decides in a
-        // real-time run (a stall of a loaded machine is seconds of mission
-        // time at --speed 50): counts are compared only outside loops, where
-        // the dry run gives exactly one.
-        let got = actions(tr);
-        let calls: Vec<&String> = got.keys().collect();
-        let want: Vec<&String> = reference[m].keys().collect();
-        assert_eq!(calls, want, "{tag}: {m}: the calls of the dry run");
-        for (k, cmds) in got.iter() {
-            for w in cmds.windows(2) {
-                assert!(!(w[0] == "enable" && w[1] == "enable"), "{tag}: {m} {k} enabled twice: {cmds:?}");
-            }
-            let enables = cmds.iter().filter(|c| *c == "enable").count();
-            if reference[m][k] == 1 {
-                assert_eq!(enables, 1, "{tag}: {m} {k}: {cmds:?}");
-            } else {
-                assert!(enables >= 1, "{tag}: {m} {k}: {cmds:?}");
-            }
-        }
-    }
-    // order { asc:deploy_auv, auv:deploy_auv }
-    let (asc_end, auv_start) = (call(asc, "deploy_auv", ".release"), call(auv, "deploy_auv", ".start"));
-    assert_eq!((asc_end.len(), auv_start.len()), (1, 1), "{tag}");
-    let tr_end = fired(&asc[asc_end[0]]);
-    let got = received(auv, "asc", tr_end).unwrap_or_else(|| panic!("{tag}: auv never heard of asc's {tr_end}"));
-    assert!(got < auv_start[0], "{tag}: auv's deploy_auv started before asc's ended");
-    // sync { auv:send_data, asc:send_data }
-    for (me, other, tr_me) in [("auv", "asc", auv), ("asc", "auv", asc)] {
-        let starts = call(tr_me, "send_data", ".start");
-        assert_eq!(starts.len(), 1, "{tag}: {me}'s send_data starts once");
-        assert!(
-            receives(&tr_me[..starts[0]]).iter().any(|(from, _)| *from == other),
-            "{tag}: {me}'s send_data started without a message from {other}"
-        );
-    }
-    for (from, to, jto) in [("auv", "asc", jc), ("asc", "auv", ja)] {
-        let seqs: Vec<u64> = jto
-            .iter()
-            .filter(|e| e["j"] == "coord_receive" && e["from"] == from)
-            .map(|e| e["seq"].as_u64().unwrap())
-            .collect();
-        assert_eq!(seqs, (1..=seqs.len() as u64).collect::<Vec<_>>(), "{tag}: {from} -> {to}");
-        let tr_from = if from == "auv" { auv } else { asc };
-        let tr_to = if to == "auv" { auv } else { asc };
-        let got: Vec<&str> = receives(tr_to).into_iter().filter(|(f, _)| *f == from).map(|(_, t)| t).collect();
-        assert_eq!(sends(tr_from), got, "{tag}: {from} -> {to}");
-        assert!(!got.is_empty(), "{tag}: {from} -> {to} carried messages");
-    }
-}
-
 #[test]
 fn auv_and_asc_over_zenoh_keep_every_constraint() {
     let _one = serial();
-    let reference = reference();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
     let runs = auv_asc(None, None, "zplain");
     check(&runs, &reference, "zplain");
 }
@@ -306,7 +163,7 @@ fn auv_and_asc_over_zenoh_keep_every_constraint() {
 #[test]
 fn a_vehicle_killed_and_resumed_over_zenoh_keeps_every_constraint() {
     let _one = serial();
-    let reference = reference();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
     // The ASC right after the AUV arrived at the send_data sync, then the
     // AUV while it waits for the ASC at the sync.
     for (auv_crash, asc_crash, tag) in [(None, Some(6), "zasc"), (Some(7), None, "zauv")] {
@@ -341,7 +198,7 @@ fn router(port: u16) -> Child {
 #[test]
 fn auv_and_asc_through_a_router() {
     let _one = serial();
-    let reference = reference();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
     // Peers that only know the router: it tells each where the other
     // listens (loopback, a port of the system's choice).
     let pr = free_port();
@@ -359,7 +216,7 @@ fn auv_and_asc_through_a_router() {
 #[test]
 fn auv_and_asc_through_a_router_restarted_mid_run() {
     let _one = serial();
-    let reference = reference();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
     let pr = free_port();
     // Clients: everything goes through the router.
     let config = tmp("client.json5");
