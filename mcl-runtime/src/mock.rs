@@ -44,7 +44,7 @@ use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::link::{Action, Inbound};
-use crate::scenario::{DelaySpec, OutcomeRule, Rule, Scenario};
+use crate::scenario::{OutcomeRule, Rule, Scenario};
 
 /// Seconds a primitive takes to answer when nothing else is said.
 pub const DEFAULT_DURATION: f64 = 5.0;
@@ -217,16 +217,7 @@ impl MockVehicle {
         let role = call.and_then(|c| c.role.as_deref());
         let outcome = match (rule.outcome, rule.probabilities) {
             (Some(o), _) => o,
-            (None, Some(p)) => {
-                let u = self.uniform() * (p.ok + p.fail + p.never);
-                if u < p.ok {
-                    OutcomeRule::Ok
-                } else if u < p.ok + p.fail {
-                    OutcomeRule::Fail
-                } else {
-                    OutcomeRule::Never
-                }
-            }
+            (None, Some(p)) => p.pick(self.uniform()),
             (None, None) => match role {
                 Some("monitor_condition") => OutcomeRule::Never,
                 Some("while_condition") => OutcomeRule::Fail,
@@ -237,8 +228,7 @@ impl MockVehicle {
         };
         let delay = match rule.delay {
             None => self.default_duration,
-            Some(DelaySpec::Fixed(d)) => d,
-            Some(DelaySpec::Range(lo, hi)) => lo + (hi - lo) * self.uniform(),
+            Some(d) => d.seconds(|| self.uniform()),
         };
         let event = match outcome {
             OutcomeRule::Never => None,

@@ -156,6 +156,30 @@ pub struct Probabilities {
     pub never: f64,
 }
 
+impl Probabilities {
+    /// The outcome that `u`, uniform in [0, 1), picks with these weights.
+    pub fn pick(&self, u: f64) -> OutcomeRule {
+        let u = u * (self.ok + self.fail + self.never);
+        if u < self.ok {
+            OutcomeRule::Ok
+        } else if u < self.ok + self.fail {
+            OutcomeRule::Fail
+        } else {
+            OutcomeRule::Never
+        }
+    }
+}
+
+impl DelaySpec {
+    /// The delay in seconds; a range takes one draw of `uniform` (in [0, 1)).
+    pub fn seconds(&self, uniform: impl FnOnce() -> f64) -> f64 {
+        match *self {
+            DelaySpec::Fixed(d) => d,
+            DelaySpec::Range(lo, hi) => lo + (hi - lo) * uniform(),
+        }
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawProbabilities {

@@ -34,7 +34,7 @@ use std::sync::Arc;
 
 use mcl_runtime::link::{Action, Inbound};
 use mcl_runtime::mock::CallInfo;
-use mcl_runtime::scenario::{DelaySpec, OutcomeRule, Scenario};
+use mcl_runtime::scenario::{OutcomeRule, Scenario};
 use mcl_runtime::vehicle::{Pose, VirtualVehicle};
 use serde_json::Value;
 
@@ -624,21 +624,11 @@ impl SimVehicle {
         let rule = self.scenario.rule_for(task, label.as_deref(), n);
         let outcome = match (rule.outcome, rule.probabilities) {
             (Some(o), _) => o,
-            (None, Some(p)) => {
-                let u = self.uniform() * (p.ok + p.fail + p.never);
-                if u < p.ok {
-                    OutcomeRule::Ok
-                } else if u < p.ok + p.fail {
-                    OutcomeRule::Fail
-                } else {
-                    OutcomeRule::Never
-                }
-            }
+            (None, Some(p)) => p.pick(self.uniform()),
             (None, None) => return None,
         };
         let delay = match rule.delay {
-            Some(DelaySpec::Fixed(d)) => d,
-            Some(DelaySpec::Range(lo, hi)) => lo + (hi - lo) * self.uniform(),
+            Some(d) => d.seconds(|| self.uniform()),
             None => self.scenario.default_duration.unwrap_or(mcl_runtime::mock::DEFAULT_DURATION),
         };
         Some(Forced { at: now + delay, outcome, event: rule.event })
