@@ -99,6 +99,25 @@ pub struct Value {
     pub span: Span,
 }
 
+impl Value {
+    /// The value as written in the source (a string quoted, a list with its
+    /// tag; `?` for one that failed to parse), for pictures and views of a
+    /// mission.
+    pub fn written(&self) -> String {
+        match &self.kind {
+            ValueKind::Number(n) => n.text.clone(),
+            ValueKind::Str(s) => format!("\"{s}\""),
+            ValueKind::Ident(n) => n.text.clone(),
+            ValueKind::List { tag, items } => format!(
+                "{}[{}]",
+                tag.as_ref().map_or("", |t| t.text.as_str()),
+                items.iter().map(Value::written).collect::<Vec<_>>().join(", ")
+            ),
+            ValueKind::Error => "?".into(),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ValueKind {
     /// An identifier: a task parameter (in actions), a mission parameter or a

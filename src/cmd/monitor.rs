@@ -9,7 +9,7 @@ use mcl_monitor::tree::{MissionTree, Node};
 use mcl_monitor::{Hub, Mode, Monitor};
 use mcl_runtime::operator;
 use mcl_runtime::trace::{read_trace, Record};
-use mcl_syntax::ast::{Block, Item, MonitorKind, ParallelOp, Stmt, StmtKind, Value, ValueKind};
+use mcl_syntax::ast::{Block, Item, MonitorKind, ParallelOp, Stmt, StmtKind, Value};
 
 /// The monitor of a live run: the hub its trace sink feeds, and the
 /// operator's commands for the real-time driver (with `--operator-token`).
@@ -179,7 +179,7 @@ fn stmt(s: &Stmt, line: &dyn Fn(u32) -> u32) -> Node {
     let part = |p: &str| p.to_string();
     match &s.kind {
         StmtKind::Call(c) => {
-            let args: Vec<String> = c.args.iter().map(written).collect();
+            let args: Vec<String> = c.args.iter().map(Value::written).collect();
             let label = c.label.as_ref().map(|l| format!(" : {}", l.text)).unwrap_or_default();
             Node {
                 kind: "call".into(),
@@ -226,20 +226,5 @@ fn stmt(s: &Stmt, line: &dyn Fn(u32) -> u32) -> Node {
         StmtKind::Error => {
             Node { kind: "error".into(), text: "(syntax error)".into(), line: line(s.span.start), children: Vec::new() }
         }
-    }
-}
-
-/// A call argument as written.
-fn written(v: &Value) -> String {
-    match &v.kind {
-        ValueKind::Number(n) => n.text.clone(),
-        ValueKind::Str(s) => format!("\"{s}\""),
-        ValueKind::Ident(n) => n.text.clone(),
-        ValueKind::List { tag, items } => format!(
-            "{}[{}]",
-            tag.as_ref().map_or("", |t| t.text.as_str()),
-            items.iter().map(written).collect::<Vec<_>>().join(", ")
-        ),
-        ValueKind::Error => "?".into(),
     }
 }

@@ -4,26 +4,11 @@
 //! part of the structure they lead to. A picture a person can read whole,
 //! where the net of the same mission (`--view net`) has hundreds of nodes.
 
-use mcl_syntax::ast::{Block, Mission, MonitorKind, ParallelOp, Stmt, StmtKind, Value, ValueKind};
+use mcl_syntax::ast::{Block, Mission, MonitorKind, ParallelOp, Stmt, StmtKind, Value};
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
     s.replace('\\', "\\\\").replace('"', "\\\"").replace('\n', "\\n")
-}
-
-/// A call argument as written.
-fn written(v: &Value) -> String {
-    match &v.kind {
-        ValueKind::Number(n) => n.text.clone(),
-        ValueKind::Str(s) => format!("\"{s}\""),
-        ValueKind::Ident(n) => n.text.clone(),
-        ValueKind::List { tag, items } => format!(
-            "{}[{}]",
-            tag.as_ref().map_or("", |t| t.text.as_str()),
-            items.iter().map(written).collect::<Vec<_>>().join(", ")
-        ),
-        ValueKind::Error => "?".into(),
-    }
 }
 
 struct Tree<'a> {
@@ -72,7 +57,7 @@ impl Tree<'_> {
     fn stmt(&mut self, s: &Stmt) -> usize {
         match &s.kind {
             StmtKind::Call(c) => {
-                let args: Vec<String> = c.args.iter().map(written).collect();
+                let args: Vec<String> = c.args.iter().map(Value::written).collect();
                 let label = c.label.as_ref().map(|l| format!(" : {}", l.text)).unwrap_or_default();
                 let text =
                     format!("{}({}){label}\nline {}", c.name.text, args.join(", "), (self.line)(c.span.start as usize));
