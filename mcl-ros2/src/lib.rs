@@ -16,7 +16,7 @@
 //!   typed API of `ros2-client`/`rustdds`).
 //!
 //! All of it is sans-IO but [`node`], the ROS 2 node of `mcl run --ros2`
-//! (on `ros2-client`: topics for now). Only the binary and the tests that
+//! (on `ros2-client`: topics, services, actions). Only the binary and the tests that
 //! need it link this crate.
 
 pub mod bridge;

@@ -5,24 +5,34 @@
 //! topics are decoded and given back to the engine, whose events and
 //! perceptions go to the player.
 //!
-//! This first transport carries **topics** only: a service call or an
-//! action goal of the bridge is reported as a warning and raises nothing
-//! (the engine and the codec already handle them; `docs/ros2.md`).
+//! Topics are published and subscribed here; service calls go through
+//! [`service`] and action goals through [`action`], whose answers (a
+//! response, a goal's end, feedback) go back to the engine. What the engine
+//! asks goes out in order, but nothing passes a goal's cancel until the
+//! server has answered it ([`action::Actions::cancelling`]).
 //!
 //! Topics are reliable and transient-local (the last 10 samples kept for
 //! a reader that matches late), so that the first command of a mission is
-//! not lost while DDS discovery is still under way.
+//! not lost while DDS discovery is still under way. Services and actions
+//! are volatile, as ROS 2's: a request waits until discovery has found its
+//! server ([`Matched`]).
 
+mod action;
+mod service;
+
+use crate::bridge::config::Mapping;
 use crate::bridge::engine::{Engine, Out};
 use crate::cdr;
 use crate::raw::RawCdr;
 use mcl_runtime::link::{AacEnd, Inbound};
+use ros2_client::dds::rustdds::DomainParticipant;
 use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::service::ServiceMapping;
 use ros2_client::{
     Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
 };
-use std::collections::BTreeMap;
-use std::time::Duration;
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::time::{Duration, Instant};
 use tokio::sync::mpsc::error::TryRecvError;
 
 /// How often the node looks for commands and messages.
@@ -30,6 +40,67 @@ const POLL: Duration = Duration::from_millis(5);
 /// How long the node stays after the player left (`ros2-client`'s
 /// publisher cannot wait for acknowledgments).
 const LINGER: Duration = Duration::from_millis(500);
+/// How often the discovered endpoints are read again.
+const REDISCOVER: Duration = Duration::from_millis(100);
+/// How long a server's endpoints must have been discovered before a
+/// request goes out (rustdds matches them to our endpoints just after).
+const GRACE: Duration = Duration::from_millis(300);
+
+/// `ros2-client`'s mapping for the bridge's.
+fn mapping(m: Mapping) -> ServiceMapping {
+    match m {
+        Mapping::Cyclone => ServiceMapping::Cyclone,
+        Mapping::Enhanced => ServiceMapping::Enhanced,
+        Mapping::Basic => ServiceMapping::Basic,
+    }
+}
+
+/// Which remote DDS readers and writers discovery has found, by topic,
+/// read again at most every [`REDISCOVER`].
+pub(crate) struct Matched {
+    dp: DomainParticipant,
+    readers: BTreeSet<String>,
+    writers: BTreeSet<String>,
+    read_at: Option<Instant>,
+    /// (request topic, reply topic) found together since.
+    since: BTreeMap<(String, String), Instant>,
+}
+
+impl Matched {
+    fn new(dp: DomainParticipant) -> Matched {
+        Matched { dp, readers: BTreeSet::new(), writers: BTreeSet::new(), read_at: None, since: BTreeMap::new() }
+    }
+
+    fn refresh(&mut self, now: Instant) {
+        if self.read_at.is_some_and(|t| now.duration_since(t) < REDISCOVER) {
+            return;
+        }
+        self.read_at = Some(now);
+        self.readers =
+            self.dp.discovered_readers().into_iter().map(|r| r.subscription_topic_data.topic_name().clone()).collect();
+        self.writers = self.dp.discovered_writers().into_iter().map(|w| w.publication_topic_data.topic_name).collect();
+    }
+
+    /// Whether a server reads `request` and writes `reply`, found at least
+    /// [`GRACE`] ago.
+    fn ready(&mut self, request: &str, reply: &str, now: Instant) -> bool {
+        self.refresh(now);
+        let key = (request.to_string(), reply.to_string());
+        if self.readers.contains(request) && self.writers.contains(reply) {
+            let since = *self.since.entry(key).or_insert(now);
+            now.duration_since(since) >= GRACE
+        } else {
+            self.since.remove(&key);
+            false
+        }
+    }
+
+    /// Whether some participant writes `topic`.
+    fn has_writer(&mut self, topic: &str, now: Instant) -> bool {
+        self.refresh(now);
+        self.writers.contains(topic)
+    }
+}
 
 /// The QoS of every topic of the bridge.
 pub fn qos() -> QosProfile {
@@ -59,7 +130,11 @@ fn type_name(full: &str) -> Result<MessageTypeName, String> {
 
 struct Ros {
     node: Node,
+    node_name: NodeName,
     publishers: BTreeMap<String, (Publisher<RawCdr>, String)>,
+    services: service::Services,
+    actions: action::Actions,
+    matched: Matched,
 }
 
 impl Ros {
@@ -93,14 +168,31 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
     let node_name = NodeName::new(&ns, b.node.get_ref()).map_err(|e| format!("node name: {e:?}"))?;
     let ctx =
         Context::with_options(ContextOptions::new().domain_id(domain)).map_err(|e| format!("ROS 2 context: {e:?}"))?;
-    let node = ctx.new_node(node_name, NodeOptions::new()).map_err(|e| format!("ROS 2 node: {e:?}"))?;
-    let mut ros = Ros { node, publishers: BTreeMap::new() };
+    let node = ctx.new_node(node_name.clone(), NodeOptions::new()).map_err(|e| format!("ROS 2 node: {e:?}"))?;
+    let m = b.mapping();
+    let mut ros = Ros {
+        node,
+        node_name,
+        publishers: BTreeMap::new(),
+        services: service::Services::new(m),
+        actions: action::Actions::new(m),
+        matched: Matched::new(ctx.domain_participant()),
+    };
     // Every topic the bridge publishes on, created before the mission starts.
     for p in engine.loaded().bridge.primitives.values() {
         for c in [&p.enable, &p.disable].into_iter().flatten() {
             if let Some(t) = &c.get_ref().publish {
                 ros.publisher(t.get_ref(), c.get_ref().ty.get_ref())?;
             }
+            // Service and action clients too: a server must discover them
+            // before their first request, or that request is lost.
+            if let Some(s) = &c.get_ref().call {
+                ros.services.client(&mut ros.node, &ros.node_name, s.get_ref(), c.get_ref().ty.get_ref())?;
+            }
+        }
+        if let Some(a) = &p.action {
+            let a = a.get_ref();
+            ros.actions.server(&mut ros.node, &ros.node_name, a.name.get_ref(), a.ty.get_ref())?;
         }
     }
     let mut subs: Vec<(String, String, Subscription<RawCdr>)> = Vec::new();
@@ -115,58 +207,52 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
             .map_err(|e| format!("subscription `{topic}`: {e:?}"))?;
         subs.push((topic.clone(), ty.clone(), s));
     }
+    // What the engine asked, in order, not yet carried out.
+    let mut queue: VecDeque<Out> = VecDeque::new();
+    let mut closed = false;
     loop {
-        let mut outs = Vec::new();
-        let mut closed = false;
-        loop {
+        while !closed {
             match end.actions.try_recv() {
                 Ok(a) => {
                     let _ = end.inbound.send(Inbound::Ack { seq: a.seq });
-                    outs.extend(engine.on_command(&a.primitive, &a.command, &a.params.to_json_map()));
+                    queue.extend(engine.on_command(&a.primitive, &a.command, &a.params.to_json_map()));
                 }
                 Err(TryRecvError::Empty) => break,
-                Err(TryRecvError::Disconnected) => {
-                    closed = true;
-                    break;
-                }
+                Err(TryRecvError::Disconnected) => closed = true,
             }
         }
         for (topic, ty, s) in &subs {
             while let Ok(Some((m, _))) = s.take() {
                 match cdr::decode_body(&engine.loaded().registry, ty, &m.0, 0) {
-                    Ok(v) => outs.extend(engine.on_message(topic, &v)),
+                    Ok(v) => queue.extend(engine.on_message(topic, &v)),
                     Err(e) => warn(&format!("a message on `{topic}` is not a `{ty}`: {e}")),
                 }
             }
         }
-        for o in outs {
-            match o {
-                Out::Publish { topic, ty, value } => {
-                    let sent = cdr::encode_body(&engine.loaded().registry, &ty, &value, 0)
-                        .map_err(|e| e.to_string())
-                        .and_then(|body| {
-                            ros.publisher(&topic, &ty)?.publish(RawCdr(body)).map_err(|e| format!("{e:?}"))
-                        });
-                    if let Err(e) = sent {
-                        warn(&format!("cannot publish on `{topic}`: {e}"));
+        let now = Instant::now();
+        for (call, response) in ros.services.poll(&engine.loaded().registry, &mut ros.matched, now) {
+            queue.extend(engine.on_response(call, response));
+        }
+        for ev in ros.actions.poll(&engine.loaded().registry, &mut ros.matched, now) {
+            match ev {
+                action::Event::End { primitive, end, warning } => {
+                    if let Some(w) = warning {
+                        warn(&w);
                     }
+                    queue.extend(engine.on_goal_end(&primitive, end));
                 }
-                Out::Event(event) => {
-                    let _ = end.inbound.send(Inbound::Event { event, activation: None, n: None });
+                action::Event::Feedback { primitive, feedback } => {
+                    queue.extend(engine.on_feedback(&primitive, &feedback))
                 }
-                Out::Perception { name, value } => {
-                    let _ = end.inbound.send(Inbound::Perception { name, value, n: None });
-                }
-                Out::Warning(w) => warn(&w),
-                Out::Call { service, .. } => {
-                    warn(&format!("service `{service}`: services are not carried by this transport yet"))
-                }
-                Out::SendGoal { action, .. } | Out::CancelGoal { action, .. } => {
-                    warn(&format!("action `{action}`: actions are not carried by this transport yet"))
-                }
+                action::Event::Warning(w) => warn(&w),
             }
         }
-        if closed {
+        // Nothing passes a cancel the server has not answered yet.
+        while !ros.actions.cancelling() {
+            let Some(o) = queue.pop_front() else { break };
+            carry(&mut ros, &mut engine, &end, o, now, &warn);
+        }
+        if closed && queue.is_empty() && !ros.actions.cancelling() && !ros.services.busy() {
             // The player has left: the node stays a moment so that its
             // reliable writers deliver the last commands (a disable sent
             // with the mission's end), then leaves the domain.
@@ -174,5 +260,66 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
             return Ok(());
         }
         std::thread::sleep(POLL);
+    }
+}
+
+/// Carries out one thing the engine asked.
+fn carry(ros: &mut Ros, engine: &mut Engine, end: &AacEnd, o: Out, now: Instant, warn: &impl Fn(&str)) {
+    match o {
+        Out::Publish { topic, ty, value } => {
+            let sent = cdr::encode_body(&engine.loaded().registry, &ty, &value, 0)
+                .map_err(|e| e.to_string())
+                .and_then(|body| ros.publisher(&topic, &ty)?.publish(RawCdr(body)).map_err(|e| format!("{e:?}")));
+            if let Err(e) = sent {
+                warn(&format!("cannot publish on `{topic}`: {e}"));
+            }
+        }
+        Out::Event(event) => {
+            let _ = end.inbound.send(Inbound::Event { event, activation: None, n: None });
+        }
+        Out::Perception { name, value } => {
+            let _ = end.inbound.send(Inbound::Perception { name, value, n: None });
+        }
+        Out::Warning(w) => warn(&w),
+        Out::Call { call, service, ty, request, timeout } => {
+            let reg = &engine.loaded().registry;
+            if let Err(e) = ros.services.call(
+                &mut ros.node,
+                &ros.node_name,
+                reg,
+                &mut ros.matched,
+                call,
+                &service,
+                &ty,
+                &request,
+                timeout,
+            ) {
+                // The call is over: its failure goes back to the engine (and to the player).
+                let outs = engine.on_response(call, Err(e));
+                for o in outs {
+                    carry(ros, engine, end, o, now, warn);
+                }
+            }
+        }
+        Out::SendGoal { primitive, action, ty, goal } => {
+            let timeout = engine.goal_timeout(&primitive);
+            let reg = &engine.loaded().registry;
+            let sent =
+                ros.actions.send_goal(&mut ros.node, &ros.node_name, reg, &primitive, &action, &ty, &goal, timeout);
+            if let Err(e) = sent {
+                warn(&format!("goal of `{primitive}` at `{action}`: {e}"));
+                let outs = engine.on_goal_end(&primitive, crate::bridge::engine::GoalEnd::Aborted);
+                for o in outs {
+                    carry(ros, engine, end, o, now, warn);
+                }
+            }
+        }
+        Out::CancelGoal { primitive, .. } => {
+            for ev in ros.actions.cancel(&primitive, now) {
+                if let action::Event::Warning(w) = ev {
+                    warn(&w);
+                }
+            }
+        }
     }
 }

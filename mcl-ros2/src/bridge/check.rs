@@ -92,6 +92,11 @@ pub fn check(loc: &Locator<'_>, bridge: &Bridge, registry: &Registry, vehicle: &
     if let Some(t) = &bridge.status_topic {
         c.name(t, "topic");
     }
+    if let Some(m) = &bridge.service_mapping {
+        if super::config::Mapping::parse(m.get_ref()).is_none() {
+            c.err(m, format!("`{}` is not a service mapping (`cyclone`, `enhanced` or `basic`)", m.get_ref()));
+        }
+    }
     for (pname, p) in &bridge.primitives {
         let Some(vp) = vehicle.primitives.iter().find(|v| v.name == *pname.get_ref()) else {
             let known: Vec<&str> = vehicle.primitives.iter().map(|v| v.name.as_str()).collect();
@@ -138,6 +143,7 @@ pub fn check(loc: &Locator<'_>, bridge: &Bridge, registry: &Registry, vehicle: &
             for ev in [Some(&a.succeeded), Some(&a.aborted), a.canceled.as_ref()].into_iter().flatten() {
                 c.event(ev, vp, vehicle);
             }
+            c.timeout(a.timeout.as_ref());
             let ty = a.ty.get_ref();
             if !c.reg.has_action(ty) {
                 c.err(&a.ty, format!("no action type `{ty}` (bundled or in `interfaces`; written `pkg/action/Name`)"));
@@ -195,6 +201,15 @@ impl Checker<'_> {
                 ev,
                 format!("primitive `{}` has no event `{name}` (its events: {})", vp.name, vp.events.join(", ")),
             ),
+        }
+    }
+
+    fn timeout(&mut self, t: Option<&Spanned<f64>>) {
+        if let Some(t) = t {
+            let s = *t.get_ref();
+            if !(s > 0.0 && s <= 86_400.0) {
+                self.err(t, format!("timeout {s} is not a number of seconds in (0, 86400]"));
+            }
         }
     }
 
@@ -289,9 +304,17 @@ impl Checker<'_> {
             }
             _ => self.err(map, "give one of `publish = \"/topic\"` and `call = \"/service\"`"),
         }
+        if c.call.is_none() {
+            if let Some(f) = &c.on_failure {
+                self.err(f, "`on_failure` goes with `call` (a service)");
+            }
+            if let Some(t) = &c.timeout {
+                self.err(t, "`timeout` goes with `call` (a service)");
+            }
+        }
+        self.timeout(c.timeout.as_ref());
         // Events of responses are checked against the primitive.
-        for r in &c.on_response {
-            let ev = &r.get_ref().event;
+        for ev in c.on_response.iter().map(|r| &r.get_ref().event).chain(&c.on_failure) {
             if !vp.events.iter().any(|e| e == ev.get_ref()) {
                 self.err(
                     ev,
