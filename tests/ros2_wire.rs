@@ -62,6 +62,10 @@ enable = { call = "CAMERA", type = "std_srvs/srv/SetBool", fields = { data = tru
     { when = "success == true", event = "eventTakeImagesOk" },
 ], on_failure = "eventTakeImagesFail" }
 disable = { call = "/camera/enable", type = "std_srvs/srv/SetBool", fields = { data = false } }
+
+# A service called with a type other than its server's (a Trigger).
+[primitives.GetPositionFixPrimitive]
+enable = { call = "/vehicle/fix", type = "std_srvs/srv/SetBool", timeout = 2, on_failure = "eventGetPositionFixFail" }
 "#;
 
 /// What one run gave.
@@ -236,10 +240,12 @@ fn a_service_that_never_answers_and_malformed_messages_do_not_stop_the_player() 
         return;
     }
     // /camera/stuck is served but never answered: after its 2 s, the fail
-    // event runs the catch. The vehicle's hostile mode sends a `Float64`
-    // without its field and a message of another type on /depth/reached
-    // before the right answer.
-    let mission = "    try { TakeImages() } catch { InitializeVehicle() } ;\n    Depth( 15, \"achieve\" )";
+    // event runs the catch. /vehicle/fix is served, but as a Trigger:
+    // the SetBool call finds no server of its type. The vehicle's hostile
+    // mode sends a `Float64` without its field and a message of another
+    // type on /depth/reached before the right answer.
+    let mission = "    try { TakeImages() } catch { InitializeVehicle() } ;
+    try { GetPositionFix() } catch { Depth( 15, \"achieve\" ) }";
     let r = run("hostile", mission, "/camera/stuck", &[Server("vehicle.py", &["hostile"], &[])]);
     assert_eq!(r.code, Some(0), "stderr: {}\nheard: {:?}", r.stderr, r.heard);
     assert!(r.at(0, "stuck") < r.at(0, "initialize"), "{:?}", r.heard);
@@ -250,7 +256,23 @@ fn a_service_that_never_answers_and_malformed_messages_do_not_stop_the_player() 
         "no warning for the malformed message: {}",
         r.stderr
     );
-    assert!(r.traced("eventDepthOk") > r.traced("eventInitializeVehicleOk"));
+    assert!(
+        r.stderr.contains(
+            "a publisher on `/depth/reached` writes `std_msgs::msg::dds_::String_`, not `std_msgs::msg::dds_::Float64_`"
+        ),
+        "no warning for the publisher of another type: {}",
+        r.stderr
+    );
+    assert!(
+        r.stderr.contains(
+            "service `/vehicle/fix`: no server was found within 2.0 s: one reads requests of type \
+             std_srvs::srv::dds_::Trigger_Request_, not std_srvs::srv::dds_::SetBool_Request_"
+        ),
+        "{}",
+        r.stderr
+    );
+    assert!(r.traced("eventInitializeVehicleOk") < r.traced("eventGetPositionFixFail"));
+    assert!(r.traced("eventGetPositionFixFail") < r.traced("eventDepthOk"));
 }
 
 #[test]

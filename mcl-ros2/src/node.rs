@@ -15,17 +15,20 @@
 //! a reader that matches late), so that the first command of a mission is
 //! not lost while DDS discovery is still under way. Services and actions
 //! are volatile, as ROS 2's: a request waits until discovery has found its
-//! server ([`Matched`]).
+//! server ([`discovery`]).
 
 mod action;
+mod discovery;
 mod service;
+
+use discovery::Discovered;
 
 use crate::bridge::config::Mapping;
 use crate::bridge::engine::{Engine, Out};
 use crate::cdr;
+use crate::idl::registry::dds_type_name;
 use crate::raw::RawCdr;
 use mcl_runtime::link::{AacEnd, Inbound};
-use ros2_client::dds::rustdds::DomainParticipant;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::service::ServiceMapping;
 use ros2_client::{
@@ -40,65 +43,12 @@ const POLL: Duration = Duration::from_millis(5);
 /// How long the node stays after the player left (`ros2-client`'s
 /// publisher cannot wait for acknowledgments).
 const LINGER: Duration = Duration::from_millis(500);
-/// How often the discovered endpoints are read again.
-const REDISCOVER: Duration = Duration::from_millis(100);
-/// How long a server's endpoints must have been discovered before a
-/// request goes out (rustdds matches them to our endpoints just after).
-const GRACE: Duration = Duration::from_millis(300);
-
 /// `ros2-client`'s mapping for the bridge's.
 fn mapping(m: Mapping) -> ServiceMapping {
     match m {
         Mapping::Cyclone => ServiceMapping::Cyclone,
         Mapping::Enhanced => ServiceMapping::Enhanced,
         Mapping::Basic => ServiceMapping::Basic,
-    }
-}
-
-/// Which remote DDS readers and writers discovery has found, by topic,
-/// read again at most every [`REDISCOVER`].
-pub(crate) struct Matched {
-    dp: DomainParticipant,
-    readers: BTreeSet<String>,
-    writers: BTreeSet<String>,
-    read_at: Option<Instant>,
-    /// (request topic, reply topic) found together since.
-    since: BTreeMap<(String, String), Instant>,
-}
-
-impl Matched {
-    fn new(dp: DomainParticipant) -> Matched {
-        Matched { dp, readers: BTreeSet::new(), writers: BTreeSet::new(), read_at: None, since: BTreeMap::new() }
-    }
-
-    fn refresh(&mut self, now: Instant) {
-        if self.read_at.is_some_and(|t| now.duration_since(t) < REDISCOVER) {
-            return;
-        }
-        self.read_at = Some(now);
-        self.readers =
-            self.dp.discovered_readers().into_iter().map(|r| r.subscription_topic_data.topic_name().clone()).collect();
-        self.writers = self.dp.discovered_writers().into_iter().map(|w| w.publication_topic_data.topic_name).collect();
-    }
-
-    /// Whether a server reads `request` and writes `reply`, found at least
-    /// [`GRACE`] ago.
-    fn ready(&mut self, request: &str, reply: &str, now: Instant) -> bool {
-        self.refresh(now);
-        let key = (request.to_string(), reply.to_string());
-        if self.readers.contains(request) && self.writers.contains(reply) {
-            let since = *self.since.entry(key).or_insert(now);
-            now.duration_since(since) >= GRACE
-        } else {
-            self.since.remove(&key);
-            false
-        }
-    }
-
-    /// Whether some participant writes `topic`.
-    fn has_writer(&mut self, topic: &str, now: Instant) -> bool {
-        self.refresh(now);
-        self.writers.contains(topic)
     }
 }
 
@@ -134,7 +84,7 @@ struct Ros {
     publishers: BTreeMap<String, (Publisher<RawCdr>, String)>,
     services: service::Services,
     actions: action::Actions,
-    matched: Matched,
+    matched: Discovered,
 }
 
 impl Ros {
@@ -176,7 +126,7 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
         publishers: BTreeMap::new(),
         services: service::Services::new(m),
         actions: action::Actions::new(m),
-        matched: Matched::new(ctx.domain_participant()),
+        matched: Discovered::new(ctx.domain_participant()),
     };
     // Every topic the bridge publishes on, created before the mission starts.
     for p in engine.loaded().bridge.primitives.values() {
@@ -196,17 +146,20 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
         }
     }
     let mut subs: Vec<(String, String, Subscription<RawCdr>)> = Vec::new();
+    // (DDS topic, DDS type) of each subscription, to name the publishers of
+    // another type, whose messages DDS never delivers.
+    let mut expected: Vec<(String, String, String)> = Vec::new();
     for (topic, ty) in engine.subscriptions() {
-        let t = ros
-            .node
-            .create_topic(&topic_name(topic)?, type_name(ty)?, &qos())
-            .map_err(|e| format!("topic `{topic}`: {e:?}"))?;
+        let name = topic_name(topic)?;
+        expected.push((topic.clone(), name.to_dds_name("rt", &ros.node_name, ""), dds_type_name(ty)));
+        let t = ros.node.create_topic(&name, type_name(ty)?, &qos()).map_err(|e| format!("topic `{topic}`: {e:?}"))?;
         let s = ros
             .node
             .create_subscription::<RawCdr>(&t, Some(qos()))
             .map_err(|e| format!("subscription `{topic}`: {e:?}"))?;
         subs.push((topic.clone(), ty.clone(), s));
     }
+    let mut foreign: BTreeSet<(String, String)> = BTreeSet::new();
     // What the engine asked, in order, not yet carried out.
     let mut queue: VecDeque<Out> = VecDeque::new();
     let mut closed = false;
@@ -230,6 +183,15 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
             }
         }
         let now = Instant::now();
+        for (topic, dds_topic, dds_type) in &expected {
+            for other in ros.matched.foreign_writers(dds_topic, dds_type, now) {
+                if foreign.insert((topic.clone(), other.clone())) {
+                    warn(&format!(
+                        "a publisher on `{topic}` writes `{other}`, not `{dds_type}`: DDS does not deliver its messages"
+                    ));
+                }
+            }
+        }
         for (call, response) in ros.services.poll(&engine.loaded().registry, &mut ros.matched, now) {
             queue.extend(engine.on_response(call, response));
         }

@@ -10,7 +10,8 @@ Depth: a setpoint on /depth/setpoint (std_msgs/Float64) is answered on
 
 Services (rmw_cyclonedds' mapping, `ros2dds.py`): /vehicle/initialize
 (std_srvs/Trigger) answers success; /camera/enable (std_srvs/SetBool)
-answers success; /camera/stuck (std_srvs/SetBool) never answers.
+answers success; /camera/stuck (std_srvs/SetBool) never answers;
+/vehicle/fix (std_srvs/Trigger) answers success.
 
 `hostile` as a third argument: each depth setpoint is first answered, from
 a second participant, by a `Float64` without its field and by a
@@ -102,6 +103,7 @@ done = writer(dp, "rt/surface/done", String_)
 initialize = ServiceServer(dp, "/vehicle/initialize", Trigger_Request_, Trigger_Response_)
 camera = ServiceServer(dp, "/camera/enable", SetBool_Request_, SetBool_Response_)
 stuck = ServiceServer(dp, "/camera/stuck", SetBool_Request_, SetBool_Response_)
+fix = ServiceServer(dp, "/vehicle/fix", Trigger_Request_, Trigger_Response_)
 print("ready", flush=True)
 
 end = time.time() + seconds
@@ -134,4 +136,7 @@ while time.time() < end:
         camera.reply(r, success=True, message="")
     for r in stuck.take():
         print("stuck", flush=True)
+    for r in fix.take():
+        print("fix", flush=True)
+        fix.reply(r, success=True, message="")
     time.sleep(0.01)

@@ -18,8 +18,9 @@
 //! ([`Actions::cancelling`]), so that a server sees the losing branch of a
 //! parallel-or cancelled before the next goal arrives.
 
-use super::service::{dds_topics, service_qos};
-use super::{mapping, topic_name, Matched};
+use super::discovery::{Discovered, Endpoints};
+use super::service::{endpoints, service_qos};
+use super::{mapping, topic_name};
 use crate::bridge::engine::GoalEnd;
 use crate::cdr;
 use crate::idl::Registry;
@@ -46,8 +47,8 @@ pub(super) enum Event {
 pub(super) struct Server {
     ty: String,
     client: ActionClient<RawCdr, RawCdr, RawCdr>,
-    /// (request reader, reply writer) of send_goal, get_result, cancel_goal.
-    services: [(String, String); 3],
+    /// The endpoints of send_goal, get_result, cancel_goal.
+    services: [Endpoints; 3],
 }
 
 enum Phase {
@@ -140,10 +141,14 @@ impl Actions {
                     action_qos(),
                 )
                 .map_err(|e| format!("action client of `{action}`: {e:?}"))?;
-            let topics = |s: &str| -> Result<(String, String), String> {
-                Ok(dds_topics(&topic_name(&format!("{action}/_action/{s}"))?, node_name))
+            let service = |s: &str, ty: &str| -> Result<Endpoints, String> {
+                Ok(endpoints(&topic_name(&format!("{action}/_action/{s}"))?, node_name, ty))
             };
-            let services = [topics("send_goal")?, topics("get_result")?, topics("cancel_goal")?];
+            let services = [
+                service("send_goal", &format!("{ty}_SendGoal"))?,
+                service("get_result", &format!("{ty}_GetResult"))?,
+                service("cancel_goal", "action_msgs/srv/CancelGoal")?,
+            ];
             self.servers.insert(action.to_string(), Server { ty: ty.to_string(), client, services });
         }
         match self.servers.get(action) {
@@ -226,7 +231,7 @@ impl Actions {
 
     /// Sends the goals whose server is now matched, and gives what the
     /// servers said: acceptances, results, feedback, cancels.
-    pub(super) fn poll(&mut self, reg: &Registry, matched: &mut Matched, now: Instant) -> Vec<Event> {
+    pub(super) fn poll(&mut self, reg: &Registry, matched: &mut Discovered, now: Instant) -> Vec<Event> {
         let mut out = Vec::new();
         let mut accepts = Vec::new();
         let mut results = Vec::new();
@@ -358,12 +363,12 @@ impl Actions {
     }
 
     /// Sends the goals whose server is discovered.
-    fn send_ready(&mut self, matched: &mut Matched, now: Instant, out: &mut Vec<Event>) {
+    fn send_ready(&mut self, matched: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
         let mut failed = Vec::new();
         for (primitive, g) in self.goals.iter_mut() {
             let Phase::Unmatched(body) = &g.phase else { continue };
             let Some(s) = self.servers.get(&g.action) else { continue };
-            if !s.services.iter().all(|(rq, rr)| matched.ready(rq, rr, now)) {
+            if !s.services.iter().all(|e| matched.ready(e, now)) {
                 continue;
             }
             match s.client.send_goal(RawCdr(body.clone())) {
@@ -382,12 +387,14 @@ impl Actions {
 
     /// Goals not accepted in time, goals whose server left, cancels not
     /// answered in time.
-    fn expire(&mut self, matched: &mut Matched, now: Instant, out: &mut Vec<Event>) {
+    fn expire(&mut self, matched: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
         let mut ended = Vec::new();
         for (primitive, g) in &self.goals {
             let why = match &g.phase {
                 Phase::Unmatched(_) if now >= g.deadline => {
-                    format!("no action server `{}` was found within {:.1} s", g.action, g.timeout.as_secs_f64())
+                    let Some(s) = self.servers.get(&g.action) else { continue };
+                    let missing = s.services.iter().find(|e| !matched.ready(e, now)).unwrap_or(&s.services[0]);
+                    format!("action `{}`: {}", g.action, matched.why_not(missing, g.timeout, now))
                 }
                 Phase::Sending(_) if now >= g.deadline => {
                     format!(
@@ -398,7 +405,8 @@ impl Actions {
                 }
                 Phase::Running(_) => {
                     let Some(s) = self.servers.get(&g.action) else { continue };
-                    if matched.has_writer(&s.services[1].1, now) {
+                    let result = &s.services[1];
+                    if matched.has_writer(&result.reply, &result.reply_type, now) {
                         continue;
                     }
                     format!("the action server `{}` left while the goal ran", g.action)

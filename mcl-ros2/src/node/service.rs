@@ -6,12 +6,14 @@
 //! ROS 2 services are volatile: a request written before the server's
 //! request reader is matched is lost. A call therefore waits until DDS
 //! discovery has found the server's request reader and reply writer
-//! ([`Matched`]), then for its response; both together take at most the
+//! ([`Discovered::ready`]), then for its response; both together take at most the
 //! call's timeout, after which the call ends with an error that names what
 //! was missing (no server, or no answer).
 
-use super::{mapping, topic_name, Matched};
+use super::discovery::{Discovered, Endpoints};
+use super::{mapping, topic_name};
 use crate::cdr;
+use crate::idl::registry::dds_type_name;
 use crate::idl::Registry;
 use crate::raw::RawCdr;
 use ros2_client::service::{Client, ServiceMapping};
@@ -21,9 +23,15 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 /// The request and reply DDS topics of service `name` (`rq/...Request`,
-/// `rr/...Reply`) as `ros2-client` names them for `node`.
-pub(super) fn dds_topics(name: &ros2_client::Name, node: &NodeName) -> (String, String) {
-    (name.to_dds_name("rq", node, "Request"), name.to_dds_name("rr", node, "Reply"))
+/// `rr/...Reply`) as `ros2-client` names them for `node`, with the DDS type
+/// names of `ty` (`pkg/srv/Name`, or an action's `pkg/action/Name_SendGoal`).
+pub(super) fn endpoints(name: &ros2_client::Name, node: &NodeName, ty: &str) -> Endpoints {
+    Endpoints {
+        request: name.to_dds_name("rq", node, "Request"),
+        request_type: dds_type_name(&format!("{ty}_Request")),
+        reply: name.to_dds_name("rr", node, "Reply"),
+        reply_type: dds_type_name(&format!("{ty}_Response")),
+    }
 }
 
 /// `ServiceTypeName` of `pkg/srv/Name`.
@@ -47,8 +55,7 @@ pub(super) fn service_qos() -> ros2_client::QosProfile {
 struct ServiceClient {
     ty: String,
     client: Client<RawCdr, RawCdr>,
-    request_topic: String,
-    reply_topic: String,
+    endpoints: Endpoints,
 }
 
 enum State {
@@ -89,12 +96,11 @@ impl Services {
     ) -> Result<(), String> {
         if !self.clients.contains_key(service) {
             let name = topic_name(service)?;
-            let (request_topic, reply_topic) = dds_topics(&name, node_name);
+            let endpoints = endpoints(&name, node_name, ty);
             let client = node
                 .create_client::<RawCdr, RawCdr>(self.mapping, &name, &service_type(ty)?, service_qos(), service_qos())
                 .map_err(|e| format!("client of `{service}`: {e:?}"))?;
-            self.clients
-                .insert(service.to_string(), ServiceClient { ty: ty.to_string(), client, request_topic, reply_topic });
+            self.clients.insert(service.to_string(), ServiceClient { ty: ty.to_string(), client, endpoints });
         }
         match self.clients.get(service) {
             Some(c) if c.ty != ty => Err(format!("service `{service}` is called as `{}`, not `{ty}`", c.ty)),
@@ -112,7 +118,7 @@ impl Services {
         node: &mut Node,
         node_name: &NodeName,
         reg: &Registry,
-        matched: &mut Matched,
+        matched: &mut Discovered,
         call: u64,
         service: &str,
         ty: &str,
@@ -135,12 +141,12 @@ impl Services {
 
     /// Sends the calls whose server is matched; gives the calls that could
     /// not be sent, with why.
-    fn send_ready(&mut self, matched: &mut Matched, now: Instant) -> Vec<(u64, Result<Value, String>)> {
+    fn send_ready(&mut self, matched: &mut Discovered, now: Instant) -> Vec<(u64, Result<Value, String>)> {
         let mut failed = Vec::new();
         for p in &mut self.pending {
             let State::Unmatched(body) = &p.state else { continue };
             let Some(c) = self.clients.get(&p.service) else { continue };
-            if !matched.ready(&c.request_topic, &c.reply_topic, now) {
+            if !matched.ready(&c.endpoints, now) {
                 continue;
             }
             match c.client.send_request(RawCdr(body.clone())) {
@@ -157,7 +163,7 @@ impl Services {
     pub(super) fn poll(
         &mut self,
         reg: &Registry,
-        matched: &mut Matched,
+        matched: &mut Discovered,
         now: Instant,
     ) -> Vec<(u64, Result<Value, String>)> {
         let mut done = self.send_ready(matched, now);
@@ -188,13 +194,10 @@ impl Services {
             }
             if now >= p.deadline {
                 let why = match p.state {
-                    State::Unmatched(_) => "no server of this service was found",
-                    State::Sent(_) => "the server did not answer",
+                    State::Unmatched(_) => matched.why_not(&c.endpoints, p.timeout, now),
+                    State::Sent(_) => format!("the server did not answer within {:.1} s", p.timeout.as_secs_f64()),
                 };
-                done.push((
-                    p.call,
-                    Err(format!("service `{}`: {why} within {:.1} s", p.service, p.timeout.as_secs_f64())),
-                ));
+                done.push((p.call, Err(format!("service `{}`: {why}", p.service))));
                 continue;
             }
             still.push(p);
