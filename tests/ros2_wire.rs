@@ -117,6 +117,11 @@ fn domain() -> u32 {
 /// Runs `mission` (its body) through `mcl run --ros2` with [`BRIDGE`]
 /// (`camera`: the service TakeImages calls) against the Python `servers`.
 fn run(name: &str, mission: &str, camera: &str, servers: &[Server<'_>]) -> Run {
+    run_for(name, mission, camera, servers, "40")
+}
+
+/// [`run`] with a time limit of `limit` seconds.
+fn run_for(name: &str, mission: &str, camera: &str, servers: &[Server<'_>], limit: &str) -> Run {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let domain = domain();
     let dir: PathBuf = std::env::temp_dir().join(format!("mcl-ros2-wire-{name}-{}-{domain}", std::process::id()));
@@ -150,7 +155,7 @@ fn run(name: &str, mission: &str, camera: &str, servers: &[Server<'_>]) -> Run {
         .args(["run", "--ros2"])
         .arg(dir.join("BRIDGE.toml"))
         .arg(dir.join("mission.mcl"))
-        .args(["--time-limit", "40", "--trace"])
+        .args(["--time-limit", limit, "--trace"])
         .arg(&trace)
         .output()
         .unwrap();
@@ -295,4 +300,15 @@ fn an_action_server_that_disappears_mid_goal_fails_the_goal() {
     assert!(r.stderr.contains("the action server `/goto` left while the goal ran"), "{}", r.stderr);
     assert!(r.traced("eventGotoFail") < r.traced("eventDepthOk"));
     r.at(1, "setpoint 5.0");
+}
+
+#[test]
+fn a_goal_still_running_when_the_player_stops_is_cancelled() {
+    if !have_cyclonedds() {
+        return;
+    }
+    // x 99 runs until cancelled; the time limit ends the mission under way.
+    let r = run_for("left", "    Goto( [99, 0] )", "/camera/enable", &[Server("goto_server.py", &[], &[])], "4");
+    assert_ne!(r.code, Some(0), "the mission cannot have ended: {}", r.stderr);
+    assert!(r.at(0, "goal 99 0") < r.at(0, "cancel 99"), "{:?}", r.heard);
 }

@@ -163,6 +163,7 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
     // What the engine asked, in order, not yet carried out.
     let mut queue: VecDeque<Out> = VecDeque::new();
     let mut closed = false;
+    let mut left = false;
     loop {
         while !closed {
             match end.actions.try_recv() {
@@ -214,7 +215,17 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
             let Some(o) = queue.pop_front() else { break };
             carry(&mut ros, &mut engine, &end, o, now, &warn);
         }
-        if closed && queue.is_empty() && !ros.actions.cancelling() && !ros.services.busy() {
+        if closed && queue.is_empty() && !left {
+            // The player has left (the mission ended, or its time limit
+            // passed): a goal still running is cancelled, not left to the vehicle.
+            left = true;
+            for ev in ros.actions.cancel_all(now) {
+                if let action::Event::Warning(w) = ev {
+                    warn(&w);
+                }
+            }
+        }
+        if left && !ros.actions.cancelling() && !ros.services.busy() {
             // The player has left: the node stays a moment so that its
             // reliable writers deliver the last commands (a disable sent
             // with the mission's end), then leaves the domain.

@@ -206,6 +206,12 @@ impl Actions {
         }
     }
 
+    /// Cancels every goal (the player has left).
+    pub(super) fn cancel_all(&mut self, now: Instant) -> Vec<Event> {
+        let primitives: Vec<String> = self.goals.keys().cloned().collect();
+        primitives.iter().flat_map(|p| self.cancel(p, now)).collect()
+    }
+
     fn send_cancel(&mut self, g: &Goal, now: Instant) -> Option<Event> {
         let s = self.servers.get(&g.action)?;
         match s.client.cancel_goal(g.id) {

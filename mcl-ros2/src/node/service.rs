@@ -211,3 +211,31 @@ impl Services {
         !self.pending.is_empty()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The DDS names and types of a service and of an action's service,
+    /// as rmw_cyclonedds and rmw_fastrtps name them.
+    #[test]
+    fn service_endpoints_follow_the_ros2_conventions() {
+        let node = NodeName::new("/auv", "mcl").unwrap();
+        let e = endpoints(&topic_name("/camera/enable").unwrap(), &node, "std_srvs/srv/SetBool");
+        assert_eq!(
+            e,
+            Endpoints {
+                request: "rq/camera/enableRequest".into(),
+                request_type: "std_srvs::srv::dds_::SetBool_Request_".into(),
+                reply: "rr/camera/enableReply".into(),
+                reply_type: "std_srvs::srv::dds_::SetBool_Response_".into(),
+            }
+        );
+        let e = endpoints(&topic_name("/goto/_action/send_goal").unwrap(), &node, "auv_msgs/action/GoTo_SendGoal");
+        assert_eq!(
+            (e.request.as_str(), e.reply_type.as_str()),
+            ("rq/goto/_action/send_goalRequest", "auv_msgs::action::dds_::GoTo_SendGoal_Response_")
+        );
+        assert!(service_type("std_msgs/msg/Bool").is_err());
+    }
+}
