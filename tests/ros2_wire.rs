@@ -220,22 +220,24 @@ fn action_goals_give_feedback_results_and_cancels_before_the_next_goal() {
 }
 
 #[test]
-fn a_rejected_an_aborted_and_an_unanswered_goal_give_the_fail_event() {
+fn a_rejected_an_aborted_an_unanswered_and_a_server_cancelled_goal_give_the_fail_event() {
     if !have_cyclonedds() {
         return;
     }
     // Each failure runs the catch, whose goal succeeds.
     let mission = "    try { Goto( [-1, 0] ) } catch { Goto( [1, 0] ) } ;
     try { Goto( [96, 0] ) } catch { Goto( [2, 0] ) } ;
-    try { Goto( [98, 0] ) } catch { Goto( [3, 0] ) }";
+    try { Goto( [98, 0] ) } catch { Goto( [3, 0] ) } ;
+    try { Goto( [94, 0] ) } catch { Goto( [4, 0] ) }";
     let r = run("goals", mission, "/camera/enable", &[Server("goto_server.py", &[], &[])]);
     assert_eq!(r.code, Some(0), "stderr: {}\nheard: {:?}", r.stderr, r.heard);
     assert!(r.at(0, "rejected -1") < r.at(0, "goal 1 0"), "{:?}", r.heard);
     assert!(r.at(0, "aborted 96") < r.at(0, "goal 2 0"), "{:?}", r.heard);
     assert!(r.at(0, "goal 98 0") < r.at(0, "goal 3 0"), "{:?}", r.heard);
+    assert!(r.at(0, "canceled 94") < r.at(0, "goal 4 0"), "{:?}", r.heard);
     assert!(r.stderr.contains("the action server `/goto` rejected the goal"), "{}", r.stderr);
     assert!(r.stderr.contains("the action server `/goto` did not answer the goal within 3.0 s"), "{}", r.stderr);
-    assert_eq!(r.trace.matches("eventGotoFail").count(), 3, "{}", r.trace);
+    assert_eq!(r.trace.matches("eventGotoFail").count(), 4, "{}", r.trace);
     assert!(r.traced("eventGotoFail") < r.traced("eventGotoOk"));
 }
 

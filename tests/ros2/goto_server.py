@@ -14,6 +14,7 @@ What a goal does depends on its target's x:
 - x == 97: accepted, one feedback, then the server's process ends at once
   (a crash: no goodbye on DDS; its lease runs out);
 - x == 96: accepted, one feedback, then aborted;
+- x == 94: accepted, one feedback, then cancelled by the server itself;
 - x == 95: accepted, and `true` is published on /safety/alarm
   (std_msgs/Bool) after a moment; runs until cancelled;
 - otherwise: accepted, three feedbacks (distance_to_target 3, 2, 1) a
@@ -211,8 +212,10 @@ while time.time() < end:
             os._exit(0)
         elif g.x == 96 and g.steps == 2:
             finish(g, ABORTED, "aborted")
+        elif g.x == 94 and g.steps == 2:
+            finish(g, CANCELED, "canceled")
         elif g.x == 95 and g.steps == 3:
             alarm.write(Bool_(data=True))
-        elif g.x not in (95, 99) and g.steps == 3:
+        elif g.x not in (94, 95, 96, 97, 99) and g.steps == 3:
             finish(g, SUCCEEDED, "succeeded")
     time.sleep(0.01)
