@@ -84,7 +84,7 @@ struct Ros {
     publishers: BTreeMap<String, (Publisher<RawCdr>, String)>,
     services: service::Services,
     actions: action::Actions,
-    matched: Discovered,
+    discovered: Discovered,
 }
 
 impl Ros {
@@ -126,7 +126,7 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
         publishers: BTreeMap::new(),
         services: service::Services::new(m),
         actions: action::Actions::new(m),
-        matched: Discovered::new(ctx.domain_participant()),
+        discovered: Discovered::new(ctx.domain_participant()),
     };
     // Every topic the bridge publishes on, created before the mission starts.
     for p in engine.loaded().bridge.primitives.values() {
@@ -184,8 +184,9 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
             }
         }
         let now = Instant::now();
+        ros.discovered.refresh(now);
         for (topic, dds_topic, dds_type) in &expected {
-            for other in ros.matched.foreign_writers(dds_topic, dds_type, now) {
+            for other in ros.discovered.foreign_writers(dds_topic, dds_type, now) {
                 if foreign.insert((topic.clone(), other.clone())) {
                     warn(&format!(
                         "a publisher on `{topic}` writes `{other}`, not `{dds_type}`: DDS does not deliver its messages"
@@ -193,10 +194,10 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
                 }
             }
         }
-        for (call, response) in ros.services.poll(&engine.loaded().registry, &mut ros.matched, now) {
+        for (call, response) in ros.services.poll(&engine.loaded().registry, &mut ros.discovered, now) {
             queue.extend(engine.on_response(call, response));
         }
-        for ev in ros.actions.poll(&engine.loaded().registry, &mut ros.matched, now) {
+        for ev in ros.actions.poll(&engine.loaded().registry, &mut ros.discovered, now) {
             match ev {
                 action::Event::End { primitive, end, warning } => {
                     if let Some(w) = warning {
@@ -260,7 +261,7 @@ fn carry(ros: &mut Ros, engine: &mut Engine, end: &AacEnd, o: Out, now: Instant,
                 &mut ros.node,
                 &ros.node_name,
                 reg,
-                &mut ros.matched,
+                &mut ros.discovered,
                 call,
                 &service,
                 &ty,

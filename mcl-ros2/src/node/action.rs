@@ -237,7 +237,7 @@ impl Actions {
 
     /// Sends the goals whose server is now matched, and gives what the
     /// servers said: acceptances, results, feedback, cancels.
-    pub(super) fn poll(&mut self, reg: &Registry, matched: &mut Discovered, now: Instant) -> Vec<Event> {
+    pub(super) fn poll(&mut self, reg: &Registry, discovered: &mut Discovered, now: Instant) -> Vec<Event> {
         let mut out = Vec::new();
         let mut accepts = Vec::new();
         let mut results = Vec::new();
@@ -319,8 +319,8 @@ impl Actions {
                 Err(e) => out.push(Event::Warning(format!("a feedback of `{action}` is not a `{ty}_Feedback`: {e}"))),
             }
         }
-        self.send_ready(matched, now, &mut out);
-        self.expire(matched, now, &mut out);
+        self.send_ready(discovered, now, &mut out);
+        self.expire(discovered, now, &mut out);
         out
     }
 
@@ -369,12 +369,12 @@ impl Actions {
     }
 
     /// Sends the goals whose server is discovered.
-    fn send_ready(&mut self, matched: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
+    fn send_ready(&mut self, discovered: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
         let mut failed = Vec::new();
         for (primitive, g) in self.goals.iter_mut() {
             let Phase::Unmatched(body) = &g.phase else { continue };
             let Some(s) = self.servers.get(&g.action) else { continue };
-            if !s.services.iter().all(|e| matched.ready(e, now)) {
+            if !s.services.iter().all(|e| discovered.ready(e, now)) {
                 continue;
             }
             match s.client.send_goal(RawCdr(body.clone())) {
@@ -393,14 +393,14 @@ impl Actions {
 
     /// Goals not accepted in time, goals whose server left, cancels not
     /// answered in time.
-    fn expire(&mut self, matched: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
+    fn expire(&mut self, discovered: &mut Discovered, now: Instant, out: &mut Vec<Event>) {
         let mut ended = Vec::new();
         for (primitive, g) in &self.goals {
             let why = match &g.phase {
                 Phase::Unmatched(_) if now >= g.deadline => {
                     let Some(s) = self.servers.get(&g.action) else { continue };
-                    let missing = s.services.iter().find(|e| !matched.ready(e, now)).unwrap_or(&s.services[0]);
-                    format!("action `{}`: {}", g.action, matched.why_not(missing, g.timeout, now))
+                    let missing = s.services.iter().find(|e| !discovered.ready(e, now)).unwrap_or(&s.services[0]);
+                    format!("action `{}`: {}", g.action, discovered.why_not(missing, g.timeout, now))
                 }
                 Phase::Sending(_) if now >= g.deadline => {
                     format!(
@@ -412,7 +412,7 @@ impl Actions {
                 Phase::Running(_) => {
                     let Some(s) = self.servers.get(&g.action) else { continue };
                     let result = &s.services[1];
-                    if matched.has_writer(&result.reply, &result.reply_type, now) {
+                    if discovered.has_writer(&result.reply, &result.reply_type, now) {
                         continue;
                     }
                     format!("the action server `{}` left while the goal ran", g.action)

@@ -13,8 +13,13 @@ use std::time::{Duration, Instant};
 /// How often the discovered endpoints are read again.
 const REDISCOVER: Duration = Duration::from_millis(100);
 /// How long a server's endpoints must have been found before a request
-/// goes out (the matching settles on both sides just after).
-const GRACE: Duration = Duration::from_millis(300);
+/// goes out. Finding the server's endpoints does not tell that the server
+/// has found ours: a volatile reader drops what a writer it does not know
+/// yet sends, so a request sent at once can be lost (and a reply to a
+/// reader the server does not know yet). ros2-client does not tell when a
+/// remote reader has acknowledged a client's writer; this margin stands
+/// for it.
+const GRACE: Duration = Duration::from_millis(1000);
 
 /// The DDS request and reply topics of a service, with their type names.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -32,16 +37,28 @@ pub(crate) struct Discovered {
     readers: BTreeMap<String, BTreeSet<String>>,
     writers: BTreeMap<String, BTreeSet<String>>,
     read_at: Option<Instant>,
-    /// Services whose endpoints were found, since.
-    since: BTreeMap<Endpoints, Instant>,
+    /// Since when each (topic, type) has had a remote reader, or writer.
+    readers_since: BTreeMap<(String, String), Instant>,
+    writers_since: BTreeMap<(String, String), Instant>,
 }
 
 impl Discovered {
     pub(crate) fn new(dp: DomainParticipant) -> Discovered {
-        Discovered { dp, readers: BTreeMap::new(), writers: BTreeMap::new(), read_at: None, since: BTreeMap::new() }
+        Discovered {
+            dp,
+            readers: BTreeMap::new(),
+            writers: BTreeMap::new(),
+            read_at: None,
+            readers_since: BTreeMap::new(),
+            writers_since: BTreeMap::new(),
+        }
     }
 
-    fn refresh(&mut self, now: Instant) {
+    /// Reads the discovered endpoints again if [`REDISCOVER`] has passed
+    /// (the node calls it on each round, so that the time since an
+    /// endpoint was found counts from when it was, not from when a
+    /// request first asked).
+    pub(crate) fn refresh(&mut self, now: Instant) {
         if self.read_at.is_some_and(|t| now.duration_since(t) < REDISCOVER) {
             return;
         }
@@ -56,23 +73,19 @@ impl Discovered {
             let t = w.publication_topic_data;
             self.writers.entry(t.topic_name).or_default().insert(t.type_name);
         }
-    }
-
-    fn found(&self, e: &Endpoints) -> bool {
-        self.readers.get(&e.request).is_some_and(|t| t.contains(&e.request_type))
-            && self.writers.get(&e.reply).is_some_and(|t| t.contains(&e.reply_type))
+        since(&mut self.readers_since, &self.readers, now);
+        since(&mut self.writers_since, &self.writers, now);
     }
 
     /// Whether a server of `e` (its request reader and reply writer, of the
     /// right types) was found at least [`GRACE`] ago.
     pub(crate) fn ready(&mut self, e: &Endpoints, now: Instant) -> bool {
         self.refresh(now);
-        if self.found(e) {
-            let since = *self.since.entry(e.clone()).or_insert(now);
-            now.duration_since(since) >= GRACE
-        } else {
-            self.since.remove(e);
-            false
+        let reader = self.readers_since.get(&(e.request.clone(), e.request_type.clone()));
+        let writer = self.writers_since.get(&(e.reply.clone(), e.reply_type.clone()));
+        match (reader, writer) {
+            (Some(r), Some(w)) => now.duration_since(*r.max(w)) >= GRACE,
+            _ => false,
         }
     }
 
@@ -101,5 +114,16 @@ impl Discovered {
     pub(crate) fn foreign_writers(&mut self, topic: &str, ty: &str, now: Instant) -> Vec<String> {
         self.refresh(now);
         self.writers.get(topic).into_iter().flatten().filter(|t| *t != ty).cloned().collect()
+    }
+}
+
+/// Keeps in `since` when each (topic, type) of `found` was first seen in a
+/// row of reads (one that disappears starts again when it comes back).
+fn since(since: &mut BTreeMap<(String, String), Instant>, found: &BTreeMap<String, BTreeSet<String>>, now: Instant) {
+    since.retain(|(topic, ty), _| found.get(topic).is_some_and(|t| t.contains(ty)));
+    for (topic, types) in found {
+        for ty in types {
+            since.entry((topic.clone(), ty.clone())).or_insert(now);
+        }
     }
 }

@@ -118,7 +118,7 @@ impl Services {
         node: &mut Node,
         node_name: &NodeName,
         reg: &Registry,
-        matched: &mut Discovered,
+        discovered: &mut Discovered,
         call: u64,
         service: &str,
         ty: &str,
@@ -135,18 +135,18 @@ impl Services {
             timeout,
             state: State::Unmatched(body),
         });
-        self.send_ready(matched, now);
+        self.send_ready(discovered, now);
         Ok(())
     }
 
     /// Sends the calls whose server is matched; gives the calls that could
     /// not be sent, with why.
-    fn send_ready(&mut self, matched: &mut Discovered, now: Instant) -> Vec<(u64, Result<Value, String>)> {
+    fn send_ready(&mut self, discovered: &mut Discovered, now: Instant) -> Vec<(u64, Result<Value, String>)> {
         let mut failed = Vec::new();
         for p in &mut self.pending {
             let State::Unmatched(body) = &p.state else { continue };
             let Some(c) = self.clients.get(&p.service) else { continue };
-            if !matched.ready(&c.endpoints, now) {
+            if !discovered.ready(&c.endpoints, now) {
                 continue;
             }
             match c.client.send_request(RawCdr(body.clone())) {
@@ -163,10 +163,10 @@ impl Services {
     pub(super) fn poll(
         &mut self,
         reg: &Registry,
-        matched: &mut Discovered,
+        discovered: &mut Discovered,
         now: Instant,
     ) -> Vec<(u64, Result<Value, String>)> {
-        let mut done = self.send_ready(matched, now);
+        let mut done = self.send_ready(discovered, now);
         // Responses, by the request they answer.
         let mut responses: BTreeMap<(String, ros2_client::service::RmwRequestId), Vec<u8>> = BTreeMap::new();
         for (name, c) in &self.clients {
@@ -194,7 +194,7 @@ impl Services {
             }
             if now >= p.deadline {
                 let why = match p.state {
-                    State::Unmatched(_) => matched.why_not(&c.endpoints, p.timeout, now),
+                    State::Unmatched(_) => discovered.why_not(&c.endpoints, p.timeout, now),
                     State::Sent(_) => format!("the server did not answer within {:.1} s", p.timeout.as_secs_f64()),
                 };
                 done.push((p.call, Err(format!("service `{}`: {why}", p.service))));
