@@ -8,7 +8,8 @@ Depth: a setpoint on /depth/setpoint (std_msgs/Float64) is answered on
 /depth/reached with the same depth. Surface: `true` on /surface/cmd
 (std_msgs/Bool) is answered "ok" on /surface/done (std_msgs/String).
 Every message received is printed, one line each; `ready` once the
-entities exist.
+entities exist. The mission's state that the bridge publishes on
+/mcl/status (std_msgs/String, JSON) is printed as `status JSON`.
 """
 import sys
 import time
@@ -62,6 +63,7 @@ stop = reader("rt/depth/stop", Empty_)
 surface = reader("rt/surface/cmd", Bool_)
 reached = writer("rt/depth/reached", Float64_)
 done = writer("rt/surface/done", String_)
+status = reader("rt/mcl/status", String_)
 print("ready", flush=True)
 
 end = time.time() + seconds
@@ -75,4 +77,6 @@ while time.time() < end:
         print(f"surface {s.data}", flush=True)
         if s.data:
             done.write(String_(data="ok"))
+    for s in status.take(10):
+        print(f"status {s.data}", flush=True)
     time.sleep(0.01)
