@@ -56,9 +56,10 @@ pub fn diagnostics(a: &Analysis<'_>, bridge: &Path) -> BTreeMap<PathBuf, Vec<Dia
         Some(_) => a.db.file(bridge).text(a.db).as_deref().map(|t| t.to_string()),
         None => None,
     };
-    let text: Result<String, std::io::Error> = match open {
+    // Not open: the bounded reader (a regular file only, never a FIFO).
+    let text = match open {
         Some(t) => Ok(t),
-        None => std::fs::read_to_string(bridge),
+        None => mcl_net::input::read_source(bridge).map_err(|e| e.to_string()),
     };
     let text = match text {
         Ok(t) => t,

@@ -39,8 +39,9 @@ pub struct Loaded {
 /// top of the bundled ones, and checks it against `vehicle`.
 pub fn load(file: &Path, vehicle: &Vehicle) -> Result<Loaded, Vec<BridgeError>> {
     let at_start = |message: String| BridgeError { file: file.to_path_buf(), line: 1, column: 1, message };
+    // The bounded reader: a regular file only, never a FIFO that blocks.
     let text =
-        std::fs::read_to_string(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
+        mcl_net::input::read_source(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
     load_text(file, &text, vehicle)
 }
 
