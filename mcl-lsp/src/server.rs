@@ -649,8 +649,6 @@ fn diagnostics_pass(
 ) -> Pass {
     let a = Analysis::new(&snap.db, &snap.world);
     let changed: HashSet<&PathBuf> = pending.iter().map(|(_, p)| p).collect();
-    // The bridge file's errors, on its own URI (also for a pulling client).
-    bridge_pass(shared, &a, snap.generation, out);
     let targets = a.diagnosed_files();
     let mut now_shown = HashMap::new();
     let mut affected = Vec::new();
@@ -678,6 +676,8 @@ fn diagnostics_pass(
                 refresh |= changed || !verdict.is_empty();
             }
         }
+        // The bridge file's errors, pushed on its own URI all the same.
+        bridge_pass(shared, &a, snap.generation, out);
         return Pass { refresh, shown: HashMap::new() };
     }
     let gen = snap.generation;
@@ -726,6 +726,9 @@ fn diagnostics_pass(
         }
         semantic.push((diags, carried.is_some()));
     }
+    // The bridge file's errors (it needs the vehicle: after the compiler's
+    // checks, before the slow coordination analyses).
+    bridge_pass(shared, &a, gen, out);
     for (&f, (mut diags, carried)) in affected.iter().zip(semantic) {
         let fingerprint = match shared.coord(&a, f) {
             Coord::Valid(_) => continue, // shown as carried (or empty)
