@@ -61,7 +61,7 @@ pub fn qos() -> QosProfile {
 }
 
 /// `Name` of a topic as written in the bridge file (`/a/b`, `a/b`).
-fn topic_name(topic: &str) -> Result<Name, String> {
+pub(crate) fn topic_name(topic: &str) -> Result<Name, String> {
     let t = topic.trim_start_matches('/');
     let (ns, base) = match t.rsplit_once('/') {
         Some((ns, base)) => (format!("/{ns}"), base),
@@ -71,7 +71,7 @@ fn topic_name(topic: &str) -> Result<Name, String> {
 }
 
 /// `MessageTypeName` of `pkg/msg/Name`.
-fn type_name(full: &str) -> Result<MessageTypeName, String> {
+pub(crate) fn type_name(full: &str) -> Result<MessageTypeName, String> {
     match full.split('/').collect::<Vec<_>>().as_slice() {
         [pkg, "msg", name] => Ok(MessageTypeName::new(pkg, name)),
         _ => Err(format!("`{full}` is not a message type `pkg/msg/Name`")),
@@ -109,9 +109,15 @@ impl Ros {
 }
 
 /// Runs the bridge as the ROS 2 node `node_name` in `namespace` on
-/// `domain`, serving `end` until the player closes its side. `Err` when the
-/// node cannot be created.
-pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result<(), String> {
+/// `domain`, serving `end` until the player closes its side; with `status`,
+/// publishes the mission's state on the status topic ([`crate::status`]).
+/// `Err` when the node cannot be created.
+pub fn serve(
+    mut engine: Engine,
+    mut end: AacEnd,
+    status: Option<crate::status::Listener>,
+    warn: impl Fn(&str),
+) -> Result<(), String> {
     let b = &engine.loaded().bridge;
     let domain = b.domain_id.as_ref().map_or(0, |d| *d.get_ref());
     let ns = b.namespace.as_ref().map_or("/".to_string(), |n| n.get_ref().clone());
@@ -128,6 +134,8 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
         actions: action::Actions::new(m),
         discovered: Discovered::new(ctx.domain_participant()),
     };
+    let mut status =
+        status.map(|l| crate::status::Outlet::open(&mut ros.node, &engine.loaded().bridge, l)).transpose()?;
     // Every topic the bridge publishes on, created before the mission starts.
     for p in engine.loaded().bridge.primitives.values() {
         for c in [&p.enable, &p.disable].into_iter().flatten() {
@@ -225,6 +233,9 @@ pub fn serve(mut engine: Engine, mut end: AacEnd, warn: impl Fn(&str)) -> Result
                     warn(&w);
                 }
             }
+        }
+        if let Some(s) = &mut status {
+            s.poll(&warn);
         }
         if left && !ros.actions.cancelling() && !ros.services.busy() {
             // The player has left: the node stays a moment so that its

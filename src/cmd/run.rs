@@ -301,6 +301,8 @@ pub fn parse_set(s: &str) -> Result<(String, Value), String> {
 struct RunSink {
     /// Publishes each vehicle's mission state over Zenoh (`mcl/<vehicle>/status`).
     status: Option<mcl_zenoh::StatusPublisher>,
+    /// Feeds the ROS 2 node's status topic (`--ros2`, docs/ros2.md).
+    ros2_status: Option<mcl_ros2::status::Feed>,
     trace: Option<TraceWriter>,
     live: bool,
     verbose: bool,
@@ -364,6 +366,9 @@ impl Sink for RunSink {
     fn record(&mut self, r: &Record) {
         if let Some(s) = &mut self.status {
             s.record(r);
+        }
+        if let Some(f) = &self.ros2_status {
+            f.record(r);
         }
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.write(r) {
@@ -447,7 +452,7 @@ pub fn run(o: Options) -> u8 {
     }
     // The ROS 2 bridge, checked against the file's vehicle before anything runs.
     let mut ros2_engine = match &o.ros2 {
-        Some(b) => match super::ros2::engine_for(b, &o.file) {
+        Some(b) => match super::ros2::engine_for(b, &[o.file.as_path()]) {
             Ok(e) => Some(e),
             Err(code) => return code,
         },
@@ -685,6 +690,7 @@ pub fn run(o: Options) -> u8 {
     };
     let mut sink = RunSink {
         status: None,
+        ros2_status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,
@@ -707,6 +713,12 @@ pub fn run(o: Options) -> u8 {
         }
         sink.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), Some((&zenoh_vehicle, &chosen.name))));
     }
+    // The ROS 2 node's status topic hears the run's records.
+    let ros2_status = ros2_engine.as_ref().map(|_| {
+        let (feed, listener) = mcl_ros2::status::channel(&chosen.name);
+        sink.ros2_status = Some(feed);
+        listener
+    });
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
         for e in &errors {
@@ -859,7 +871,7 @@ pub fn run(o: Options) -> u8 {
             match aac {
                 None if ros2_engine.is_some() => {
                     let (mut link, end) = mcl_runtime::link::pair();
-                    let node = super::ros2::spawn_node(ros2_engine.take(), end);
+                    let node = super::ros2::spawn_node(ros2_engine.take(), end, ros2_status);
                     let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
                     // Closing the link ends the node.
                     drop(link);
@@ -1306,6 +1318,7 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         status: None,
+        ros2_status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,

@@ -19,6 +19,9 @@ a second participant, by a `Float64` without its field and by a
 
 Every message and request received is printed, one line each; `ready`
 once the entities exist.
+
+The mission's state that the bridge publishes on /mcl/status
+(std_msgs/String, JSON) is printed as `status JSON`.
 """
 import sys
 import time
@@ -104,6 +107,7 @@ initialize = ServiceServer(dp, "/vehicle/initialize", Trigger_Request_, Trigger_
 camera = ServiceServer(dp, "/camera/enable", SetBool_Request_, SetBool_Response_)
 stuck = ServiceServer(dp, "/camera/stuck", SetBool_Request_, SetBool_Response_)
 fix = ServiceServer(dp, "/vehicle/fix", Trigger_Request_, Trigger_Response_)
+status = reader(dp, "rt/mcl/status", String_)
 print("ready", flush=True)
 
 end = time.time() + seconds
@@ -139,4 +143,6 @@ while time.time() < end:
     for r in fix.take():
         print("fix", flush=True)
         fix.reply(r, success=True, message="")
+    for s in status.take(10):
+        print(f"status {s.data}", flush=True)
     time.sleep(0.01)

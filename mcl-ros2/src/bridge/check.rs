@@ -39,10 +39,17 @@ pub struct Loaded {
 /// top of the bundled ones, and checks it against `vehicle`.
 pub fn load(file: &Path, vehicle: &Vehicle) -> Result<Loaded, Vec<BridgeError>> {
     let at_start = |message: String| BridgeError { file: file.to_path_buf(), line: 1, column: 1, message };
+    // The bounded reader: a regular file only, never a FIFO that blocks.
     let text =
-        std::fs::read_to_string(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
-    let bridge = parse(file, &text).map_err(|e| vec![e])?;
-    let loc = Locator { file, text: &text };
+        mcl_net::input::read_source(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
+    load_text(file, &text, vehicle)
+}
+
+/// [`load`] of the text of `file` (an editor's buffer): the interface
+/// folders it names are read from disk, relative to `file`.
+pub fn load_text(file: &Path, text: &str, vehicle: &Vehicle) -> Result<Loaded, Vec<BridgeError>> {
+    let bridge = parse(file, text).map_err(|e| vec![e])?;
+    let loc = Locator { file, text };
     let mut registry = Registry::bundled();
     let base = file.parent().unwrap_or(Path::new("."));
     for dir in &bridge.interfaces {
