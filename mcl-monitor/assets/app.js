@@ -96,6 +96,8 @@ function apply(s, r) {
 }
 
 function outcomeOf(s) {
+  // Every mission aborted by the operator: the summary says stuck (state.rs, `json`).
+  if (s.summary && s.outcomes.size > 0 && [...s.outcomes.values()].every((r) => r === 'aborted')) return 'aborted';
   if (s.summary) return s.summary;
   if (s.outcomes.size === 1 && s.missions.size <= 1) return [...s.outcomes.values()][0];
   return null;
@@ -485,6 +487,8 @@ function follow() {
 
 async function command(body) {
   const token = $('token').value;
+  const vehicle = $('op-vehicle').value;
+  if (vehicle) body.vehicle = vehicle;
   try {
     const res = await fetch('/api/operator', { method: 'POST', headers: { 'Content-Type': 'application/json', Authorization: 'Bearer ' + token }, body: JSON.stringify(body) });
     const j = await res.json().catch(() => ({}));
@@ -567,6 +571,11 @@ async function main() {
       $('operator').hidden = false;
       const m = /token=([^&]+)/.exec(location.hash);
       if (m) $('token').value = decodeURIComponent(m[1]);
+      // Several vehicles: the commands go to the one picked, or to every one (an answer needs one).
+      if ((info.vehicles || []).length > 1) {
+        $('op-vehicle').hidden = false;
+        for (const v of info.vehicles) $('op-vehicle').append(new Option(v, v));
+      }
       $('op-pause').addEventListener('click', () => command({ command: 'pause' }));
       $('op-resume').addEventListener('click', () => command({ command: 'resume' }));
       $('op-abort').addEventListener('click', () => command({ command: 'abort' }));

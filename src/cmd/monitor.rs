@@ -12,23 +12,37 @@ use mcl_runtime::trace::{read_trace, Record};
 use mcl_syntax::ast::{Block, Item, MonitorKind, ParallelOp, Stmt, StmtKind, Value};
 
 /// The monitor of a live run: the hub its trace sink feeds, and the
-/// operator's commands for the real-time driver (with `--operator-token`).
+/// operator's commands for the drivers (with `--operator-token`).
 pub struct Live {
     /// Where the run's records go.
     pub hub: Arc<Hub>,
-    /// The operator's commands (None without `--operator-token`).
-    pub commands: Option<operator::Receiver>,
+    /// The operator's commands for each vehicle (empty without `--operator-token`).
+    commands: Vec<(String, operator::Receiver)>,
 }
 
-/// Starts the server of `mcl run --monitor=ADDR` for the run of `title`,
-/// and says where it is on stderr. Err: the exit status.
-pub fn start_live(addr: &str, title: String, operator_token: Option<String>) -> Result<Live, u8> {
+impl Live {
+    /// The operator's commands for the vehicle of `mission` (None without
+    /// `--operator-token`, or once taken).
+    pub fn commands_for(&mut self, mission: &str) -> Option<operator::Receiver> {
+        let k = self.commands.iter().position(|(n, _)| n == mission)?;
+        Some(self.commands.swap_remove(k).1)
+    }
+}
+
+/// Starts the server of `mcl run --monitor=ADDR` for the run of `title`
+/// whose vehicles run the missions `vehicles`, and says where it is on
+/// stderr. Err: the exit status.
+pub fn start_live(addr: &str, title: String, operator_token: Option<String>, vehicles: &[String]) -> Result<Live, u8> {
     let mut hub = Hub::new(Mode::Live, title.clone());
-    let mut commands = None;
+    let mut commands = Vec::new();
     if let Some(token) = operator_token {
-        let (tx, rx) = operator::channel();
-        hub = hub.with_operator(token, tx);
-        commands = Some(rx);
+        let mut senders = Vec::new();
+        for v in vehicles {
+            let (tx, rx) = operator::channel();
+            senders.push((v.clone(), tx));
+            commands.push((v.clone(), rx));
+        }
+        hub = hub.with_operator(token, senders);
     }
     if title.ends_with(".mcl") {
         hub.add_trees(trees_of(&title));
