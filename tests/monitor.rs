@@ -538,3 +538,64 @@ fn the_page_follows_a_coordinated_run() {
     let errors = b.errors();
     assert!(errors.is_empty(), "console errors: {errors:?}");
 }
+
+/// A free loopback port (bound then released).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+#[test]
+fn each_vehicle_in_its_own_process_is_aborted_through_its_own_monitor() {
+    let (pa, pb) = (free_port(), free_port());
+    let journal = |me: &str| tmp(&format!("proc-{me}.journal"));
+    let start = |me: &str, listen: u16, peer: &str, port: u16| {
+        let j = journal(me);
+        let (listen, peer) = (format!("127.0.0.1:{listen}"), format!("{peer}=127.0.0.1:{port}"));
+        Served::start(&[
+            "run",
+            "--mock",
+            "examples/auv-asc.mcl",
+            "--vehicle",
+            me,
+            "--coord-listen",
+            &listen,
+            "--coord-peer",
+            &peer,
+            "--speed",
+            "2",
+            "--time-limit",
+            "600",
+            "--monitor=127.0.0.1:0",
+            "--operator-token",
+            "k",
+            "--journal",
+            j.to_str().unwrap(),
+            "-q",
+        ])
+    };
+    let auv = start("auv", pa, "asc", pb);
+    let asc = start("asc", pb, "auv", pa);
+    for (run, me) in [(&auv, "auv"), (&asc, "asc")] {
+        let (_, info) = http::get(&format!("{}api/info", run.url));
+        assert_eq!(serde_json::from_str::<Value>(&info).unwrap()["vehicles"], serde_json::json!([me]));
+        run.state_until("a running call", |s| s["running"].as_array().is_some_and(|r| !r.is_empty()));
+    }
+    assert_eq!(auv.command(None, r#"{"command":"abort"}"#).0, 401, "no token");
+    assert_eq!(auv.command(Some("k"), r#"{"command":"abort","vehicle":"asc"}"#).0, 400, "asc is not in this process");
+    assert_eq!(auv.command(Some("k"), r#"{"command":"abort","vehicle":"auv"}"#).0, 202);
+    assert_eq!(asc.command(Some("k"), r#"{"command":"abort"}"#).0, 202);
+    // Each aborted mission ends once nothing more happens in it, and tells its peer.
+    for (run, me) in [(auv, "auv"), (asc, "asc")] {
+        let (status, stderr) = run.wait();
+        assert_eq!(status.code(), Some(3), "{me}: {stderr:?}");
+        assert!(stderr.iter().any(|l| l.starts_with(&format!("mission `{me}`: ABORTED"))), "{stderr:?}");
+        let entries = mcl_runtime::journal::read_journal(&journal(me)).unwrap();
+        assert!(
+            entries.iter().any(|e| matches!(
+                e,
+                mcl_runtime::journal::Entry::Operator { command: mcl_runtime::operator::Command::Abort, .. }
+            )),
+            "{me}: the abort is journaled"
+        );
+    }
+}

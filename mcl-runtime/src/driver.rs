@@ -745,6 +745,11 @@ impl Session<'_> {
     pub fn set_operator_aborted(&mut self) {
         self.operator_aborted = true;
     }
+
+    /// Whether an operator aborted the mission.
+    pub fn operator_aborted(&self) -> bool {
+        self.operator_aborted
+    }
 }
 
 /// `pause`, `resume`, `abort` or `answer`.

@@ -1199,6 +1199,13 @@ pub async fn run_real_time_with_peers(
                     if let Some(o) = v.s.player.outcome() {
                         break Ok(End::Outcome(o));
                     }
+                    // An aborted mission is over once nothing more happens in
+                    // it (its peers in other processes cannot tell: they wait
+                    // for its `ENDED`); it is recorded `aborted`.
+                    if v.s.operator_aborted() && v.idle() && paused.is_none() {
+                        let t = clock.now().max(v.s.player.now());
+                        break Ok(v.stuck(t));
+                    }
                     lock(&global)?.set_idle(i, v.idle() && paused.is_none());
                     let (tp, tm) = (v.s.player.next_deadline(), v.mock.next_deadline());
                     let wake = [tp, tm, limits.time_limit].into_iter().flatten().reduce(f64::min);
