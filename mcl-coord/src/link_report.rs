@@ -551,16 +551,18 @@ impl LinkReport {
     /// Markdown for the hover on constraint `number` (from 1).
     pub fn hover_text(&self, number: usize) -> Option<String> {
         let c = self.constraints.iter().find(|c| c.number == number)?;
-        let bytes = |b: &Count| b.max().map_or("-".to_string(), |b| b.to_string());
+        let how_many = match &c.messages {
+            Count::Bounded { max } => format!("at most {max}"),
+            Count::Unbounded { per_iteration: Some(n), reason } => {
+                format!("any number of (at most {n} per iteration of a loop: {reason})")
+            }
+            other => other.describe(),
+        };
         Some(format!(
-            "**Link**: a run sends {} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message.",
-            match &c.messages {
-                Count::Bounded { max } => format!("at most {max}"),
-                other => other.describe(),
-            },
+            "**Link**: a run sends {how_many} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message and what its bound means.",
             self.frame_bytes,
-            bytes(&c.compact_bytes),
-            bytes(&c.json_bytes),
+            c.compact_bytes.bytes(),
+            c.json_bytes.bytes(),
         ))
     }
 
