@@ -337,3 +337,34 @@ fn verify_mode(
 pub fn empty_places(m: &Marking) -> Vec<PlaceId> {
     m.0.iter().enumerate().filter(|(_, &n)| n == 0).map(|(i, _)| PlaceId(i as u32)).collect()
 }
+
+/// One vehicle's graph for the link report (`crate::link_report`): the
+/// markings of mission `m`'s net alone under the per-vehicle firing rule,
+/// its transitions `gated` (indexed by its own transitions) free to be
+/// held, as step 1 builds them (`lts.rs`: every run of the vehicle, whatever
+/// its supervisors and messages do, is a path from marking 0). Per
+/// marking: its moves (transition, next marking) and the gated immediate
+/// transitions enabled in it. An error beyond `max` markings or 200 tokens
+/// in a place.
+pub(crate) fn vehicle_graph(m: &Mission, gated: &[bool], max: usize) -> Result<VehicleGraph, String> {
+    // Each gated transition its own effect, so that a marking's waiting
+    // effects name its enabled gated immediate transitions.
+    let effect_of: Vec<u32> = (0..gated.len() as u32).map(|t| t + 1).collect();
+    let lts = lts::build_lts(m, 0, &effect_of, gated, false, max).map_err(|e| match e {
+        lts::LtsError::TooMany => format!("mission `{}` has more than {max} markings", m.name),
+        lts::LtsError::Unbounded => format!("a place of mission `{}` exceeds 200 tokens", m.name),
+    })?;
+    let n = lts.len() as u32;
+    Ok(VehicleGraph {
+        moves: (0..n).map(|s| lts.out(s).iter().map(|e| (e.t, e.to)).collect()).collect(),
+        waiting: (0..n).map(|s| lts.gates(s).iter().map(|&g| g - 1).collect()).collect(),
+    })
+}
+
+/// See [`vehicle_graph`].
+pub(crate) struct VehicleGraph {
+    /// Per marking: (transition index, next marking).
+    pub(crate) moves: Vec<Vec<(u32, u32)>>,
+    /// Per marking: the gated immediate transitions enabled in it.
+    pub(crate) waiting: Vec<Vec<u32>>,
+}
