@@ -9,6 +9,7 @@ use super::lts::Lts;
 use super::product::{explore_product, Effect, Product};
 use super::quotient::Quotient;
 use super::replay::{concretize, Replay, ReplayRules};
+use super::structural_proof::{self, Proof};
 use super::stubborn::Deps;
 use super::{VerifyOptions, VerifyStats, Witness, WitnessKind};
 use crate::central::Plant;
@@ -115,8 +116,16 @@ pub(super) fn verify_group(
         init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
         init
     };
-    // A large product: look for a deadlock by random walks first.
     let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
+    // A large product: the state equation may prove it free at once.
+    if nv > 1 && estimate > opts.structural_threshold as f64 {
+        let init: Vec<u32> = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).collect();
+        if structural_proof::prove(quots, &effects, &init) == Proof::Free {
+            stats.structural_proofs += 1;
+            return GroupOutcome::Verified;
+        }
+    }
+    // Then look for a deadlock by random walks.
     if nv > 1 && estimate > opts.hunt_threshold as f64 {
         let prod = Product { quots, effects: &effects, cap, nv };
         if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps) {
