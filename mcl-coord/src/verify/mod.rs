@@ -51,6 +51,12 @@
 //! (one rule for all vehicles) allows, and more: a deadlock-free verdict
 //! holds for both.
 //!
+//! A large group whose vehicles' graphs have no cycle is first tried by the
+//! state equation of the product (`structural_proof.rs`): when no
+//! combination of the vehicles' positions and path effects can be dead,
+//! the group is free without exploring its product (docs/coordination.md,
+//! "The state equation").
+//!
 //! Scaling (docs/coordination.md, "Scaling"): vehicles that no supervisor
 //! links are verified as separate groups (exact: they share no place), and
 //! when a group's product of class counts is large, seeded random walks look

@@ -31,7 +31,8 @@
 //! is the end of every mission. So the end is reachable from every state
 //! (the second half of "free", `group.rs`), through exact steps, which are
 //! pessimistic. A solution is only a candidate (the state equation ignores
-//! the order of the moves): the explicit search decides then, as before.
+//! the order of the moves): the explicit search decides then, as before,
+//! first by random walks directed to the candidates' classes (`hunt.rs`).
 //!
 //! Not applicable (the explicit search decides): a graph with a cycle, an
 //! edge that takes a withdrawn sync arrival back (`Effect::take_back`: its
@@ -48,14 +49,17 @@ use super::quotient::Quotient;
 pub(super) const MAX_PAIRS: usize = 50_000;
 /// Largest number of nodes of the search.
 pub(super) const MAX_NODES: usize = 200_000;
+/// Solutions collected as candidates for a directed search.
+const MAX_SOLUTIONS: usize = 16;
 
 /// What the state equation says about a group.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub(super) enum Proof {
     /// No dead state but the end, and the end reachable from every state.
     Free,
-    /// The state equation has a solution (perhaps not reachable).
-    Candidate,
+    /// The state equation has solutions (perhaps not reachable): the
+    /// classes of the vehicles in each of the first few.
+    Candidates(Vec<Vec<u32>>),
     /// The method does not apply or ran out of budget.
     Unknown,
 }
@@ -96,11 +100,15 @@ pub(super) fn prove(quots: &[&Quotient], effects: &[Effect], init: &[u32]) -> Pr
         hi: vec![0; ns],
         vmin: vehicles.iter().map(|v| vec![0; v.touched.len()]).collect(),
         vmax: vehicles.iter().map(|v| vec![0; v.touched.len()]).collect(),
+        solutions: Vec::new(),
     };
     let dom: Vec<Vec<u32>> = vehicles.iter().map(|v| (0..v.pairs.len() as u32).collect()).collect();
-    match search.solve(dom) {
-        Some(true) => Proof::Candidate,
-        Some(false) => Proof::Free,
+    let done = search.solve(dom);
+    if !search.solutions.is_empty() {
+        return Proof::Candidates(search.solutions);
+    }
+    match done {
+        Some(_) => Proof::Free,
         None => Proof::Unknown,
     }
 }
@@ -214,10 +222,13 @@ struct Search<'a> {
     /// its pairs still possible.
     vmin: Vec<Vec<i32>>,
     vmax: Vec<Vec<i32>>,
+    /// The classes of the solutions found.
+    solutions: Vec<Vec<u32>>,
 }
 
 impl Search<'_> {
-    /// `Some(true)`: a solution; `Some(false)`: none; `None`: out of budget.
+    /// Collects solutions in `self.solutions`. `Some(true)`: enough of
+    /// them; `Some(false)`: the search is complete; `None`: out of budget.
     fn solve(&mut self, mut dom: Vec<Vec<u32>>) -> Option<bool> {
         self.nodes += 1;
         if self.nodes > MAX_NODES {
@@ -230,7 +241,13 @@ impl Search<'_> {
             return Some(false);
         }
         let Some(v) = (0..dom.len()).filter(|&v| dom[v].len() > 1).min_by_key(|&v| dom[v].len()) else {
-            return Some(self.is_solution(&dom));
+            if self.is_solution(&dom) {
+                let classes = dom.iter().enumerate().map(|(v, d)| self.vs[v].pairs[d[0] as usize].class).collect();
+                if !self.solutions.contains(&classes) {
+                    self.solutions.push(classes);
+                }
+            }
+            return Some(self.solutions.len() >= MAX_SOLUTIONS);
         };
         for &p in &dom[v].clone() {
             let mut d = dom.clone();
@@ -341,4 +358,33 @@ impl Search<'_> {
                 .all(|(v, veh)| self.may_be_dead(veh.quot, veh.pairs[dom[v][0] as usize].class, &s, &s))
             && self.vs.iter().enumerate().any(|(v, veh)| !veh.quot.fin[veh.pairs[dom[v][0] as usize].class as usize])
     }
+}
+
+/// Per vehicle, the classes from which its class in `target` is reachable
+/// in its graph (the guide of a directed walk, `hunt.rs`).
+pub(super) fn on_the_way(quots: &[&Quotient], target: &[u32]) -> Vec<Vec<bool>> {
+    quots
+        .iter()
+        .zip(target)
+        .map(|(q, &t)| {
+            let mut preds: Vec<Vec<u32>> = vec![Vec::new(); q.n];
+            for c in 0..q.n as u32 {
+                for &(_, to) in q.out(c) {
+                    preds[to as usize].push(c);
+                }
+            }
+            let mut on = vec![false; q.n];
+            let mut stack = vec![t];
+            on[t as usize] = true;
+            while let Some(c) = stack.pop() {
+                for &p in &preds[c as usize] {
+                    if !on[p as usize] {
+                        on[p as usize] = true;
+                        stack.push(p);
+                    }
+                }
+            }
+            on
+        })
+        .collect()
 }
