@@ -51,6 +51,12 @@
 //! (one rule for all vehicles) allows, and more: a deadlock-free verdict
 //! holds for both.
 //!
+//! A large group whose vehicles' graphs have no cycle is first tried by the
+//! state equation of the product (`structural_proof.rs`): when no
+//! combination of the vehicles' positions and path effects can be dead,
+//! the group is free without exploring its product (docs/coordination.md,
+//! "The state equation").
+//!
 //! Scaling (docs/coordination.md, "Scaling"): vehicles that no supervisor
 //! links are verified as separate groups (exact: they share no place), and
 //! when a group's product of class counts is large, seeded random walks look
@@ -63,6 +69,7 @@ mod lts;
 mod product;
 mod quotient;
 mod replay;
+mod structural_proof;
 mod stubborn;
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
@@ -104,6 +111,11 @@ pub struct VerifyOptions {
     /// counterexamples are the shortest ones and the dry-run scenarios built
     /// from them replay as often as before the reduction existed.
     pub reduction_threshold: u64,
+    /// Above this many combinations of the vehicles' reduced states, a
+    /// group of vehicles without loops is first tried by the state
+    /// equation (`structural_proof.rs`), which proves it free without
+    /// exploring the product; `u64::MAX`: never.
+    pub structural_threshold: u64,
 }
 
 impl Default for VerifyOptions {
@@ -117,6 +129,7 @@ impl Default for VerifyOptions {
             hunt_steps: 200_000,
             reduction: true,
             reduction_threshold: 100_000,
+            structural_threshold: 100_000,
         }
     }
 }
@@ -132,6 +145,9 @@ pub struct VerifyStats {
     pub product_states: usize,
     /// K used.
     pub counter_cap: u32,
+    /// Groups of vehicles proven free by the state equation, without their
+    /// product (`structural_proof.rs`).
+    pub structural_proofs: usize,
     /// True when no supervisor place ever exceeded K (the product is then
     /// exact, not an over-approximation).
     pub exact: bool,
