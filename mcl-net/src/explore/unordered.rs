@@ -34,6 +34,7 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::time::Duration;
 
 use super::engine::{mix, Compiled, Overflow, Stats, Table, NO_PARENT};
+use super::fixed::FixedTable;
 use super::{StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 
@@ -61,6 +62,79 @@ struct Batch {
 impl Batch {
     fn new(from: usize, w: usize) -> Self {
         Batch { from: from as u32, words: Vec::with_capacity(SEND * w), meta: Vec::with_capacity(SEND) }
+    }
+}
+
+/// A worker's hash set of packed markings: the slice-based [`Table`] for
+/// any width, or a [`FixedTable`] for markings of `W` ≤ 8 words (fixed-size
+/// compares and copies).
+trait Keys: Send {
+    fn create(words: usize) -> Self;
+    fn len(&self) -> usize;
+    fn capacity(&self) -> usize;
+    fn grow(&mut self);
+    fn touch(&self, mixed: u64) -> u64;
+    /// `Ok(local index)` or `Err(free slot)`; `key` has the layout's width.
+    fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize>;
+    fn insert_at(&mut self, pos: usize, key: &[u64], mixed: u64, idx: u32);
+}
+
+impl Keys for Table {
+    fn create(words: usize) -> Self {
+        Table::new(words)
+    }
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn capacity(&self) -> usize {
+        Table::capacity(self)
+    }
+    fn grow(&mut self) {
+        Table::grow(self)
+    }
+    #[inline]
+    fn touch(&self, mixed: u64) -> u64 {
+        Table::touch(self, mixed)
+    }
+    #[inline]
+    fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize> {
+        Table::find(self, key, mixed)
+    }
+    #[inline]
+    fn insert_at(&mut self, pos: usize, key: &[u64], mixed: u64, idx: u32) {
+        Table::insert_at(self, pos, key, mixed, idx)
+    }
+}
+
+impl<const W: usize> Keys for FixedTable<W> {
+    fn create(_: usize) -> Self {
+        FixedTable::new()
+    }
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn capacity(&self) -> usize {
+        FixedTable::capacity(self)
+    }
+    fn grow(&mut self) {
+        FixedTable::grow(self)
+    }
+    #[inline]
+    fn touch(&self, mixed: u64) -> u64 {
+        FixedTable::touch(self, mixed)
+    }
+    #[inline]
+    fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize> {
+        // `run` picks `W` equal to the layout's width, the length of `key`.
+        let mut k = [0u64; W];
+        k.copy_from_slice(key);
+        FixedTable::find(self, &k, mixed)
+    }
+    #[inline]
+    fn insert_at(&mut self, pos: usize, key: &[u64], mixed: u64, idx: u32) {
+        let mut k = [0u64; W];
+        k.copy_from_slice(key);
+        FixedTable::insert_at(self, pos, k, mixed, idx)
     }
 }
 
@@ -103,12 +177,12 @@ struct Part {
     stats: Stats,
 }
 
-struct Worker<'a> {
+struct Worker<'a, T> {
     me: usize,
     c: &'a Compiled,
     net: &'a Net,
     sh: &'a Shared,
-    table: Table,
+    table: T,
     hashes: Vec<u64>,
     part: Part,
     /// Next local state to expand.
@@ -120,7 +194,7 @@ struct Worker<'a> {
     out: Vec<Batch>,
 }
 
-impl<'a> Worker<'a> {
+impl<'a, T: Keys> Worker<'a, T> {
     fn new(me: usize, k: usize, c: &'a Compiled, net: &'a Net, sh: &'a Shared) -> Self {
         let w = c.layout.words;
         Worker {
@@ -128,7 +202,7 @@ impl<'a> Worker<'a> {
             c,
             net,
             sh,
-            table: Table::new(w),
+            table: T::create(w),
             hashes: Vec::new(),
             part: Part {
                 arena: Vec::new(),
@@ -171,7 +245,7 @@ impl<'a> Worker<'a> {
     /// Inserts the new states of `b` (all owned by this worker).
     fn insert(&mut self, b: &Batch) -> Result<(), u8> {
         let w = self.c.layout.words;
-        while (self.table.len + b.meta.len()) * 4 > self.table.capacity() * 3 {
+        while (self.table.len() + b.meta.len()) * 4 > self.table.capacity() * 3 {
             self.table.grow();
         }
         let from = u64::from(b.from) << 32;
@@ -320,6 +394,20 @@ fn owner(mixed: u64, k: usize) -> usize {
 /// Explores on `threads` workers; `None` means a place overflowed its field
 /// (retry wider).
 pub(super) fn run(c: &Compiled, net: &Net, max_states: usize, threads: usize) -> Option<StateSpace> {
+    match c.layout.words {
+        1 => run_with::<FixedTable<1>>(c, net, max_states, threads),
+        2 => run_with::<FixedTable<2>>(c, net, max_states, threads),
+        3 => run_with::<FixedTable<3>>(c, net, max_states, threads),
+        4 => run_with::<FixedTable<4>>(c, net, max_states, threads),
+        5 => run_with::<FixedTable<5>>(c, net, max_states, threads),
+        6 => run_with::<FixedTable<6>>(c, net, max_states, threads),
+        7 => run_with::<FixedTable<7>>(c, net, max_states, threads),
+        8 => run_with::<FixedTable<8>>(c, net, max_states, threads),
+        _ => run_with::<Table>(c, net, max_states, threads),
+    }
+}
+
+fn run_with<T: Keys>(c: &Compiled, net: &Net, max_states: usize, threads: usize) -> Option<StateSpace> {
     let k = threads.max(1);
     let sh = Shared {
         pending: AtomicI64::new(1),
@@ -327,7 +415,7 @@ pub(super) fn run(c: &Compiled, net: &Net, max_states: usize, threads: usize) ->
         reserved: AtomicUsize::new(1),
         max_states,
     };
-    let mut workers: Vec<Worker<'_>> = (0..k).map(|me| Worker::new(me, k, c, net, &sh)).collect();
+    let mut workers: Vec<Worker<'_, T>> = (0..k).map(|me| Worker::new(me, k, c, net, &sh)).collect();
     let m0 = mix(c.initial_hash);
     let first = owner(m0, k);
     {
