@@ -75,7 +75,8 @@ pub struct Options {
     /// false, the asynchronous `unordered.rs` explores without levels:
     /// the same states, edges, dead markings, vanishing markings and bounds,
     /// but other ids, and paths that are real but not always shortest. One
-    /// thread always runs the sequential BFS.
+    /// thread always runs the sequential BFS. The unordered engine may stop
+    /// a few states short of `max_states` (see `unordered.rs`).
     pub exact_order: bool,
     /// Keep the edges (state, ready transition, successor) for
     /// [`StateSpace::successors`] and [`StateSpace::coreachable`].

@@ -24,6 +24,13 @@
 //! the batches in flight; it is 0 exactly when no work is left anywhere,
 //! and stays 0, so a worker that reads 0 stops.
 //!
+//! **State limit.** Workers reserve state ids from a global count in
+//! grants; one that needs an id when all are reserved stops every worker.
+//! The space is then reported incomplete with at most `max_states` states,
+//! possibly a few fewer (ids other workers had reserved and not used yet),
+//! so a net with slightly fewer than `max_states` states may be reported
+//! incomplete; a complete report is always exact.
+//!
 //! A state's parent is the state whose expansion first inserted it, so
 //! [`StateSpace::path_to`] gives a real firing sequence, but not a shortest
 //! one, and state ids follow the partitions, not BFS. Used when
@@ -224,14 +231,17 @@ impl<'a, T: Keys> Worker<'a, T> {
         self.hashes.len()
     }
 
-    /// Reserves state ids; false when the limit is reached.
+    /// Reserves state ids; false when the limit is reached. Grants shrink
+    /// near the limit, so that few ids stay reserved and unused by other
+    /// workers when one of them finds none left.
     fn reserve(&mut self) -> bool {
+        let k = self.out.len();
         let mut cur = self.sh.reserved.load(Ordering::Relaxed);
         loop {
             if cur >= self.sh.max_states {
                 return false;
             }
-            let take = GRANT.min(self.sh.max_states - cur);
+            let take = GRANT.min(((self.sh.max_states - cur) / (2 * k)).max(1));
             match self.sh.reserved.compare_exchange_weak(cur, cur + take, Ordering::Relaxed, Ordering::Relaxed) {
                 Ok(_) => {
                     self.grant = take;
