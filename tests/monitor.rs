@@ -91,7 +91,13 @@ impl Served {
 
     fn wait(mut self) -> (ExitStatus, Vec<String>) {
         let status = self.child.wait().unwrap();
-        (status, self.stderr.try_iter().collect())
+        // Every line up to the end of the pipe: the reader thread may not
+        // have passed the last ones on yet when the process has exited.
+        let mut lines = Vec::new();
+        while let Ok(line) = self.stderr.recv_timeout(Duration::from_secs(10)) {
+            lines.push(line);
+        }
+        (status, lines)
     }
 }
 
