@@ -6,7 +6,7 @@ use mcl_net::{Net, TransitionId};
 
 use super::hunt::hunt;
 use super::lts::Lts;
-use super::product::{explore_product, Effect, Product};
+use super::product::{explore_product, Effect, Product, NOBODY};
 use super::quotient::Quotient;
 use super::replay::{concretize, Replay, ReplayRules};
 use super::stubborn::Deps;
@@ -60,11 +60,20 @@ pub(super) struct Group<'a> {
     pub(super) sups: &'a [usize],
     pub(super) ltss: Vec<&'a Lts>,
     pub(super) quots: Vec<&'a Quotient>,
+    /// The same graphs reduced for settling (vanishing markings as a
+    /// label), for the products explored whole.
+    pub(super) settled: Vec<&'a Quotient>,
     pub(super) can_end: Vec<bool>,
     /// The group holds every vehicle.
     pub(super) whole: bool,
     /// What a replay of its counterexamples applies.
     pub(super) rules: &'a ReplayRules<'a>,
+    /// Per vehicle of the group and effect: its gated starts fire as soon
+    /// as allowed ([`Product::urgent`]).
+    pub(super) urgent: Vec<&'a [bool]>,
+    /// Per effect: the holders of the mutexes between vehicles it consumes
+    /// from (vehicles of the plant, `settle.rs`).
+    pub(super) holders: &'a [Vec<usize>],
 }
 
 /// The verdict on one group.
@@ -102,6 +111,12 @@ pub(super) fn verify_group(
         .collect();
     let quots = &grp.quots;
     let nv = grp.vehicles.len();
+    // The holders, as vehicles of the group (a mutex links its holder in).
+    let holders: Vec<Vec<usize>> = grp
+        .holders
+        .iter()
+        .map(|hs| hs.iter().filter_map(|h| grp.vehicles.iter().position(|v| v == h)).collect())
+        .collect();
     let can_end = &grp.can_end;
     let group_ts: Vec<TransitionId> =
         grp.vehicles.iter().flat_map(|&v| plant.parts[v].transitions.clone().map(TransitionId)).collect();
@@ -110,16 +125,18 @@ pub(super) fn verify_group(
     let max_w = sups.iter().flat_map(|s| s.consumed_by.iter().map(|&(_, w)| w)).max().unwrap_or(1);
     let max_init = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).max().unwrap_or(0);
     let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
-    let init_of = |cap: u32| -> Vec<u32> {
+    let init_of = |quots: &[&Quotient], cap: u32| -> Vec<u32> {
         let mut init: Vec<u32> = quots.iter().map(|q| q.block[0]).collect();
         init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
+        init.push(NOBODY);
         init
     };
     // A large product: look for a deadlock by random walks first.
     let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
     if nv > 1 && estimate > opts.hunt_threshold as f64 {
-        let prod = Product { quots, effects: &effects, cap, nv };
-        if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps) {
+        let prod =
+            Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
+        if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, opts.hunt_steps) {
             stats.counter_cap = stats.counter_cap.max(cap);
             return GroupOutcome::Problems(vec![w]);
         }
@@ -132,8 +149,12 @@ pub(super) fn verify_group(
     let mut exact_deps = true;
     let mut deps = reduce.then(|| Deps::new(quots, &effects, sups.len(), true));
     loop {
-        let prod = Product { quots, effects: &effects, cap, nv };
-        let g = explore_product(&prod, init_of(cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
+        // Settling only without the reduction (docs/coordination.md,
+        // "Settling"): a reduced product interleaves every vehicle's moves.
+        let settling = !reduce;
+        let quots = if settling { &grp.settled } else { &grp.quots };
+        let prod = Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling };
+        let g = explore_product(&prod, init_of(quots, cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
         if reduce && exact_deps && g.over {
             exact_deps = false;
             deps = Some(Deps::new(quots, &effects, sups.len(), false));
@@ -190,12 +211,12 @@ pub(super) fn verify_group(
         }
         let dead: Vec<u32> = g.dead.iter().copied().filter(|&s| !is_end(g.state(s))).collect();
         let blocked: Vec<u32> = (0..n as u32).filter(|&s| !co[s as usize] && !is_dead[s as usize]).collect();
-        let settle = |stats: &mut VerifyStats| {
+        let count = |stats: &mut VerifyStats| {
             stats.product_states += states;
             stats.exact &= !g.over;
         };
         if dead.is_empty() && blocked.is_empty() {
-            settle(stats);
+            count(stats);
             return GroupOutcome::Verified;
         }
         // Counterexamples: every dead state (up to a few), and the first
@@ -232,7 +253,7 @@ pub(super) fn verify_group(
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            settle(stats);
+            count(stats);
             return GroupOutcome::Unknown(format!(
                 "counterexamples found with supervisor places counted up to {cap} tokens do not replay"
             ));
@@ -244,13 +265,13 @@ pub(super) fn verify_group(
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            settle(stats);
+            count(stats);
             return GroupOutcome::Unknown(format!(
                 "no deadlock, but whether every mission can always end is not decided: supervisor places \
                  exceed {cap} tokens"
             ));
         }
-        settle(stats);
+        count(stats);
         return GroupOutcome::Problems(witnesses);
     }
 }

@@ -19,9 +19,10 @@
 //!    *visible*; the others are silent (τ). (`lts.rs`)
 //! 2. **Reduction.** Each vehicle graph is reduced modulo divergence-
 //!    preserving branching bisimulation (signature refinement, Blom and
-//!    Orzan), with the gated transitions waiting and the end of the mission
-//!    as state labels. Deadlocks, the reachability of the missions' ends and
-//!    every visible behaviour are preserved. (`quotient.rs`)
+//!    Orzan), with the gated transitions waiting, the end of the mission
+//!    and vanishing markings as state labels. Deadlocks, the reachability
+//!    of the missions' ends and every visible behaviour are preserved.
+//!    (`quotient.rs`)
 //! 3. **Product.** The reduced graphs run together with the supervisor
 //!    places. A supervisor place holds 0..=K tokens exactly, or `>K`
 //!    (consuming from `>K` may leave `K` or `>K`): every reachable marking of
@@ -29,7 +30,9 @@
 //!    marking*. The end of the missions must stay reachable from every image
 //!    through *pessimistic* steps (`>K` minus one is `K`), which every real
 //!    marking with that image can follow, so this proves that no vehicle can
-//!    be blocked forever. (`product.rs`)
+//!    be blocked forever. A vehicle settles as its player does: after its
+//!    own step, its ready immediate steps (and its allowed starts on its
+//!    own supervisors) come before any other vehicle's move. (`product.rs`)
 //!
 //! The product is explored breadth-first with stubborn sets of vehicles
 //! (`stubborn.rs`): in each state only the moves of a set of vehicles that
@@ -63,6 +66,7 @@ mod lts;
 mod product;
 mod quotient;
 mod replay;
+mod settle;
 mod stubborn;
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
@@ -77,6 +81,7 @@ use lts::{build_lts, can_end_alone, LtsError};
 use product::Effect;
 use quotient::{reduce, Quotient};
 use replay::ReplayRules;
+use settle::urgency;
 
 /// Caps of the verification.
 #[derive(Clone, Debug, Serialize)]
@@ -259,10 +264,12 @@ fn verify_mode(
             })
         })
         .collect();
+    let urgency = urgency(plant, sups, &effects, nt);
     let mut stats = VerifyStats::default();
     let mut ltss = Vec::new();
     for (m, part) in missions.iter().zip(&plant.parts) {
-        match build_lts(m, part.transitions.start, &effect_of, &gated, quiet, opts.max_vehicle_states) {
+        match build_lts(m, part.transitions.start, &effect_of, &gated, &urgency.remote, quiet, opts.max_vehicle_states)
+        {
             Ok(l) => {
                 stats.vehicle_states.push(l.len());
                 ltss.push(l);
@@ -281,7 +288,9 @@ fn verify_mode(
             }
         }
     }
-    let quots: Vec<Quotient> = ltss.iter().map(reduce).collect();
+    let quots: Vec<Quotient> = ltss.iter().map(|l| reduce(l, false)).collect();
+    // Finer, for the products explored whole with settling (`product.rs`).
+    let settled: Vec<Quotient> = ltss.iter().map(|l| reduce(l, true)).collect();
     stats.vehicle_classes = quots.iter().map(|q| q.n).collect();
     // Which vehicles can end when nothing holds them.
     let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
@@ -298,7 +307,13 @@ fn verify_mode(
     }
     let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
     let finals: Vec<Vec<PlaceId>> = plant.parts.iter().map(|p| p.final_places.clone()).collect();
-    let rules = ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals };
+    let rules = ReplayRules {
+        vehicles: &vehicles,
+        take_back: &take_back,
+        quiet: &quiet_ts,
+        finals: &finals,
+        remote: &urgency.remote,
+    };
 
     // Vehicles that no supervisor links are independent: each group of
     // linked vehicles is verified alone (docs/coordination.md).
@@ -312,9 +327,12 @@ fn verify_mode(
             sups: ss,
             ltss: vs.iter().map(|&v| &ltss[v]).collect(),
             quots: vs.iter().map(|&v| &quots[v]).collect(),
+            settled: vs.iter().map(|&v| &settled[v]).collect(),
             can_end: vs.iter().map(|&v| can_end[v]).collect(),
             whole: groups.len() == 1,
             rules: &rules,
+            urgent: vs.iter().map(|&v| urgency.urgent[v].as_slice()).collect(),
+            holders: &urgency.holders,
         };
         match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
             GroupOutcome::Verified => {}
