@@ -598,7 +598,7 @@ impl Run<'_> {
     /// Delivers what the vehicle sends at the current time (between steps):
     /// the mock's messages due now; what the AAC sends until it has been
     /// quiet for [`AAC_SETTLE`].
-    fn settle(&mut self) {
+    fn drain_vehicle(&mut self) {
         loop {
             let m = match &mut self.vehicle {
                 Vehicle::Mock(mock) => mock.pop_due(self.t).map(|(_, m)| m),
@@ -741,7 +741,7 @@ impl Run<'_> {
             }
             // Between missions: take what is due now, then decide.
             if self.running.is_none() {
-                self.settle();
+                self.drain_vehicle();
                 if self.link_error.is_some() {
                     continue;
                 }
