@@ -797,14 +797,14 @@ pub async fn run_virtual_with_link(
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings; those given a later start time
     // start then (`Due::Start`).
-    fleet.settle().await?;
+    fleet.exchange_messages().await?;
     for i in 0..fleet.vs.len() {
         if fleet.vs[i].start_at > 0.0 {
             continue;
         }
         let outs = fleet.vs[i].start(0.0)?;
         fleet.work.push_back((i, outs));
-        fleet.settle().await?;
+        fleet.exchange_messages().await?;
     }
     let stop = virtual_loop::run_paced(&mut fleet, &limits, pace).await?;
     let running = fleet.vs.iter_mut().filter(|v| v.end.is_none());
@@ -874,11 +874,11 @@ const LINK: (usize, Due) = (usize::MAX, Due::Link);
 const HELD: (usize, Due) = (usize::MAX, Due::Held);
 
 impl Fleet<'_> {
-    /// Settles the consequences of the last inputs, messages included, at
+    /// Carries the consequences of the last inputs, messages included, at
     /// `now`: each message is awaited until its receiver has it; then one
     /// vehicle takes its messages, and what it does in reaction reaches the
     /// others before the next one does.
-    async fn settle(&mut self) -> Result<(), String> {
+    async fn exchange_messages(&mut self) -> Result<(), String> {
         let now = self.now;
         while let Some((i, outs)) = self.work.pop_front() {
             let msgs = self.vs[i].after(&outs)?;
@@ -997,7 +997,7 @@ impl Discrete for Fleet<'_> {
                     break;
                 }
             }
-            return self.settle().await;
+            return self.exchange_messages().await;
         }
         let v = &mut self.vs[i];
         if due == Due::Start {
@@ -1016,7 +1016,7 @@ impl Discrete for Fleet<'_> {
             // in time order with the other records.
             drain_poses(&mut v.s, &mut *v.mock);
         }
-        self.settle().await
+        self.exchange_messages().await
     }
 }
 
