@@ -148,10 +148,12 @@ pub(super) fn verify_group(
     let mut reduce = opts.reduction && estimate > opts.reduction_threshold as f64;
     let mut exact_deps = true;
     let mut deps = reduce.then(|| Deps::new(quots, &effects, sups.len(), true));
+    // Settling only without the reduction (docs/coordination.md,
+    // "Settling"): a reduced product interleaves every vehicle's moves, and
+    // so does a full one when the settled product passed the cap.
+    let mut settle_ok = true;
     loop {
-        // Settling only without the reduction (docs/coordination.md,
-        // "Settling"): a reduced product interleaves every vehicle's moves.
-        let settling = !reduce;
+        let settling = !reduce && settle_ok;
         let quots = if settling { &grp.settled } else { &grp.quots };
         let prod = Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling };
         let g = explore_product(&prod, init_of(quots, cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
@@ -162,6 +164,10 @@ pub(super) fn verify_group(
         }
         let states = g.states.len() / g.width.max(1);
         stats.counter_cap = stats.counter_cap.max(cap);
+        if !g.complete && settling {
+            settle_ok = false;
+            continue;
+        }
         if !g.complete {
             stats.product_states += states;
             stats.exact &= !g.over;
