@@ -104,9 +104,15 @@ enum Command {
         /// Firing rule.
         #[arg(long, value_enum, default_value = "auto")]
         semantics: cmd::analyze::SemanticsChoice,
-        /// Worker threads (0: one per core).
+        /// Worker threads (0: one per core). Above 1 the workers explore
+        /// without levels: the same counts and verdicts, dead markings with
+        /// real but not always shortest paths.
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// With --threads: explore level by level instead, so that dead
+        /// markings come with shortest paths (slower on many cores).
+        #[arg(long)]
+        shortest_paths: bool,
         /// Exploration method: every marking, or stubborn sets (deadlocks only).
         #[arg(long, value_enum, default_value = "explicit")]
         method: cmd::analyze::Method,
@@ -306,8 +312,8 @@ fn main() -> ExitCode {
         Command::ZenohRouter { listen, connect, config } => cmd::zenoh_router::run(listen, connect, config),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
-        Command::Analyze { net, format, max_states, semantics, threads, method } => {
-            cmd::analyze::run(&net, format, max_states, semantics, threads, method)
+        Command::Analyze { net, format, max_states, semantics, threads, shortest_paths, method } => {
+            cmd::analyze::run(&net, format, max_states, semantics, threads, shortest_paths, method)
         }
         Command::Compile { file, link_report: true, format, frame_bytes, .. } => {
             cmd::link_report::run(&file, format, frame_bytes)

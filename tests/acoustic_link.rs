@@ -7,8 +7,9 @@
 //! constraint is ever violated: replaying the firings of both vehicles in
 //! the order of the trace on the centralized supervisors of the
 //! constraints (seed 6.1: `μ_c = μ_c0 + D_c·v ≥ 0`), no supervisor place
-//! ever goes negative. The cases come from a fixed proptest seed (CI runs
-//! the same ones).
+//! ever goes negative; and no run sends more messages of a kind, or more
+//! messages from a mission, than `mcl compile --link-report` bounds. The
+//! cases come from a fixed proptest seed (CI runs the same ones).
 //!
 //! Through the binary: `mcl compile --link-report` on the seed's AUV/ASC
 //! mission (every message fits a 32-byte frame; E0410 at one byte), `mcl
@@ -17,6 +18,7 @@
 //! a simulated world, and the usage errors of `--link`.
 
 use mcl_compiler::{check_file, Database};
+use mcl_coord::link_report::LinkReport;
 use mcl_runtime::acoustic::{AcousticLink, LinkSpec};
 use mcl_runtime::driver::{Collect, End, Limits};
 use mcl_runtime::mock::MockVehicle;
@@ -112,9 +114,10 @@ struct Supervisors {
     effect: HashMap<String, Vec<(usize, i64)>>,
 }
 
-/// The vehicle nets of a pair and its constraints' supervisors, or why
-/// there are none (the analysis finds a deadlock or is inconclusive).
-fn coordinate(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Supervisors), String> {
+/// The vehicle nets of a pair, its constraints' supervisors and its link
+/// report, or why there are none (the analysis finds a deadlock or is
+/// inconclusive).
+fn coordinate(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Supervisors, LinkReport), String> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/acoustic");
     db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
@@ -141,7 +144,38 @@ fn coordinate(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Supervisors), S
         }
     }
     let nets = mcl_coord::decentralize(&missions, &report.supervisors).map_err(|e| e.to_string())?;
-    Ok((nets, sups))
+    let links = mcl_coord::link_report::link_report(&missions, &cs, &nets);
+    Ok((nets, sups, links))
+}
+
+/// The first message kind (or mission) of which a run sent more than the
+/// link report's bound (`coord_send` records; an unbounded count has none).
+fn over_bound(report: &LinkReport, records: &[Record]) -> Option<String> {
+    let mut sent: HashMap<(&str, &str, &str), u64> = HashMap::new();
+    let mut by_mission: HashMap<&str, u64> = HashMap::new();
+    for r in records {
+        if let (RecordKind::CoordSend { transition, to, .. }, Some(m)) = (&r.kind, &r.mission) {
+            *sent.entry((m, transition, to)).or_default() += 1;
+            *by_mission.entry(m).or_default() += 1;
+        }
+    }
+    for ((from, t, to), n) in &sent {
+        let Some(m) =
+            report.messages.iter().find(|m| (m.from.as_str(), m.transition.as_str(), m.to.as_str()) == (from, t, to))
+        else {
+            return Some(format!("{from} -> {to}: {t} is no message of the report"));
+        };
+        if m.count.max().is_some_and(|max| *n > max) {
+            return Some(format!("{from} -> {to}: {t} sent {n} times, at most {}", m.count.describe()));
+        }
+    }
+    for m in &report.missions {
+        let n = by_mission.get(m.mission.as_str()).copied().unwrap_or(0);
+        if m.messages.max().is_some_and(|max| n > max) {
+            return Some(format!("{} sent {n} messages, at most {}", m.mission, m.messages.describe()));
+        }
+    }
+    None
 }
 
 /// Runs the pair over `link`; returns how each mission ended and the records.
@@ -216,7 +250,7 @@ proptest! {
     #[test]
     fn lossy_slow_links_keep_every_constraint_and_every_run_ends(seed in any::<u64>()) {
         let c = case(seed);
-        let (nets, sups) = match coordinate(&c.text) {
+        let (nets, sups, links) = match coordinate(&c.text) {
             Ok(x) => x,
             // The analysis refuses it: nothing to run (counted below).
             Err(_) => return Ok(()),
@@ -228,6 +262,8 @@ proptest! {
             prop_assert!(matches!(e, End::Outcome(Outcome::Ok | Outcome::Fail)), "a mission did not end: {e:?}\n{}", what());
         }
         prop_assert_eq!(violation(&sups, &records), None, "{}", what());
+        // The link report's counts are upper bounds of every run.
+        prop_assert_eq!(over_bound(&links, &records), None, "{}\n{}", what(), links.to_text());
         if c.link.loss > 0.2 {
             let sent = records.iter().filter(|r| matches!(r.kind, RecordKind::CoordSend { .. })).count();
             let lost = records.iter().filter(|r| matches!(r.kind, RecordKind::LinkLost { .. })).count();
@@ -244,12 +280,22 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     let mut lossy_runs = 0;
     let mut caught = 0;
     let mut token_requests = 0;
+    let mut excess = 0;
     for seed in 0..12u64 {
         let c = case(seed * 7919);
-        let Ok((nets, sups)) = coordinate(&c.text) else { continue };
+        let Ok((nets, sups, links)) = coordinate(&c.text) else { continue };
         runnable += 1;
         let link = AcousticLink { spec: LinkSpec { loss: 0.5, ..c.link }, seed: c.seed, positions: None };
         let (_, records) = run(&nets, &c.scenario, c.seed, link);
+        // The bound check sees a run that sends every message twice (the
+        // bounds are tight enough to notice).
+        let twice: Vec<Record> = records
+            .iter()
+            .flat_map(|r| vec![r.clone(); if matches!(r.kind, RecordKind::CoordSend { .. }) { 2 } else { 1 }])
+            .collect();
+        if over_bound(&links, &twice).is_some() {
+            excess += 1;
+        }
         if records.iter().any(|r| matches!(r.kind, RecordKind::LinkLost { .. })) {
             lossy_runs += 1;
         }
@@ -275,6 +321,7 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
     assert!(lossy_runs >= 4, "only {lossy_runs} runs lost frames");
     assert!(caught >= 2, "the checker caught only {caught} forged violations");
     assert!(token_requests >= 1, "no run asked a mutex holder for a token over the link");
+    assert!(excess >= 4, "the bound check caught only {excess} runs that sent every message twice");
 }
 
 // ---------------------------------------------------------------------------
@@ -305,7 +352,36 @@ fn link_report_of_the_auv_asc_mission_fits_32_bytes_and_refuses_one() {
     assert!(v["frame_bytes"].as_u64().is_some_and(|b| b <= 32), "{v}");
     assert_eq!(v["diagnostics"].as_array().map(Vec::len), Some(0));
     assert_eq!(v["constraints"][0]["messages"], serde_json::json!({"bound": "bounded", "max": 1}));
+    // A loop: unbounded, with a bound per iteration.
     assert_eq!(v["constraints"][1]["messages"]["bound"], "unbounded");
+    assert!(v["constraints"][1]["messages"]["per_iteration"].as_u64().is_some_and(|n| n >= 1), "{v}");
+    // A dry run (and a lossy one) sends no message more often than its bound.
+    for link in [None, Some("acoustic:bitrate=80,loss=0.4,delay=2")] {
+        let tp =
+            std::env::temp_dir().join(format!("mcl-acoustic-bound-{}-{}.jsonl", std::process::id(), link.is_some()));
+        let mut args = vec!["run", "--mock", "--virtual-time", "examples/auv-asc.mcl", "-q", "--trace"];
+        args.extend([tp.to_str().unwrap(), "--scenario", "examples/scenarios/auv-asc.toml"]);
+        args.extend(link.iter().flat_map(|l| ["--link", l]));
+        let run = mcl(&args);
+        assert_eq!(run.status.code(), Some(0), "{}", String::from_utf8_lossy(&run.stderr));
+        let records = read_trace(&tp);
+        let mut checked = 0;
+        for m in v["messages"].as_array().expect("messages") {
+            let n = records
+                .iter()
+                .filter(|r| {
+                    r.mission.as_deref() == m["from"].as_str()
+                        && matches!(&r.kind, RecordKind::CoordSend { transition, to, .. }
+                            if Some(transition.as_str()) == m["transition"].as_str() && Some(to.as_str()) == m["to"].as_str())
+                })
+                .count() as u64;
+            if let Some(max) = m["count"]["max"].as_u64() {
+                assert!(n <= max, "{m}: sent {n} times\n{v}");
+                checked += u64::from(n > 0);
+            }
+        }
+        assert!(checked >= 3, "the run sent few bounded messages: {checked}");
+    }
     let out = mcl(&["compile", "--link-report", "examples/auv-asc.mcl", "--frame-bytes", "1"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);

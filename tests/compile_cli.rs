@@ -97,6 +97,33 @@ fn analyze_method_por_keeps_the_deadlocks() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("plain rule only"));
 }
 
+/// `--threads`: the unordered workers give the one-thread counts and
+/// verdict; `--shortest-paths` keeps the level-synchronous engine and so
+/// the one-thread dead examples, paths included.
+#[test]
+fn analyze_threads_keep_counts_and_verdicts() {
+    let net = "tests/data/mcc/Philosophers-PT-000005.pnml";
+    let one: Value = serde_json::from_slice(&mcl(&["analyze", "--format", "json", net]).stdout).unwrap();
+    for extra in [&[][..], &["--shortest-paths"][..]] {
+        let mut args = vec!["analyze", "--format", "json", "--threads", "3"];
+        args.extend_from_slice(extra);
+        args.push(net);
+        let o = mcl(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        for key in ["states", "edges", "deadlock", "dead_markings", "complete", "bounds"] {
+            assert_eq!(v[key], one[key], "{key} with {extra:?}");
+        }
+        let paths =
+            |r: &Value| r["dead_examples"].as_array().unwrap().iter().map(|d| d["path"].clone()).collect::<Vec<_>>();
+        if !extra.is_empty() {
+            assert_eq!(paths(&v), paths(&one), "shortest paths");
+        } else {
+            assert_eq!(paths(&v).len(), paths(&one).len());
+        }
+    }
+}
+
 /// `--view structure` draws the mission's control structures and calls (a
 /// picture a person can read whole: tens of nodes where the net has
 /// hundreds); `--view task:NAME` draws one task's net; both need `--dot`.

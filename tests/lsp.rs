@@ -596,6 +596,100 @@ fn a_vehicle_changed_on_disk_is_reloaded() {
     assert_eq!(lsp.shutdown(), 0);
 }
 
+/// A ROS 2 bridge file for `VEHICLE` with three errors: a field the
+/// message type lacks (line 4), a parameter the command lacks (line 7), a
+/// primitive the vehicle lacks (line 9).
+const BAD_BRIDGE: &str = r#"node = "mcl_player"
+
+[primitives.GotoPrimitive]
+enable = { publish = "/goto", type = "geometry_msgs/msg/Point", fields = { x = "$way-point[0]", w = 1.0 } }
+
+[primitives.DepthPrimitive]
+enable = { publish = "/depth", type = "std_msgs/msg/Float64", fields = { data = "$speed" } }
+
+[primitives.SonarPrimitive]
+enable = { publish = "/sonar", type = "std_msgs/msg/Bool" }
+"#;
+
+const GOOD_BRIDGE: &str = r#"node = "mcl_player"
+
+[primitives.GotoPrimitive]
+enable = { publish = "/goto", type = "geometry_msgs/msg/Point", fields = { x = "$way-point[0]", y = 1.0 } }
+
+[primitives.DepthPrimitive]
+enable = { publish = "/depth", type = "std_msgs/msg/Float64", fields = { data = "$depth" } }
+"#;
+
+#[test]
+fn a_configured_ros2_bridge_is_checked_against_the_open_vehicle() {
+    let root =
+        workspace("ros2-bridge", &[("vehicle.mcl", VEHICLE), ("mission.mcl", MISSION), ("BRIDGE.toml", BAD_BRIDGE)]);
+    let mut lsp = Lsp::start(&root);
+    let r = uri_of(&root);
+    lsp.request(
+        "initialize",
+        json!({"processId": null, "rootUri": r, "capabilities": client_caps(),
+               "workspaceFolders": [{"uri": r, "name": "ws"}],
+               "initializationOptions": {"ros2Bridge": "BRIDGE.toml"}}),
+    );
+    lsp.notify("initialized", json!({}));
+    let bridge = lsp.uri("BRIDGE.toml");
+    let count = |n: usize| {
+        let bridge = bridge.clone();
+        move |p: &Value| p["uri"] == bridge.as_str() && p["diagnostics"].as_array().is_some_and(|d| d.len() == n)
+    };
+    // With an MCL document open, the bridge's errors against its vehicle,
+    // each at its line, on the bridge file's URI.
+    lsp.open("mission.mcl", MISSION);
+    let d = lsp.wait_for("textDocument/publishDiagnostics", count(3));
+    let found: Vec<(i64, String)> = d["diagnostics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| (d["range"]["start"]["line"].as_i64().unwrap(), d["message"].as_str().unwrap().to_string()))
+        .collect();
+    let at = |line: i64, needle: &str| {
+        assert!(found.iter().any(|(l, m)| *l == line && m.contains(needle)), "`{needle}` on line {line}: {found:?}")
+    };
+    at(3, "`w`");
+    at(6, "has no parameter `speed`");
+    at(8, "has no primitive `SonarPrimitive`");
+    assert!(d["diagnostics"].as_array().unwrap().iter().all(|d| d["code"] == "ros2" && d["severity"] == 1), "{d}");
+    // Fixed on disk: the errors go.
+    std::fs::write(root.join("BRIDGE.toml"), GOOD_BRIDGE).unwrap();
+    lsp.notify("workspace/didChangeWatchedFiles", json!({"changes": [{"uri": bridge, "type": 2}]}));
+    lsp.wait_for("textDocument/publishDiagnostics", count(0));
+    // The vehicle loses a parameter in the editor: the bridge that uses it
+    // is wrong again.
+    lsp.open("vehicle.mcl", VEHICLE);
+    let changed = VEHICLE.replace("GotoPrimitive( c: enable, v: way-point )", "GotoPrimitive( c: enable )");
+    lsp.change("vehicle.mcl", 2, json!([{"text": changed}]));
+    let d = lsp.wait_for("textDocument/publishDiagnostics", count(1));
+    assert_eq!(d["diagnostics"][0]["range"]["start"]["line"], 3, "{d}");
+    assert!(d["diagnostics"][0]["message"].as_str().unwrap().contains("way-point"), "{d}");
+    // The bridge file edited in the editor: its text wins over the disk's,
+    // and it is never diagnosed as MCL.
+    let edited = format!(
+        "{GOOD_BRIDGE}\n[primitives.SonarPrimitive]\nenable = {{ publish = \"/s\", type = \"std_msgs/msg/Bool\" }}\n"
+    );
+    lsp.notify(
+        "textDocument/didOpen",
+        json!({"textDocument": {"uri": bridge, "languageId": "toml", "version": 1, "text": edited}}),
+    );
+    let d = lsp.wait_for("textDocument/publishDiagnostics", count(2));
+    assert_eq!(d["version"], 1, "{d}");
+    assert!(d["diagnostics"].as_array().unwrap().iter().all(|d| d["code"] == "ros2"), "{d}");
+    let stray: Vec<&Value> = lsp
+        .stash
+        .iter()
+        .filter(|m| m["method"] == "textDocument/publishDiagnostics" && m["params"]["uri"] == bridge.as_str())
+        .flat_map(|m| m["params"]["diagnostics"].as_array().into_iter().flatten())
+        .filter(|d| d["code"] != "ros2")
+        .collect();
+    assert!(stray.is_empty(), "the bridge file was diagnosed as MCL: {stray:?}");
+    assert_eq!(lsp.shutdown(), 0);
+}
+
 /// A FIFO and a device imported by an open document: errors at the imports,
 /// and the server never blocks on them (the other document still gets its
 /// diagnostics).

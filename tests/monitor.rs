@@ -9,6 +9,7 @@ mod monitor {
     pub mod cdp;
     pub mod http;
 }
+mod aac_common;
 
 use monitor::cdp::Browser;
 use monitor::http;
@@ -328,4 +329,273 @@ fn a_fleet_replay_draws_every_vehicle_on_the_map() {
     b.screenshot(&root().join("docs/pictures/monitor-fleet.png"));
     let errors = b.errors();
     assert!(errors.is_empty(), "console errors: {errors:?}");
+}
+
+/// The operator's commands in a trace, with their missions.
+fn operator_records(trace: &std::path::Path) -> Vec<(Option<String>, mcl_runtime::operator::Command)> {
+    mcl_runtime::trace::read_trace(trace)
+        .unwrap()
+        .into_iter()
+        .filter_map(|r| match r.kind {
+            mcl_runtime::trace::RecordKind::Operator { command } => Some((r.mission, command)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Whether every running call of `s` is a call of its task on its line of `file`.
+fn running_calls_on_their_lines(s: &Value, file: &str) {
+    for c in s["running"].as_array().unwrap() {
+        assert_eq!(c["file"], file, "{c}");
+        let task = c["task"].as_str().unwrap();
+        let line = source_line(file, c["line"].as_u64().unwrap());
+        assert!(line.contains(&format!("{task}(")), "line {} is not a call of {task}: {line}", c["line"]);
+    }
+}
+
+#[test]
+fn a_coordinated_run_lists_each_vehicles_calls_and_is_aborted_by_the_operator() {
+    let trace = tmp("coord-abort.jsonl");
+    let run = Served::start(&[
+        "run",
+        "--mock",
+        "examples/auv-asc.mcl",
+        "--speed",
+        "2",
+        "--monitor=127.0.0.1:0",
+        "--monitor-linger",
+        "2",
+        "--operator-token",
+        "fleet-k3y",
+        "--trace",
+        trace.to_str().unwrap(),
+        "-q",
+    ]);
+    let (code, info) = http::get(&format!("{}api/info", run.url));
+    assert_eq!(code, 200, "{info}");
+    let info: Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(info["vehicles"], serde_json::json!(["auv", "asc"]), "{info}");
+    // Both vehicles have run calls; the AUV's run now, each on its line.
+    let missions = |s: &Value, key: &str| -> Vec<String> {
+        let mut m: Vec<String> =
+            s[key].as_array().unwrap().iter().map(|c| c["mission"].as_str().unwrap().to_string()).collect();
+        m.sort();
+        m.dedup();
+        m
+    };
+    let s = run.state_until("calls of both vehicles", |s| missions(s, "calls") == ["asc", "auv"]);
+    assert!(s["outcome"].is_null(), "{s}");
+    let s = run.state_until("a running call of the AUV", |s| missions(s, "running").contains(&"auv".to_string()));
+    running_calls_on_their_lines(&s, "examples/auv-asc.mcl");
+    // Refused without the token, or naming no vehicle of the run.
+    let abort = r#"{"command":"abort"}"#;
+    assert_eq!(run.command(None, abort).0, 401, "no token");
+    assert_eq!(run.command(Some("fleet-k3Y"), abort).0, 401, "another token");
+    assert_eq!(run.command(Some("fleet-k3y"), r#"{"command":"abort","vehicle":"rov"}"#).0, 400, "no such vehicle");
+    let (code, body) = run.command(Some("fleet-k3y"), r#"{"command":"answer","event":"eventVoidOk"}"#);
+    assert_eq!(code, 400, "an answer names its vehicle: {body}");
+    assert!(run.state()["outcome"].is_null(), "refused commands change nothing");
+    // The abort goes to every vehicle; each mission's abort cascades.
+    let (code, body) = run.command(Some("fleet-k3y"), abort);
+    assert_eq!(code, 202, "{body}");
+    let s = run.state_until("the outcome", |s| s["finished"] == true);
+    assert_eq!(s["outcome"], "aborted", "{s}");
+    assert_eq!(s["outcomes"], serde_json::json!({"asc": "aborted", "auv": "aborted"}), "{s}");
+    assert_eq!(s["running"], Value::Array(vec![]), "the aborts stopped every call");
+    let (code, _) = run.command(Some("fleet-k3y"), abort);
+    assert_eq!(code, 409, "the run is over");
+    let (status, stderr) = run.wait();
+    assert_eq!(status.code(), Some(3), "{stderr:?}");
+    for m in ["auv", "asc"] {
+        assert!(stderr.iter().any(|l| l.starts_with(&format!("mission `{m}`: ABORTED"))), "{stderr:?}");
+    }
+    use mcl_runtime::operator::Command as Op;
+    let mut ops = operator_records(&trace);
+    ops.sort_by(|a, b| a.0.cmp(&b.0));
+    assert_eq!(ops, [(Some("asc".into()), Op::Abort), (Some("auv".into()), Op::Abort)]);
+}
+
+#[test]
+fn a_sim_run_is_paused_and_resumed_by_the_operator_and_journals_it() {
+    let trace = tmp("sim-pause.jsonl");
+    let journal = tmp("sim-pause.journal");
+    let run = Served::start(&[
+        "run",
+        "--sim",
+        "examples/survey.mcl",
+        "--speed",
+        "10",
+        "--monitor=127.0.0.1:0",
+        "--monitor-linger",
+        "1",
+        "--operator-token",
+        "s3cret",
+        "--trace",
+        trace.to_str().unwrap(),
+        "--journal",
+        journal.to_str().unwrap(),
+        "-q",
+    ]);
+    run.state_until("a running call", |s| s["running"].as_array().is_some_and(|r| !r.is_empty()));
+    assert_eq!(run.command(None, r#"{"command":"pause"}"#).0, 401, "no token");
+    assert_eq!(run.command(Some("s3cret"), r#"{"command":"pause"}"#).0, 202);
+    let paused = run.state_until("the pause", |s| s["paused"] == true);
+    // Paused, the simulated mission stands still: no record comes.
+    std::thread::sleep(Duration::from_millis(500));
+    let still = run.state();
+    assert_eq!((&still["records"], &still["t"]), (&paused["records"], &paused["t"]), "{paused} then {still}");
+    assert_eq!(run.command(Some("s3cret"), r#"{"command":"resume","vehicle":"mission"}"#).0, 202);
+    let s = run.state_until("the outcome", |s| s["finished"] == true);
+    assert_eq!((s["outcome"].as_str(), &s["paused"]), (Some("ok"), &Value::Bool(false)), "{s}");
+    let (status, stderr) = run.wait();
+    assert_eq!(status.code(), Some(0), "{stderr:?}");
+    use mcl_runtime::operator::Command as Op;
+    let ops: Vec<Op> = operator_records(&trace).into_iter().map(|(_, c)| c).collect();
+    assert_eq!(ops, [Op::Pause, Op::Resume]);
+    let journaled: Vec<Op> = mcl_runtime::journal::read_journal(&journal)
+        .unwrap()
+        .into_iter()
+        .filter_map(|e| match e {
+            mcl_runtime::journal::Entry::Operator { command, .. } => Some(command),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(journaled, [Op::Pause, Op::Resume]);
+}
+
+#[test]
+fn an_aac_run_shows_its_running_calls_and_outcome() {
+    let found = mcl_testutil::runs("python3", &["--version"]);
+    if !mcl_testutil::have_tool("python3", found, "apt-get install python3") {
+        return;
+    }
+    // The reference AAC: each primitive ends ok after 0.3 s, the alarm and the camera never.
+    let map = tmp("aac-map.json");
+    std::fs::write(&map, r#"{"AlarmPrimitive": "", "TakeImagesPrimitive": ""}"#).unwrap();
+    let mut aac = Command::new("python3");
+    aac.arg(root().join("clients/python/mcl_aac.py")).args(["--listen", "127.0.0.1:0", "--token", "tok"]);
+    aac.args(["--map-file", map.to_str().unwrap(), "--map", "AltitudePrimitive=eventAltitudeOk", "--delay", "0.3"]);
+    let aac = aac_common::Proc::spawn(aac);
+    let run = Served::start(&[
+        "run",
+        "--aac",
+        &aac.addr,
+        "--token",
+        "tok",
+        "examples/survey.mcl",
+        "--monitor=127.0.0.1:0",
+        "--monitor-linger",
+        "30",
+        "-q",
+    ]);
+    let s = run.state_until("a running call", |s| s["running"].as_array().is_some_and(|r| !r.is_empty()));
+    running_calls_on_their_lines(&s, "examples/survey.mcl");
+    let done = run.state_until("the outcome", |s| s["finished"] == true);
+    assert_eq!(done["outcome"], "ok", "{done}; AAC: {:?}", aac.log());
+    assert_eq!(done["running"], Value::Array(vec![]));
+    let calls = done["calls"].as_array().unwrap();
+    assert!(calls.iter().any(|c| c["line"] == 15 && c["status"] == "ok"), "InitializeVehicle ended ok: {done}");
+}
+
+#[test]
+fn the_page_follows_a_coordinated_run() {
+    if !mcl_testutil::browser::have_chromium() {
+        return;
+    }
+    let run = Served::start(&[
+        "run",
+        "--mock",
+        "examples/auv-asc.mcl",
+        "--speed",
+        "2",
+        "--monitor=127.0.0.1:0",
+        "--monitor-linger",
+        "60",
+        "--operator-token",
+        "k",
+        "-q",
+    ]);
+    // Paused while the browser starts: each vehicle's running calls stay.
+    run.state_until("a running call", |s| s["running"].as_array().is_some_and(|r| !r.is_empty()));
+    assert_eq!(run.command(Some("k"), r#"{"command":"pause"}"#).0, 202);
+    run.state_until("the pause", |s| s["paused"] == true);
+    let mut b = Browser::start(&tmp("chromium-coord"));
+    b.open(&format!("{}#token=k", run.url));
+    b.wait_for("document.querySelectorAll('.line.running').length > 0", "a running line highlighted");
+    // Each vehicle paused itself by now: the calls that run are highlighted.
+    let s = run.state();
+    let running = s["running"].as_array().unwrap();
+    assert!(!running.is_empty(), "{s}");
+    for c in running {
+        let line = c["line"].as_u64().unwrap() as u32;
+        b.wait_for(&format!("{} === 'line running'", line_class("examples/auv-asc.mcl", line)), "a running line");
+    }
+    assert_eq!(b.eval("document.getElementById('op-vehicle').hidden"), false, "a vehicle picker");
+    assert_eq!(b.eval("document.getElementById('op-vehicle').options.length"), 3, "every vehicle, auv, asc");
+    // Aborted from the page: the commands go to every vehicle.
+    b.eval("document.getElementById('op-abort').click()");
+    b.wait_for("document.getElementById('outcome').textContent === 'aborted'", "the outcome");
+    let errors = b.errors();
+    assert!(errors.is_empty(), "console errors: {errors:?}");
+}
+
+/// A free loopback port (bound then released).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+#[test]
+fn each_vehicle_in_its_own_process_is_aborted_through_its_own_monitor() {
+    let (pa, pb) = (free_port(), free_port());
+    let journal = |me: &str| tmp(&format!("proc-{me}.journal"));
+    let start = |me: &str, listen: u16, peer: &str, port: u16| {
+        let j = journal(me);
+        let (listen, peer) = (format!("127.0.0.1:{listen}"), format!("{peer}=127.0.0.1:{port}"));
+        Served::start(&[
+            "run",
+            "--mock",
+            "examples/auv-asc.mcl",
+            "--vehicle",
+            me,
+            "--coord-listen",
+            &listen,
+            "--coord-peer",
+            &peer,
+            "--speed",
+            "2",
+            "--time-limit",
+            "600",
+            "--monitor=127.0.0.1:0",
+            "--operator-token",
+            "k",
+            "--journal",
+            j.to_str().unwrap(),
+            "-q",
+        ])
+    };
+    let auv = start("auv", pa, "asc", pb);
+    let asc = start("asc", pb, "auv", pa);
+    for (run, me) in [(&auv, "auv"), (&asc, "asc")] {
+        let (_, info) = http::get(&format!("{}api/info", run.url));
+        assert_eq!(serde_json::from_str::<Value>(&info).unwrap()["vehicles"], serde_json::json!([me]));
+        run.state_until("a running call", |s| s["running"].as_array().is_some_and(|r| !r.is_empty()));
+    }
+    assert_eq!(auv.command(None, r#"{"command":"abort"}"#).0, 401, "no token");
+    assert_eq!(auv.command(Some("k"), r#"{"command":"abort","vehicle":"asc"}"#).0, 400, "asc is not in this process");
+    assert_eq!(auv.command(Some("k"), r#"{"command":"abort","vehicle":"auv"}"#).0, 202);
+    assert_eq!(asc.command(Some("k"), r#"{"command":"abort"}"#).0, 202);
+    // Each aborted mission ends once nothing more happens in it, and tells its peer.
+    for (run, me) in [(auv, "auv"), (asc, "asc")] {
+        let (status, stderr) = run.wait();
+        assert_eq!(status.code(), Some(3), "{me}: {stderr:?}");
+        assert!(stderr.iter().any(|l| l.starts_with(&format!("mission `{me}`: ABORTED"))), "{stderr:?}");
+        let entries = mcl_runtime::journal::read_journal(&journal(me)).unwrap();
+        assert!(
+            entries.iter().any(|e| matches!(
+                e,
+                mcl_runtime::journal::Entry::Operator { command: mcl_runtime::operator::Command::Abort, .. }
+            )),
+            "{me}: the abort is journaled"
+        );
+    }
 }

@@ -56,3 +56,32 @@ fn a_broken_bridge_gives_errors_with_file_and_line() {
     assert_eq!(lines.len(), 3, "{out}");
     assert!(lines.contains(&(line_of("data < 0.2") as u64)));
 }
+
+/// `mcl plan --run --ros2`: the bridge is checked against the operators'
+/// vehicle before anything runs (no DDS needed to see it refused), and
+/// what needs the in-process mock is refused.
+#[test]
+fn a_planned_run_checks_the_bridge_first() {
+    let dir = std::env::temp_dir().join(format!("mcl-ros2-plan-check-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let bridge = dir.join("BRIDGE.toml");
+    std::fs::write(&bridge, "node = \"n\"\n\n[primitives.NoSuchPrimitive]\nevents = []\n").unwrap();
+    let (b, plan) = (bridge.to_str().unwrap(), "examples/planning/move/move.mcl");
+    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["plan", plan, "--run", "--ros2", b])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("{b}:3:")) && stderr.contains("no primitive `NoSuchPrimitive`"), "{stderr}");
+    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["plan", plan, "--run", "--ros2", b, "--virtual-time"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--ros2 runs in real time"), "{stderr}");
+}

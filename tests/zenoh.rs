@@ -3,9 +3,14 @@
 //! `--transport zenoh`, also with one of them killed and resumed, and
 //! through a Zenoh router (`mcl zenoh-router`) restarted mid-run; the
 //! survey against the Python reference vehicle over Zenoh
-//! (clients/python/mcl_aac_zenoh.py). Explicit loopback endpoints, no
+//! (clients/python/mcl_aac_zenoh.py), and a player killed (SIGKILL) and
+//! resumed from its journal against it. Explicit loopback endpoints, no
 //! multicast scouting. Every process is bounded in time.
 
+mod aac_common;
+#[allow(dead_code)]
+#[path = "../mcl-zenoh/examples/aac_vehicle.rs"]
+mod aac_vehicle;
 mod auv_asc_common;
 use auv_asc_common::{check, AUV_ASC, SCENARIO};
 use mcl_runtime::trace::{Record, RecordKind};
@@ -213,6 +218,62 @@ fn auv_and_asc_through_a_router() {
     check(&runs, &reference, "zrpeer");
 }
 
+/// `mcl zenoh-router --listen ENDPOINT --zenoh-config FILE`, once it says it listens.
+fn router_with(port: u16, config: &Path) -> Child {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["zenoh-router", "--listen", &endpoint(port), "--config"])
+        .arg(config)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run mcl zenoh-router");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert!(first.starts_with("zenoh router listening on"), "{first}");
+    child
+}
+
+/// Peers that listen nowhere and only connect to the router: the others
+/// cannot reach them, so Zenoh's peer-to-peer routing gives them nothing
+/// of each other (docs/zenoh.md *Through a router*). Each vehicle names
+/// its region (`region_name`), and the router is the gateway of one south
+/// region per vehicle: it routes between them.
+#[test]
+fn peers_that_listen_nowhere_through_a_router_with_a_region_each() {
+    let _one = serial();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
+    let pr = free_port();
+    let rc = tmp("region-router.json5");
+    std::fs::write(
+        &rc,
+        r#"{ scouting: { multicast: { enabled: false } }, gateway: { south: [
+             { filters: [ { region_names: ["auv"] } ] },
+             { filters: [ { region_names: ["asc"] } ] },
+             { filters: [ { modes: ["peer", "client"] } ] } ] } }"#,
+    )
+    .unwrap();
+    let mut r = router_with(pr, &rc);
+    let nets = ["auv", "asc"].map(|me| {
+        let config = tmp(&format!("region-{me}.json5"));
+        std::fs::write(
+            &config,
+            format!(
+                r#"{{ mode: "peer", region_name: "{me}", listen: {{ endpoints: [] }},
+                     scouting: {{ multicast: {{ enabled: false }} }} }}"#
+            ),
+        )
+        .unwrap();
+        Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config) }
+    });
+    let [na, nc] = nets;
+    let c = std::thread::spawn(move || vehicle("asc", &nc, None, "zrregion"));
+    let a = vehicle("auv", &na, None, "zrregion");
+    let runs = [a, c.join().unwrap()];
+    let _ = r.kill();
+    let _ = r.wait();
+    check(&runs, &reference, "zrregion");
+}
+
 #[test]
 fn auv_and_asc_through_a_router_restarted_mid_run() {
     let _one = serial();
@@ -331,4 +392,112 @@ fn the_survey_against_the_python_reference_vehicle_over_zenoh() {
         .filter_map(|l| l.split("executed seq=").nth(1)?.split_whitespace().next()?.parse().ok())
         .collect();
     assert_eq!(executed, sent, "{ctx}");
+}
+
+/// The player over Zenoh killed at several moments (an abort right after
+/// journaling an input; SIGKILL wherever it is once the dive ended, and
+/// once the altitude is reached while Goto still runs) against the running
+/// Python reference vehicle (which answers meanwhile), then resumed with
+/// `--resume`: the mission ends ok with the actions and events of the dry
+/// run, every action executed exactly once.
+#[test]
+fn the_player_killed_and_resumed_over_zenoh_against_the_python_vehicle() {
+    use aac_common::{crashed_run_over, odd_events, resumed_run_over, sent, unique, Kill, Proc};
+    let _one = serial();
+    if !python_zenoh() {
+        return;
+    }
+    let dir = aac_common::scratch("zenoh-resume");
+    let file = aac_common::resume_mission(&dir);
+    let mut reference = aac_common::reference_calls(&dir, &file, "default_duration = 1\n");
+    reference.sort();
+    let kills = [Kill::After(1), Kill::After(3), Kill::When("eventDepthOk"), Kill::When("eventAltitudeOk")];
+    for (i, kill) in kills.into_iter().enumerate() {
+        let vehicle = format!("resume{i}");
+        let mut py = Command::new("python3");
+        py.arg(root().join("clients/python/mcl_aac_zenoh.py")).args([
+            "--vehicle",
+            &vehicle,
+            "--listen",
+            &endpoint(free_port()),
+            "--delay",
+            "0.3",
+        ]);
+        let aac = Proc::spawn(py);
+        let player = ["--zenoh", "--vehicle-name", &vehicle, "--zenoh-connect", &aac.addr];
+        let player = [&player[..], &["--zenoh-listen", "tcp/127.0.0.1:0", "--connect-timeout", "20"]].concat();
+        let journal = dir.join(format!("j{i}.jsonl"));
+        let trace = dir.join(format!("t{i}.jsonl"));
+        crashed_run_over(&player, &file, &journal, &[], kill);
+        // The vehicle goes on while the player is down.
+        std::thread::sleep(Duration::from_millis(800));
+        let (code, ctx) = resumed_run_over(&player, &file, &journal, &trace, &["-q"]);
+        let ctx = format!("{kill:?}\n{ctx}\nAAC:\n{}", aac.log().join("\n"));
+        assert_eq!(code, Some(0), "{ctx}");
+        let mut calls = aac_common::calls(&trace);
+        calls.sort();
+        assert_eq!(calls, reference, "{ctx}");
+        assert_eq!(odd_events(&trace), Vec::new(), "{ctx}");
+        let mut executed = aac.executed();
+        assert!(unique(&executed), "an action was executed twice\n{ctx}");
+        executed.sort_unstable();
+        let mut sent = sent(&trace);
+        sent.sort_unstable();
+        assert_eq!(executed, sent, "{ctx}");
+        // The resumed player went on with the run of its journal: the
+        // vehicle saw one run, in one session.
+        assert_eq!(aac.log().iter().filter(|l| l.contains("new session")).count(), 1, "{ctx}");
+    }
+}
+
+/// The survey played by `mcl run --zenoh` against the Rust example vehicle
+/// (mcl-zenoh/examples/aac_vehicle.rs, on the `zenoh` crate alone), run in
+/// this process: the mission ends ok, the alarm never fires, every action
+/// executed exactly once and in order.
+#[test]
+fn the_survey_against_the_rust_example_vehicle_over_zenoh() {
+    let _one = serial();
+    let port = free_port();
+    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    let map = [("AlarmPrimitive", ""), ("TakeImagesPrimitive", ""), ("AltitudePrimitive", "eventAltitudeOk")];
+    let opts = aac_vehicle::VehicleOptions {
+        vehicle: "rustv".into(),
+        listen: vec![endpoint(port)],
+        delay: Duration::from_millis(50),
+        map: map.iter().map(|(p, e)| (p.to_string(), e.to_string())).collect(),
+        ..Default::default()
+    };
+    let vehicle = rt.block_on(aac_vehicle::start(opts)).unwrap();
+    let tp = tmp("survey-rust.jsonl");
+    let child = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["run", "--zenoh", "examples/survey.mcl", "--vehicle-name", "rustv"])
+        .args(["--zenoh-connect", &endpoint(port), "--zenoh-listen", "tcp/127.0.0.1:0", "--connect-timeout", "30"])
+        .args(["--set", "timeout=60", "--set", "altitude=2.5", "--set", "velocity=0.5", "-q", "--trace"])
+        .arg(&tp)
+        .current_dir(root())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let (status, err) = wait(child, LIMIT, "mcl run --zenoh");
+    assert_eq!(status.code(), Some(0), "{err}");
+    assert!(err.contains("mission `mission`: OK"), "{err}");
+    let tr = trace(&tp);
+    let sent: Vec<u64> = tr
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Action { seq, .. } => Some(*seq),
+            _ => None,
+        })
+        .collect();
+    assert!(sent.len() > 4, "{err}");
+    assert!(
+        !tr.iter().any(
+            |r| matches!(&r.kind, RecordKind::Action { primitive, .. } if primitive == "EmergencySurfacePrimitive")
+        ),
+        "the alarm never fires\n{err}"
+    );
+    assert_eq!(*vehicle.executed.lock().unwrap(), sent, "{err}");
+    drop(vehicle);
+    rt.shutdown_timeout(Duration::from_secs(2));
 }

@@ -3,7 +3,8 @@
 //! The text imports `vehicle.mcl` (copy `examples/vehicle.mcl` beside it).
 //! With `--analyze FILE` instead, analyzes FILE (an .mcl file) and prints
 //! the verdict, the sizes and the time (`--full`: without the reduction;
-//! `--no-walks`: no random walks first).
+//! `--no-walks`: no random walks first; `--no-structural`: no proof by the
+//! state equation first).
 
 use mcl_coord::gen::{fleet, FleetSpec};
 
@@ -11,7 +12,7 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().is_some_and(|a| a == "--analyze") {
         let has = |f: &str| args.iter().any(|a| a == f);
-        analyze(args.get(1).map_or("", String::as_str), has("--full"), has("--no-walks"));
+        analyze(args.get(1).map_or("", String::as_str), has("--full"), has("--no-walks"), has("--no-structural"));
         return;
     }
     let num = |i: usize, default: u64| args.get(i).and_then(|a| a.parse::<u64>().ok()).unwrap_or(default);
@@ -23,7 +24,7 @@ fn main() {
     print!("{}", fleet(&spec).text);
 }
 
-fn analyze(path: &str, full: bool, no_walks: bool) {
+fn analyze(path: &str, full: bool, no_walks: bool, no_structural: bool) {
     use mcl_compiler::{Database, Db};
     let db = Database::new();
     let (ms, cs) = match mcl_coord::source::load(&db, db.file(std::path::Path::new(path))) {
@@ -36,17 +37,21 @@ fn analyze(path: &str, full: bool, no_walks: bool) {
     let mut opts = mcl_coord::check::options();
     opts.verify.reduction = !full;
     opts.verify.reduction_threshold = 0;
+    if no_structural {
+        opts.verify.structural_threshold = u64::MAX;
+    }
     if no_walks {
         opts.verify.hunt_threshold = u64::MAX;
     }
     let t = std::time::Instant::now();
     match mcl_coord::analyze_with(&ms, &cs, &opts) {
         Ok(r) => println!(
-            "{:?} in {:.2} s: classes {:?}, {} product states",
+            "{:?} in {:.2} s: classes {:?}, {} product states, {} groups proven by the state equation",
             r.verdict,
             t.elapsed().as_secs_f64(),
             r.stats.vehicle_classes,
-            r.stats.product_states
+            r.stats.product_states,
+            r.stats.structural_proofs
         ),
         Err(e) => eprintln!("error: {e}"),
     }

@@ -1,17 +1,25 @@
 //! How many coordination messages a run sends, and how many bytes each
 //! takes (`mcl compile --link-report`, the language server's hover on a
-//! constraint; `docs/acoustic.md`).
+//! constraint; `docs/acoustic.md` §2 says what the bounds mean).
 //!
 //! The messages are those of the vehicle nets ([`crate::decentralize`]):
 //! each entry of a net's `coord.send` is one message per firing of its
-//! transition. The most firings of a transition in a run come from the
-//! state space of its mission alone (every event and timer free to fire,
-//! so an upper bound): the longest path counted in firings of it, or
-//! *unbounded* when it lies on a cycle (a loop). The messages of the
-//! single-holder mutex protocol (request, grant, unused return) are at
-//! most one each per arrival of a borrowing call (its starts and
-//! withdrawals). A message belongs to the constraints whose supervisor
-//! copies its receive transitions touch.
+//! transition. Every run of a vehicle is a path of its *vehicle graph*
+//! (the markings of its mission under the per-vehicle firing rule, every
+//! start a supervisor controls free to be held or to fire: step 1 of the
+//! verification, `verify/lts.rs`, which over-approximates and never
+//! under-approximates what the vehicle does, whatever the others send). The
+//! most messages of a kind a run sends is the longest path of that graph
+//! counted in those messages: a proven upper bound; *unbounded* when a
+//! cycle of the graph (a loop) sends some, with a bound per iteration of
+//! the loop (the most sent on a path of the loop's markings between two
+//! returns to a loop head).
+//!
+//! The single-holder mutex protocol's messages (request, grant, unused
+//! return) are counted per *readiness episode* of a borrowing start (it
+//! becomes enabled in its mission's net): each episode asks for at most the
+//! start's weight in tokens, each request is granted once, and a token is
+//! returned at most once per grant.
 //!
 //! Every message takes [`Codebook::frame_bytes`] in the compact encoding
 //! ([`mcl_net::wire`]); its JSON size is that of the TCP link's body with
@@ -20,15 +28,15 @@
 use std::collections::{BTreeMap, HashMap};
 
 use mcl_compiler::codes;
-use mcl_net::explore::{explore, Options, Semantics, StateId};
 use mcl_net::wire::{Body, Codebook, DEFAULT_SEQ_BITS};
-use mcl_net::TransitionKind;
+use mcl_net::TransitionId;
 use mcl_syntax::{Diagnostic, Span};
 use serde::Serialize;
 
 use crate::analysis::{AnalyzeOptions, Verdict};
 use crate::decentral::VehicleNet;
 use crate::model::{Constraint, Mission};
+use crate::verify::VehicleGraph;
 use mcl_compiler::{Db, SourceFile};
 
 /// States of a mission's state space explored at most for the counts.
@@ -47,6 +55,10 @@ pub enum Count {
     Unbounded {
         /// Why.
         reason: String,
+        /// At most this many per iteration of a loop: between two returns
+        /// of the sender's mission to a loop head (summed over the
+        /// senders); none when not known.
+        per_iteration: Option<u64>,
     },
     /// Not known (the mission's state space is too large, or the message
     /// is not one this report knows how to count).
@@ -60,17 +72,39 @@ impl Count {
     fn add(&self, other: &Count, times: u64) -> Count {
         match (self, other) {
             (Count::Bounded { max: a }, Count::Bounded { max: b }) => Count::Bounded { max: a + b * times },
-            (Count::Unbounded { .. } | Count::Unknown { .. }, _) => self.clone(),
-            (_, o) => o.clone(),
+            (Count::Unknown { .. }, _) => self.clone(),
+            (_, Count::Unknown { .. }) => other.clone(),
+            (Count::Unbounded { reason, per_iteration: a }, Count::Unbounded { per_iteration: b, .. }) => {
+                let per_iteration = a.zip(*b).map(|(a, b)| a + b * times);
+                Count::Unbounded { reason: reason.clone(), per_iteration }
+            }
+            (Count::Unbounded { reason, per_iteration }, Count::Bounded { .. }) => {
+                Count::Unbounded { reason: reason.clone(), per_iteration: *per_iteration }
+            }
+            (Count::Bounded { .. }, Count::Unbounded { reason, per_iteration }) => {
+                Count::Unbounded { reason: reason.clone(), per_iteration: per_iteration.map(|p| p * times) }
+            }
         }
     }
 
-    /// `3`, `unbounded (reason)`, `unknown (reason)`.
+    /// `3`, `unbounded, at most 2 per iteration (reason)`, `unknown (reason)`.
     pub fn describe(&self) -> String {
         match self {
             Count::Bounded { max } => max.to_string(),
-            Count::Unbounded { reason } => format!("unbounded ({reason})"),
+            Count::Unbounded { reason, per_iteration: Some(n) } => {
+                format!("unbounded, at most {n} per iteration ({reason})")
+            }
+            Count::Unbounded { reason, per_iteration: None } => format!("unbounded ({reason})"),
             Count::Unknown { reason } => format!("unknown ({reason})"),
+        }
+    }
+
+    /// A count of bytes for the text report: `140`, `4 per iteration`, `-`.
+    fn bytes(&self) -> String {
+        match self {
+            Count::Bounded { max } => max.to_string(),
+            Count::Unbounded { per_iteration: Some(p), .. } => format!("{p} per iteration"),
+            _ => "-".into(),
         }
     }
 
@@ -152,92 +186,165 @@ pub struct LinkReport {
     pub messages: Vec<MessageLink>,
 }
 
-/// The most firings of each of `ids` in a run of `mission`'s net, its
-/// supervised transitions `held` free to wait (each fires as an event, in
-/// a tangible marking, or never).
-fn max_firings(mission: &Mission, held: &[String], ids: &[String]) -> HashMap<String, Count> {
-    let mut b = mission.net.to_builder();
-    for id in held {
-        if let Some(t) = mission.net.transition_by_id(id).and_then(|t| b.transition_mut(t)) {
-            t.kind = TransitionKind::Event(format!("coord.held/{id}"));
-        }
+/// The runs of one vehicle: its vehicle graph and its strongly connected
+/// components (see the [module documentation](self)).
+struct Runs<'a> {
+    mission: &'a Mission,
+    g: VehicleGraph,
+    /// The component of each marking.
+    comp: Vec<u32>,
+    /// The components, sinks first.
+    order: Vec<Vec<u32>>,
+}
+
+/// The longest path of a vehicle graph in some weight.
+enum Longest {
+    Bounded(u64),
+    /// A cycle has weight: `t` is a transition on one; at most
+    /// `per_iteration` between two returns to a loop head.
+    Unbounded {
+        t: u32,
+        per_iteration: u64,
+    },
+}
+
+impl<'a> Runs<'a> {
+    /// The graph of `mission`, the transitions `held` free to wait.
+    fn new(mission: &'a Mission, held: &[String]) -> Result<Runs<'a>, String> {
+        let gated: Vec<bool> =
+            mission.net.transitions().iter().map(|t| held.iter().any(|h| h.as_str() == t.id.as_str())).collect();
+        let g = crate::verify::vehicle_graph(mission, &gated, MAX_STATES)?;
+        let n = g.moves.len();
+        let mut comp = vec![u32::MAX; n];
+        let mut order: Vec<Vec<u32>> = Vec::new();
+        mcl_net::graph::tarjan(
+            n,
+            |s, out| out.extend(g.moves[s as usize].iter().map(|&(_, v)| v)),
+            |c| {
+                for &s in c {
+                    comp[s as usize] = order.len() as u32;
+                }
+                order.push(c.to_vec());
+            },
+        );
+        Ok(Runs { mission, g, comp, order })
     }
-    let net = match b.build() {
-        Ok(n) => n,
-        Err(e) => {
-            let reason = format!("mission `{}`: {e}", mission.name);
-            return ids.iter().map(|id| (id.clone(), Count::Unknown { reason: reason.clone() })).collect();
-        }
-    };
-    let labelled = mission;
-    let (net, mission) = (&net, mission.name.as_str());
-    let opts = Options { semantics: Semantics::Mcl, max_states: MAX_STATES, record_edges: true, ..Options::default() };
-    let ss = explore(net, &opts);
-    if !ss.complete() {
-        let reason = format!("mission `{mission}` has more than {MAX_STATES} states");
-        return ids.iter().map(|id| (id.clone(), Count::Unknown { reason: reason.clone() })).collect();
-    }
-    let n = ss.len();
-    let mut comp = vec![u32::MAX; n];
-    let mut order: Vec<Vec<u32>> = Vec::new();
-    mcl_net::graph::tarjan(
-        n,
-        |s, out| out.extend(ss.successors(StateId(s)).iter().map(|(_, v)| v.0)),
-        |c| {
-            for &s in c {
-                comp[s as usize] = order.len() as u32;
-            }
-            order.push(c.to_vec());
-        },
-    );
-    let mut out = HashMap::new();
-    for id in ids {
-        let Some(t) = net.transition_by_id(id) else {
-            out.insert(id.clone(), Count::Unknown { reason: format!("`{id}` is not a transition of `{mission}`") });
-            continue;
-        };
+
+    /// The longest path from the initial marking in `w(from, t, to)`.
+    fn longest(&self, w: &dyn Fn(u32, u32, u32) -> u64) -> Longest {
+        let mut val: Vec<Option<u64>> = vec![Some(0); self.order.len()];
+        let mut on_cycle = None;
         // Components come sinks first: each one's successors are done.
-        let mut val: Vec<Option<u64>> = vec![Some(0); order.len()];
-        for (c, states) in order.iter().enumerate() {
+        for (c, states) in self.order.iter().enumerate() {
             let mut best = Some(0u64);
             for &u in states {
-                for &(tr, v) in ss.successors(StateId(u)) {
-                    let w = u64::from(tr == t);
-                    let cv = comp[v.0 as usize] as usize;
+                for &(t, v) in &self.g.moves[u as usize] {
+                    let wt = w(u, t, v);
+                    let cv = self.comp[v as usize] as usize;
                     let through = if cv == c {
-                        if w > 0 {
+                        if wt > 0 {
+                            on_cycle.get_or_insert(t);
                             None
                         } else {
                             Some(0)
                         }
                     } else {
-                        val[cv].map(|x| x + w)
+                        val[cv].map(|x| x + wt)
                     };
-                    best = match (best, through) {
-                        (Some(a), Some(b)) => Some(a.max(b)),
-                        _ => None,
-                    };
+                    best = best.zip(through).map(|(a, b)| a.max(b));
                 }
             }
             val[c] = best;
         }
-        let count = match val[comp[0] as usize] {
-            Some(max) => Count::Bounded { max },
-            None => {
-                // The labelled call it belongs to, when it is one's.
-                let call = labelled
+        match (val[self.comp[0] as usize], on_cycle) {
+            (Some(max), _) => Longest::Bounded(max),
+            (None, t) => Longest::Unbounded { t: t.unwrap_or(0), per_iteration: self.per_iteration(w) },
+        }
+    }
+
+    /// The most weight on a path inside one loop (a cyclic component)
+    /// between two returns to a loop head: a depth-first search of the
+    /// component from its first marking splits its moves into back moves
+    /// (to a marking on the search's stack: the loop heads) and the others,
+    /// which form an acyclic graph; an iteration is a path of those,
+    /// possibly ended by one back move.
+    fn per_iteration(&self, w: &dyn Fn(u32, u32, u32) -> u64) -> u64 {
+        let mut best = 0u64;
+        let mut state = vec![0u8; self.g.moves.len()]; // 0 unseen, 1 on the stack, 2 done
+        let mut dp = vec![0u64; self.g.moves.len()];
+        for (c, states) in self.order.iter().enumerate() {
+            let inside = |v: u32| self.comp[v as usize] as usize == c;
+            let cyclic = states.len() > 1 || self.g.moves[states[0] as usize].iter().any(|&(_, v)| v == states[0]);
+            if !cyclic {
+                continue;
+            }
+            let root = states.iter().copied().min().unwrap_or(0);
+            // (marking, next move) frames.
+            let mut stack: Vec<(u32, usize)> = vec![(root, 0)];
+            state[root as usize] = 1;
+            while let Some(&mut (u, ref mut i)) = stack.last_mut() {
+                let moves = &self.g.moves[u as usize];
+                if let Some(&(_, v)) = moves.get(*i) {
+                    *i += 1;
+                    if inside(v) && state[v as usize] == 0 {
+                        state[v as usize] = 1;
+                        stack.push((v, 0));
+                    }
+                    continue;
+                }
+                // Every successor inside is done or on the stack (a back move).
+                let mut d = 0u64;
+                for &(t, v) in moves.iter().filter(|&&(_, v)| inside(v)) {
+                    let wt = w(u, t, v);
+                    d = d.max(if state[v as usize] == 1 { wt } else { wt + dp[v as usize] });
+                }
+                dp[u as usize] = d;
+                best = best.max(d);
+                state[u as usize] = 2;
+                stack.pop();
+            }
+        }
+        best
+    }
+
+    /// A count from a longest path; `what` names the messages.
+    fn count(&self, l: Longest, extra: u64) -> Count {
+        match l {
+            Longest::Bounded(max) => Count::Bounded { max: max + extra },
+            Longest::Unbounded { t, per_iteration } => {
+                let id = self.mission.net.transitions().get(t as usize).map_or("?", |t| t.id.as_str());
+                let tid = TransitionId(t);
+                let call = self
+                    .mission
                     .activities
                     .iter()
-                    .find(|a| [&a.arrived, &a.withdrawn, &a.started, &a.ended].iter().any(|ts| ts.contains(&t)));
-                let of = call.map_or(String::new(), |a| format!(" (call `{mission}:{}`)", a.label));
+                    .find(|a| [&a.arrived, &a.withdrawn, &a.started, &a.ended].iter().any(|ts| ts.contains(&tid)));
+                let of = call.map_or(String::new(), |a| format!(" (call `{}:{}`)", self.mission.name, a.label));
                 Count::Unbounded {
-                    reason: format!("`{id}`{of} of `{mission}` is in a loop: it can fire again after it fired"),
+                    reason: format!(
+                        "`{id}`{of} of `{}` is in a loop: it can fire again after it fired",
+                        self.mission.name
+                    ),
+                    per_iteration: Some(per_iteration),
                 }
             }
-        };
-        out.insert(id.clone(), count);
+        }
     }
-    out
+
+    /// Local index of transition `id`.
+    fn index(&self, id: &str) -> Option<u32> {
+        self.mission.net.transition_by_id(id).map(|t| t.0)
+    }
+
+    /// The most readiness episodes of the starts `starts` (index, weight),
+    /// weighted: how many tokens the calls ask for in a run, at most.
+    fn asked(&self, starts: &[(u32, u64)]) -> Count {
+        let waits = |s: u32, t: u32| self.g.waiting[s as usize].contains(&t);
+        let first: u64 = starts.iter().filter(|&&(t, _)| waits(0, t)).map(|&(_, w)| w).sum();
+        let l = self
+            .longest(&|u, _, v| starts.iter().filter(|&&(t, _)| waits(v, t) && !waits(u, t)).map(|&(_, w)| w).sum());
+        self.count(l, first)
+    }
 }
 
 /// The constraint number of a supervisor place id (`coord.mutex2.lent.b`
@@ -263,61 +370,66 @@ pub fn link_report(missions: &[Mission], constraints: &[Constraint], vehicles: &
         .iter()
         .map(|v| (v.mission.as_str(), mcl_net::coord_props::CoordProps::read(&v.net).unwrap_or_default()))
         .collect();
-    // The most firings of every own transition counted.
-    let mut firings: HashMap<&str, HashMap<String, Count>> = HashMap::new();
+    // Every vehicle's runs.
+    let mut runs: HashMap<&str, Result<Runs<'_>, String>> = HashMap::new();
     for v in vehicles {
         let Some(m) = missions.iter().find(|m| m.name == v.mission) else { continue };
-        let mut ids: Vec<String> = v.send.iter().map(|(t, _)| t.clone()).collect();
-        for b in &props[v.mission.as_str()].tokens {
-            for s in &b.starts {
-                ids.push(s.transition.clone());
-                if let Some(call) = s.transition.strip_suffix(".start") {
-                    if m.net.transition_by_id(&format!("{call}.cancel")).is_some() {
-                        ids.push(format!("{call}.cancel"));
-                    }
-                }
-            }
-        }
-        ids.sort();
-        ids.dedup();
-        ids.retain(|id| m.net.transition_by_id(id).is_some());
-        // Its starts that a supervisor copy may hold.
+        // Its transitions that a supervisor copy may hold.
         let held: Vec<String> = v
             .net
             .transition_ids()
             .filter(|&t| v.net.pre(t).iter().any(|&(p, _)| v.net.place(p).is_some_and(|p| p.id.starts_with("coord."))))
             .map(|t| v.net.transitions()[t.index()].id.to_string())
             .collect();
-        firings.insert(v.mission.as_str(), max_firings(m, &held, &ids));
+        runs.insert(v.mission.as_str(), Runs::new(m, &held));
     }
-    // Arrivals of `borrower`'s calls under mutex `supervisor`.
-    let arrivals = |borrower: &str, supervisor: &str| -> Count {
+    let runs_of = |mission: &str| -> Result<&Runs<'_>, Count> {
+        match runs.get(mission) {
+            Some(Ok(r)) => Ok(r),
+            Some(Err(e)) => Err(Count::Unknown { reason: e.clone() }),
+            None => Err(Count::Unknown { reason: format!("`{mission}` is not a mission of the file") }),
+        }
+    };
+    // The most firings of `t` in a run of `mission`.
+    let firings = |mission: &str, t: &str| -> Count {
+        let r = match runs_of(mission) {
+            Ok(r) => r,
+            Err(c) => return c,
+        };
+        match r.index(t) {
+            Some(i) => r.count(r.longest(&|_, x, _| u64::from(x == i)), 0),
+            None => Count::Unknown { reason: format!("`{t}` is not a transition of `{mission}`") },
+        }
+    };
+    // The most tokens of mutex `supervisor` that `borrower`'s calls ask for.
+    let asked = |borrower: &str, supervisor: &str| -> Count {
         let Some(b) = props.get(borrower).and_then(|p| p.tokens.iter().find(|b| b.supervisor == supervisor)) else {
             return Count::Unknown { reason: format!("`{borrower}` borrows no `{supervisor}`") };
         };
-        let counts = &firings[borrower];
-        let mut total = Count::Bounded { max: 0 };
+        let r = match runs_of(borrower) {
+            Ok(r) => r,
+            Err(c) => return c,
+        };
+        let mut starts = Vec::new();
         for s in &b.starts {
-            let call = s.transition.strip_suffix(".start").unwrap_or(&s.transition);
-            for id in [s.transition.clone(), format!("{call}.cancel")] {
-                if let Some(c) = counts.get(&id) {
-                    total = total.add(c, 1);
+            match r.index(&s.transition) {
+                Some(i) => starts.push((i, u64::from(s.weight))),
+                None => {
+                    return Count::Unknown { reason: format!("`{}` is not a transition of `{borrower}`", s.transition) }
                 }
             }
         }
-        total
+        r.asked(&starts)
     };
     let mut messages = Vec::new();
     for v in vehicles {
         for (t, to) in &v.send {
             let body = book.body_of(t);
             let count = match &body {
-                Body::Request(s) | Body::Return(s) => arrivals(&v.mission, s),
+                Body::Request(s) | Body::Return(s) => asked(&v.mission, s),
                 _ => match t.strip_prefix("coord.lend.").and_then(|r| r.rsplit_once('.')) {
-                    Some((mutex, borrower)) => arrivals(borrower, &format!("coord.{mutex}")),
-                    None => firings.get(v.mission.as_str()).and_then(|f| f.get(t)).cloned().unwrap_or_else(|| {
-                        Count::Unknown { reason: format!("`{t}` is not a transition of a mission") }
-                    }),
+                    Some((mutex, borrower)) => asked(borrower, &format!("coord.{mutex}")),
+                    None => firings(&v.mission, t),
                 },
             };
             let mut served: Vec<usize> = Vec::new();
@@ -374,10 +486,36 @@ pub fn link_report(missions: &[Mission], constraints: &[Constraint], vehicles: &
             ConstraintLink { number: i + 1, text: c.to_string(), span: c.span, messages, compact_bytes, json_bytes }
         })
         .collect();
+    // A mission's firing messages along one path of its graph (tighter
+    // than the sum of each one's most), plus its token messages.
+    let mission_total = |v: &VehicleNet| -> (Count, Count, Count) {
+        let is_firing =
+            |m: &&MessageLink| m.from == v.mission && m.kind == "firing" && !m.transition.starts_with("coord.lend.");
+        let r = match runs_of(&v.mission) {
+            Ok(r) => r,
+            Err(c) => return (c.clone(), c.clone(), c),
+        };
+        // Per transition: (messages, their JSON bytes).
+        let mut per_t: HashMap<u32, (u64, u64)> = HashMap::new();
+        for m in messages.iter().filter(is_firing) {
+            let Some(i) = r.index(&m.transition) else {
+                let c = Count::Unknown { reason: format!("`{}` is not a transition of `{}`", m.transition, v.mission) };
+                return (c.clone(), c.clone(), c);
+            };
+            let e = per_t.entry(i).or_default();
+            e.0 += 1;
+            e.1 += m.json_bytes;
+        }
+        let own = r.count(r.longest(&|_, t, _| per_t.get(&t).map_or(0, |e| e.0)), 0);
+        let own_json = r.count(r.longest(&|_, t, _| per_t.get(&t).map_or(0, |e| e.1)), 0);
+        let (n, c, j) = totals(&mut messages.iter().filter(|m| m.from == v.mission && !is_firing(m)));
+        let own_compact = Count::Bounded { max: 0 }.add(&own, frame);
+        (own.add(&n, 1), own_compact.add(&c, 1), own_json.add(&j, 1))
+    };
     let missions = vehicles
         .iter()
         .map(|v| {
-            let (messages, compact_bytes, json_bytes) = totals(&mut messages.iter().filter(|m| m.from == v.mission));
+            let (messages, compact_bytes, json_bytes) = mission_total(v);
             MissionLink { mission: v.mission.clone(), messages, compact_bytes, json_bytes }
         })
         .collect();
@@ -413,16 +551,18 @@ impl LinkReport {
     /// Markdown for the hover on constraint `number` (from 1).
     pub fn hover_text(&self, number: usize) -> Option<String> {
         let c = self.constraints.iter().find(|c| c.number == number)?;
-        let bytes = |b: &Count| b.max().map_or("-".to_string(), |b| b.to_string());
+        let how_many = match &c.messages {
+            Count::Bounded { max } => format!("at most {max}"),
+            Count::Unbounded { per_iteration: Some(n), reason } => {
+                format!("any number of (at most {n} per iteration of a loop: {reason})")
+            }
+            other => other.describe(),
+        };
         Some(format!(
-            "**Link**: a run sends {} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message.",
-            match &c.messages {
-                Count::Bounded { max } => format!("at most {max}"),
-                other => other.describe(),
-            },
+            "**Link**: a run sends {how_many} coordination messages for it, {} bytes each in the compact encoding ({} bytes in all; {} as JSON). `mcl compile --link-report` details every message and what its bound means.",
             self.frame_bytes,
-            bytes(&c.compact_bytes),
-            bytes(&c.json_bytes),
+            c.compact_bytes.bytes(),
+            c.json_bytes.bytes(),
         ))
     }
 
@@ -469,8 +609,8 @@ impl LinkReport {
                 c.number,
                 c.text,
                 c.messages.describe(),
-                c.compact_bytes.max().map_or("-".into(), |b| b.to_string()),
-                c.json_bytes.max().map_or("-".into(), |b| b.to_string()),
+                c.compact_bytes.bytes(),
+                c.json_bytes.bytes(),
             ));
         }
         s.push_str("\nper mission (the most messages it sends; their bytes compact / JSON):\n");
@@ -479,8 +619,8 @@ impl LinkReport {
                 "  {}: messages {}, bytes {} / {}\n",
                 m.mission,
                 m.messages.describe(),
-                m.compact_bytes.max().map_or("-".into(), |b| b.to_string()),
-                m.json_bytes.max().map_or("-".into(), |b| b.to_string()),
+                m.compact_bytes.bytes(),
+                m.json_bytes.bytes(),
             ));
         }
         s.push_str("\nmessages (from -> to: transition, kind, constraints, at most, bytes compact / JSON):\n");
@@ -524,9 +664,50 @@ mod tests {
     fn counts_add_up_and_describe_themselves() {
         let b = |max| Count::Bounded { max };
         assert_eq!(b(2).add(&b(3), 2), b(8));
-        let u = Count::Unbounded { reason: "loop".into() };
-        assert_eq!(b(2).add(&u, 1), u);
-        assert_eq!(u.describe(), "unbounded (loop)");
+        let u = |n| Count::Unbounded { reason: "loop".into(), per_iteration: Some(n) };
+        assert_eq!(b(2).add(&u(1), 1), u(1));
+        assert_eq!(u(1).add(&u(2), 3), u(7));
+        assert_eq!(u(2).describe(), "unbounded, at most 2 per iteration (loop)");
         assert_eq!(b(4).max(), Some(4));
+        assert_eq!(u(1).max(), None);
+    }
+
+    /// `p` —a→ `q` —b→ `p` (a loop), `p` —c→ `r` (the end).
+    fn looping() -> Mission {
+        use mcl_net::{NetBuilder, Place, Transition, TransitionKind};
+        let mut bld = NetBuilder::new("m");
+        let p = bld.add_place(Place::new("p").with_tokens(1));
+        let q = bld.add_place(Place::new("q"));
+        let r = bld.add_place(Place::new("r"));
+        let ev = |id: &str| Transition::new(id).with_kind(TransitionKind::Event(id.into()));
+        let (a, b, c) = (bld.add_transition(ev("a")), bld.add_transition(ev("b")), bld.add_transition(ev("c")));
+        bld.add_input(p, a, 1).add_output(a, q, 1).add_input(q, b, 1).add_output(b, p, 1);
+        bld.add_input(p, c, 1).add_output(c, r, 1);
+        let net = bld.build().unwrap();
+        Mission {
+            name: "m".into(),
+            controllable: vec![true; net.transition_count()],
+            net,
+            initial_places: vec![p],
+            final_places: vec![r],
+            activities: Vec::new(),
+            off_nominal: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_loop_is_unbounded_with_a_bound_per_iteration() {
+        let m = looping();
+        let runs = Runs::new(&m, &[]).unwrap();
+        let (a, c) = (runs.index("a").unwrap(), runs.index("c").unwrap());
+        let count = |t: u32| runs.count(runs.longest(&|_, x, _| u64::from(x == t)), 0);
+        assert_eq!(count(c), Count::Bounded { max: 1 });
+        let Count::Unbounded { reason, per_iteration } = count(a) else { panic!("a loops") };
+        assert_eq!(per_iteration, Some(1));
+        assert!(reason.contains("`a`"), "{reason}");
+        // Both a and b: two per iteration.
+        let b = runs.index("b").unwrap();
+        let both = runs.count(runs.longest(&|_, x, _| u64::from(x == a || x == b)), 0);
+        assert!(matches!(both, Count::Unbounded { per_iteration: Some(2), .. }), "{both:?}");
     }
 }

@@ -53,6 +53,12 @@ struct Shared {
     /// The last coordination verdict of each file (see
     /// [`analysis::coordination`]), written by the analysis thread.
     verdicts: std::sync::Mutex<HashMap<PathBuf, Verdict>>,
+    /// The ROS 2 bridge file the client named, if any ([`analysis::bridge`]).
+    bridge: std::sync::Mutex<Option<PathBuf>>,
+    /// The first workspace folder: where a relative bridge path starts.
+    root: std::sync::Mutex<Option<PathBuf>>,
+    /// The URIs that show bridge diagnostics now.
+    bridge_shown: std::sync::Mutex<HashSet<String>>,
 }
 
 /// Where a file's coordination verdict stands on a snapshot.
@@ -124,6 +130,11 @@ pub struct Backend {
     client: Client,
     shared: Arc<Shared>,
     applied: watch::Receiver<u64>,
+}
+
+/// A lock that survives a panic in another holder.
+fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 fn content_modified() -> Error {
@@ -220,6 +231,10 @@ impl LanguageServer for Backend {
             }
         }
         roots.retain(|r| r.is_dir());
+        *lock(&self.shared.root) = roots.first().cloned();
+        if let Some(opts) = &params.initialization_options {
+            *lock(&self.shared.bridge) = analysis::bridge::configured(opts, roots.first().map(PathBuf::as_path));
+        }
         if !roots.is_empty() {
             // Off the edit path: a large folder must not delay the first edits.
             let shared = self.shared.clone();
@@ -289,7 +304,7 @@ impl LanguageServer for Backend {
 
     async fn initialized(&self, _: InitializedParams) {
         if self.shared.caps.watch_registration.load(Ordering::SeqCst) {
-            let watchers = ["**/*.mcl", "**/*.xml", "**/*.pnml"]
+            let watchers = ["**/*.mcl", "**/*.xml", "**/*.pnml", "**/*.toml", "**/*.msg", "**/*.srv", "**/*.action"]
                 .iter()
                 .map(|g| FileSystemWatcher { glob_pattern: GlobPattern::String(g.to_string()), kind: None })
                 .collect();
@@ -313,6 +328,22 @@ impl LanguageServer for Backend {
     async fn did_change(&self, _: DidChangeTextDocumentParams) {}
     async fn did_close(&self, _: DidCloseTextDocumentParams) {}
     async fn did_change_watched_files(&self, _: DidChangeWatchedFilesParams) {}
+
+    async fn did_change_configuration(&self, p: DidChangeConfigurationParams) {
+        // `{"mcl": {"ros2Bridge": PATH}}`: the bridge file to check, or none.
+        let root = lock(&self.shared.root).clone();
+        let bridge = analysis::bridge::configured(&p.settings, root.as_deref());
+        let changed = {
+            let mut b = lock(&self.shared.bridge);
+            let changed = *b != bridge;
+            *b = bridge;
+            changed
+        };
+        if changed {
+            // An empty batch of watched files: a diagnostics pass.
+            self.shared.enqueue(Edit::Watched { changes: Vec::new() });
+        }
+    }
 
     async fn hover(&self, p: HoverParams) -> Result<Option<Hover>> {
         self.analyse(move |a| {
@@ -645,6 +676,8 @@ fn diagnostics_pass(
                 refresh |= changed || !verdict.is_empty();
             }
         }
+        // The bridge file's errors, pushed on its own URI all the same.
+        bridge_pass(shared, &a, snap.generation, out);
         return Pass { refresh, shown: HashMap::new() };
     }
     let gen = snap.generation;
@@ -693,6 +726,9 @@ fn diagnostics_pass(
         }
         semantic.push((diags, carried.is_some()));
     }
+    // The bridge file's errors (it needs the vehicle: after the compiler's
+    // checks, before the slow coordination analyses).
+    bridge_pass(shared, &a, gen, out);
     for (&f, (mut diags, carried)) in affected.iter().zip(semantic) {
         let fingerprint = match shared.coord(&a, f) {
             Coord::Valid(_) => continue, // shown as carried (or empty)
@@ -716,6 +752,28 @@ fn diagnostics_pass(
         }
     }
     Pass { refresh: false, shown: now_shown }
+}
+
+/// Publishes the errors of the configured ROS 2 bridge file, and clears
+/// those of files that no longer have any to show.
+fn bridge_pass(shared: &Shared, a: &Analysis<'_>, generation: u64, out: &tmpsc::UnboundedSender<ToClient>) {
+    let bridge = lock(&shared.bridge).clone();
+    let found = bridge.map(|b| analysis::bridge::diagnostics(a, &b)).unwrap_or_default();
+    let mut now = HashSet::new();
+    for (path, diagnostics) in found {
+        let Some(uri) = a.world.uri_of(&path) else { continue };
+        now.insert(uri.as_str().to_string());
+        let version = a.world.version_of(&path);
+        let _ = out.send(ToClient::Publish(Publication { uri, version, generation, stage: 1, diagnostics }));
+    }
+    let mut shown = lock(&shared.bridge_shown);
+    for old in shown.difference(&now) {
+        if let Ok(uri) = old.parse::<Uri>() {
+            let p = Publication { uri, version: None, generation, stage: 1, diagnostics: vec![] };
+            let _ = out.send(ToClient::Publish(p));
+        }
+    }
+    *shown = now;
 }
 
 /// Sends publications in order, dropping any older than one already sent
@@ -775,6 +833,9 @@ pub fn service() -> (Ordered, tower_lsp_server::ClientSocket) {
         shut_down: AtomicBool::new(false),
         exit: tokio::sync::Notify::new(),
         verdicts: Default::default(),
+        bridge: Default::default(),
+        root: Default::default(),
+        bridge_shown: Default::default(),
     });
     let (applied_tx, applied_rx) = watch::channel(0u64);
     let (wake_tx, wake_rx) = mpsc::channel();

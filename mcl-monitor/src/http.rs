@@ -41,7 +41,12 @@ pub fn router(hub: Arc<Hub>) -> Router {
 }
 
 async fn info(State(hub): State<Arc<Hub>>) -> Json<serde_json::Value> {
-    Json(json!({ "mode": hub.mode(), "title": hub.title(), "operator": hub.has_operator() }))
+    Json(json!({
+        "mode": hub.mode(),
+        "title": hub.title(),
+        "operator": hub.has_operator(),
+        "vehicles": hub.vehicles(),
+    }))
 }
 
 async fn state(State(hub): State<Arc<Hub>>) -> Response {
@@ -123,12 +128,20 @@ fn bearer(h: &HeaderMap) -> Option<&str> {
     h.get(header::AUTHORIZATION)?.to_str().ok()?.strip_prefix("Bearer ").map(str::trim)
 }
 
+/// The vehicle an operator's request names (`"vehicle"`, next to the command).
+#[derive(Deserialize)]
+struct Vehicle {
+    #[serde(default)]
+    vehicle: Option<String>,
+}
+
 async fn operator(State(hub): State<Arc<Hub>>, headers: HeaderMap, body: String) -> Response {
-    let c: Command = match serde_json::from_str(&body) {
+    let parsed = serde_json::from_str::<Command>(&body).and_then(|c| Ok((c, serde_json::from_str::<Vehicle>(&body)?)));
+    let (c, to) = match parsed {
         Ok(c) => c,
         Err(e) => return error(StatusCode::BAD_REQUEST, &format!("not an operator command: {e}")),
     };
-    match hub.command(bearer(&headers), c) {
+    match hub.command(bearer(&headers), to.vehicle.as_deref(), c) {
         Ok(()) => (StatusCode::ACCEPTED, Json(json!({ "accepted": true }))).into_response(),
         Err(Refused::Off) => {
             error(StatusCode::FORBIDDEN, "operator control is off: start the run with --operator-token TOKEN")
@@ -139,6 +152,7 @@ async fn operator(State(hub): State<Arc<Hub>>, headers: HeaderMap, body: String)
             r
         }
         Err(Refused::Finished) => error(StatusCode::CONFLICT, "the run is over"),
+        Err(Refused::Vehicle(why)) => error(StatusCode::BAD_REQUEST, &why),
     }
 }
 

@@ -23,10 +23,10 @@ pub enum Mode {
 }
 
 /// What the operator may do: the token a request must carry, and where
-/// its commands go.
+/// its commands go (each vehicle of the run, by its mission's name).
 struct Operator {
     token: String,
-    commands: operator::Sender,
+    vehicles: Vec<(String, operator::Sender)>,
 }
 
 /// Why an operator's command was refused.
@@ -38,6 +38,9 @@ pub enum Refused {
     Token,
     /// The run is over.
     Finished,
+    /// The request names no vehicle of the run, or names none where it
+    /// must (an answer in a run of several vehicles): why.
+    Vehicle(String),
 }
 
 /// Records, the state they make, and who waits for new ones.
@@ -94,10 +97,17 @@ impl Hub {
         }
     }
 
-    /// Takes operator commands that carry `token`, and sends them to `commands`.
-    pub fn with_operator(mut self, token: String, commands: operator::Sender) -> Self {
-        self.operator = Some(Operator { token, commands });
+    /// Takes operator commands that carry `token`, and sends each to the
+    /// vehicle it names among `vehicles` (by mission name, each with the
+    /// sending end of its commands).
+    pub fn with_operator(mut self, token: String, vehicles: Vec<(String, operator::Sender)>) -> Self {
+        self.operator = Some(Operator { token, vehicles });
         self
+    }
+
+    /// The vehicles that take operator commands (none without a token).
+    pub fn vehicles(&self) -> Vec<String> {
+        self.operator.iter().flat_map(|o| o.vehicles.iter().map(|(n, _)| n.clone())).collect()
     }
 
     fn inner(&self) -> MutexGuard<'_, Inner> {
@@ -208,8 +218,11 @@ impl Hub {
         text
     }
 
-    /// Passes an operator's command to the run when `token` is the run's.
-    pub fn command(&self, token: Option<&str>, c: Command) -> Result<(), Refused> {
+    /// Passes an operator's command to the run when `token` is the run's:
+    /// to `vehicle`, or, when it names none, to the only vehicle, or to
+    /// every vehicle (but an answer, which is for one primitive of one
+    /// vehicle).
+    pub fn command(&self, token: Option<&str>, vehicle: Option<&str>, c: Command) -> Result<(), Refused> {
         let op = self.operator.as_ref().ok_or(Refused::Off)?;
         if !token.is_some_and(|t| same(t.as_bytes(), op.token.as_bytes())) {
             return Err(Refused::Token);
@@ -217,7 +230,26 @@ impl Hub {
         if self.inner().finished {
             return Err(Refused::Finished);
         }
-        op.commands.send(c).map_err(|_| Refused::Finished)
+        let names = || op.vehicles.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ");
+        let to: Vec<&operator::Sender> = match vehicle {
+            Some(v) => match op.vehicles.iter().find(|(n, _)| n == v) {
+                Some((_, tx)) => vec![tx],
+                None => return Err(Refused::Vehicle(format!("no vehicle `{v}` in this run (vehicles: {})", names()))),
+            },
+            None if op.vehicles.len() > 1 && matches!(c, Command::Answer { .. }) => {
+                return Err(Refused::Vehicle(format!(
+                    "an answer is for one vehicle: name it with \"vehicle\" (vehicles: {})",
+                    names()
+                )))
+            }
+            None => op.vehicles.iter().map(|(_, tx)| tx).collect(),
+        };
+        // A vehicle's side is gone once its run is over.
+        let sent = to.iter().filter(|tx| tx.send(c.clone()).is_ok()).count();
+        if sent == 0 {
+            return Err(Refused::Finished);
+        }
+        Ok(())
     }
 }
 
@@ -237,15 +269,33 @@ mod tests {
     #[test]
     fn commands_need_the_token_and_a_running_run() {
         let (tx, mut rx) = operator::channel();
-        let hub = Hub::new(Mode::Live, "t".into()).with_operator("s3cret".into(), tx);
-        assert_eq!(hub.command(None, Command::Pause), Err(Refused::Token));
-        assert_eq!(hub.command(Some("s3creT"), Command::Pause), Err(Refused::Token));
-        assert_eq!(hub.command(Some("s3cret"), Command::Pause), Ok(()));
+        let hub = Hub::new(Mode::Live, "t".into()).with_operator("s3cret".into(), vec![("m".into(), tx)]);
+        assert_eq!(hub.command(None, None, Command::Pause), Err(Refused::Token));
+        assert_eq!(hub.command(Some("s3creT"), None, Command::Pause), Err(Refused::Token));
+        assert_eq!(hub.command(Some("s3cret"), None, Command::Pause), Ok(()));
         assert_eq!(rx.try_recv().unwrap(), Command::Pause);
         hub.finish();
-        assert_eq!(hub.command(Some("s3cret"), Command::Abort), Err(Refused::Finished));
+        assert_eq!(hub.command(Some("s3cret"), None, Command::Abort), Err(Refused::Finished));
         let off = Hub::new(Mode::Replay, "t".into());
-        assert_eq!(off.command(Some("s3cret"), Command::Abort), Err(Refused::Off));
+        assert_eq!(off.command(Some("s3cret"), None, Command::Abort), Err(Refused::Off));
+    }
+
+    #[test]
+    fn commands_go_to_the_vehicle_named_or_to_every_vehicle() {
+        let (ta, mut ra) = operator::channel();
+        let (tb, mut rb) = operator::channel();
+        let hub = Hub::new(Mode::Live, "t".into()).with_operator("k".into(), vec![("a".into(), ta), ("b".into(), tb)]);
+        assert_eq!(hub.vehicles(), ["a", "b"]);
+        assert_eq!(hub.command(Some("k"), Some("b"), Command::Pause), Ok(()));
+        assert_eq!((ra.try_recv().ok(), rb.try_recv().ok()), (None, Some(Command::Pause)));
+        assert_eq!(hub.command(Some("k"), None, Command::Abort), Ok(()));
+        assert_eq!((ra.try_recv().ok(), rb.try_recv().ok()), (Some(Command::Abort), Some(Command::Abort)));
+        let answer = Command::Answer { event: "e".into() };
+        assert!(matches!(hub.command(Some("k"), None, answer.clone()), Err(Refused::Vehicle(_))));
+        assert!(matches!(hub.command(Some("k"), Some("c"), Command::Pause), Err(Refused::Vehicle(_))));
+        assert_eq!(hub.command(None, Some("c"), Command::Pause), Err(Refused::Token), "the token first");
+        assert_eq!(hub.command(Some("k"), Some("a"), answer.clone()), Ok(()));
+        assert_eq!(ra.try_recv().ok(), Some(answer));
     }
 
     #[test]

@@ -10,8 +10,8 @@
 //!   timeout`), and `stopped` at a `disable` sent while it runs (its block
 //!   aborted it);
 //! * a mission's outcome is its `outcome` record; a coordinated run's is
-//!   its `coord_summary`; the run is paused between an operator's `pause`
-//!   and `resume`.
+//!   its `coord_summary` (`aborted` when the operator aborted every
+//!   mission); the run is paused between an operator's `pause` and `resume`.
 
 use std::collections::BTreeMap;
 
@@ -201,7 +201,11 @@ impl State {
     pub fn json(&self) -> StateJson {
         let calls: Vec<CallState> =
             self.calls.values().flat_map(|m| m.values()).filter(|c| c.runs > 0).cloned().collect();
+        // A coordinated run whose every mission the operator aborted is
+        // `aborted` (its summary says `stuck`: the players had nothing left to fire).
+        let all_aborted = !self.outcomes.is_empty() && self.outcomes.values().all(|r| r == "aborted");
         let outcome = match (&self.summary, self.outcomes.len()) {
+            (Some(_), _) if all_aborted => Some("aborted".to_string()),
             (Some(s), _) => Some(s.clone()),
             (None, 1) if self.missions() <= 1 => self.outcomes.values().next().cloned(),
             _ => None,

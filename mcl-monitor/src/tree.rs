@@ -1,7 +1,7 @@
 //! The control-structure tree of a mission as plain data (`GET
 //! /api/tree`): the page draws it with the states of its calls, matched by
 //! mission and line. The binary builds it from the syntax tree
-//! (`src/cmd/monitor.rs`); this crate knows nothing of the language.
+//! (`src/cmd/monitor.rs`, from mcl-compiler's `structure_tree`); this crate knows nothing of the language.
 
 use serde::Serialize;
 

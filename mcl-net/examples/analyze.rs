@@ -2,8 +2,11 @@
 //!
 //! ```text
 //! cargo run --release -p mcl-net --example analyze -- NET.pnml [--plain] [--max-states N]
-//!     [--dead-examples N] [--threads N]
+//!     [--dead-examples N] [--threads N] [--unordered]
 //! ```
+//!
+//! `--unordered` explores on several threads without levels
+//! ([`mcl_net::Options::exact_order`] false).
 //!
 //! Besides the report, the JSON has `seconds` (wall time of the exploration)
 //! and `states_per_second`.
@@ -21,6 +24,7 @@ fn main() -> ExitCode {
         match a.as_str() {
             "--plain" => opts.semantics = Semantics::Plain,
             "--mcl" => opts.semantics = Semantics::Mcl,
+            "--unordered" => opts.exact_order = false,
             "--max-states" | "--dead-examples" | "--threads" => {
                 let Some(n) = args.next().and_then(|v| v.parse::<usize>().ok()) else {
                     eprintln!("{a} needs a number");
@@ -40,7 +44,9 @@ fn main() -> ExitCode {
         }
     }
     let Some(path) = path else {
-        eprintln!("usage: analyze NET.pnml [--plain|--mcl] [--max-states N] [--dead-examples N] [--threads N]");
+        eprintln!(
+            "usage: analyze NET.pnml [--plain|--mcl] [--max-states N] [--dead-examples N] [--threads N] [--unordered]"
+        );
         return ExitCode::from(2);
     };
     let text = match std::fs::read_to_string(&path) {

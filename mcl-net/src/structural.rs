@@ -392,19 +392,26 @@ impl Flow<'_> {
             if !contains(&s, &required) || !s.iter().any(|&b| b) {
                 continue;
             }
-            // Shrink to a siphon minimal among those containing `required`.
+            // Shrink to a siphon minimal among those containing `required`:
+            // drop each place in turn with the places that then lose their
+            // last fed input (the largest siphon within the rest, computed
+            // from the counts of `s`), and put them back if that loses a
+            // required place or everything.
+            let mut cnt = self.in_counts(&s);
+            let mut size = s.iter().filter(|&&b| b).count();
+            let mut removed = Vec::new();
             for p in 0..np {
                 if !s[p] || required[p] {
                     continue;
                 }
-                let mut t = s.clone();
-                t[p] = false;
-                self.max_siphon(&mut t);
-                if contains(&t, &required) && t.iter().any(|&b| b) {
-                    s = t;
+                self.remove_cascade(&mut s, &mut cnt, p, &mut removed);
+                if removed.len() == size || removed.iter().any(|&q| required[q]) {
+                    self.restore(&mut s, &mut cnt, &removed);
+                } else {
+                    size -= removed.len();
                 }
             }
-            if self.is_globally_minimal(&s) {
+            if self.is_globally_minimal(&mut s, &mut cnt, size) {
                 sets.push(members(&s));
             }
             // Partition the rest of the region: siphons that miss the i-th free
@@ -422,14 +429,64 @@ impl Flow<'_> {
         PlaceSets { sets, complete }
     }
 
-    /// A non-empty siphon is minimal iff removing any one place leaves no siphon.
-    fn is_globally_minimal(&self, s: &[bool]) -> bool {
-        (0..s.len()).filter(|&p| s[p]).all(|p| {
-            let mut t = s.to_vec();
-            t[p] = false;
-            self.max_siphon(&mut t);
-            !t.iter().any(|&b| b)
+    /// A non-empty siphon is minimal iff removing any one place leaves no
+    /// siphon. `s` (of `size` places, input counts `cnt`) is left as given.
+    fn is_globally_minimal(&self, s: &mut [bool], cnt: &mut [u32], size: usize) -> bool {
+        let mut removed = Vec::new();
+        (0..s.len()).all(|p| {
+            if !s[p] {
+                return true;
+            }
+            self.remove_cascade(s, cnt, p, &mut removed);
+            let empty = removed.len() == size;
+            self.restore(s, cnt, &removed);
+            empty
         })
+    }
+
+    /// The number of inputs of each transition in `set`.
+    fn in_counts(&self, set: &[bool]) -> Vec<u32> {
+        self.net
+            .transition_ids()
+            .map(|t| self.inputs(t).iter().filter(|&&(q, _)| set[q.index()]).count() as u32)
+            .collect()
+    }
+
+    /// Removes `p` from the siphon `set` (input counts `cnt`) and then every
+    /// place fed by a transition left without input in the set: the largest
+    /// siphon within `set` minus `p`, as [`Self::max_siphon`] computes it,
+    /// in time proportional to what is removed. The removed places are in
+    /// `removed`, for [`Self::restore`].
+    fn remove_cascade(&self, set: &mut [bool], cnt: &mut [u32], p: usize, removed: &mut Vec<usize>) {
+        removed.clear();
+        set[p] = false;
+        removed.push(p);
+        let mut next = 0;
+        while next < removed.len() {
+            let q = removed[next];
+            next += 1;
+            for &t in self.drainers(PlaceId(q as u32)) {
+                cnt[t.index()] -= 1;
+                if cnt[t.index()] == 0 {
+                    for &(r, _) in self.outputs(t) {
+                        if set[r.index()] {
+                            set[r.index()] = false;
+                            removed.push(r.index());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Undoes [`Self::remove_cascade`].
+    fn restore(&self, set: &mut [bool], cnt: &mut [u32], removed: &[usize]) {
+        for &q in removed {
+            set[q] = true;
+            for &t in self.drainers(PlaceId(q as u32)) {
+                cnt[t.index()] += 1;
+            }
+        }
     }
 }
 

@@ -211,6 +211,76 @@ fn parallel_engine_stops_at_the_state_limit() {
     assert_eq!((r.states, r.complete), (300, false));
 }
 
+/// The markings of `ss`, sorted.
+fn markings(ss: &mcl_net::explore::StateSpace) -> Vec<Marking> {
+    let mut v: Vec<Marking> = ss.states().map(|s| ss.marking(s)).collect();
+    v.sort();
+    v
+}
+
+/// The unordered engine against the sequential one: the same states, edges,
+/// dead and vanishing markings and bounds; every path leads to its marking.
+fn assert_unordered_agrees(net: &Net, o: &Options, seq: &mcl_net::explore::StateSpace, threads: usize) {
+    let par = explore(net, &Options { threads, exact_order: false, ..o.clone() });
+    assert_eq!((par.len(), par.edges(), par.complete()), (seq.len(), seq.edges(), seq.complete()), "{threads} threads");
+    assert_eq!(par.bounds(), seq.bounds());
+    assert_eq!(par.max_tokens(), seq.max_tokens());
+    assert_eq!(par.vanishing_count(), seq.vanishing_count());
+    assert_eq!(markings(&par), markings(seq));
+    let dead = |ss: &mcl_net::explore::StateSpace| {
+        let mut v: Vec<Marking> = ss.dead_states().map(|s| ss.marking(s)).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(dead(&par), dead(seq));
+    assert!(par.path_to(mcl_net::explore::StateId(0)).is_empty(), "state 0 is the initial marking");
+    for st in par.states() {
+        let mut x = net.initial_marking();
+        for t in par.path_to(st) {
+            semantics::fire(net, &mut x, t).unwrap();
+        }
+        assert_eq!(x, par.marking(st));
+    }
+}
+
+#[test]
+fn unordered_threads_find_the_same_state_space() {
+    let net = rings(13);
+    let seq = explore(&net, &opts(Semantics::Plain));
+    for threads in [2, 3, 4] {
+        assert_unordered_agrees(&net, &opts(Semantics::Plain), &seq, threads);
+    }
+    // Widening from 1-bit to 8-bit fields restarts the workers.
+    let mut b = NetBuilder::new("fill");
+    let budget = b.add_place(Place::new("budget").with_tokens(1));
+    let acc = b.add_place(Place::new("acc"));
+    let fill = b.add_transition(Transition::new("fill"));
+    let drain = b.add_transition(Transition::new("drain"));
+    b.add_input(budget, fill, 1).add_output(fill, acc, 40);
+    b.add_input(acc, drain, 1);
+    let net = b.build().unwrap();
+    let seq = explore(&net, &opts(Semantics::Plain));
+    assert_unordered_agrees(&net, &opts(Semantics::Plain), &seq, 3);
+}
+
+#[test]
+fn unordered_engine_stops_at_the_state_limit() {
+    for threads in [2, 4] {
+        let o = Options { max_states: 5000, threads, exact_order: false, ..opts(Semantics::Plain) };
+        let ss = explore(&rings(13), &o);
+        assert!(ss.len() <= 5000 && !ss.is_empty(), "{} states", ss.len());
+        assert_eq!(ss.stop_reason(), Some(StopReason::StateLimit));
+        // Stored states are reachable: their paths replay.
+        for st in ss.states() {
+            let mut x = rings(13).initial_marking();
+            for t in ss.path_to(st) {
+                semantics::fire(&rings(13), &mut x, t).unwrap();
+            }
+            assert_eq!(x, ss.marking(st));
+        }
+    }
+}
+
 #[test]
 fn wide_markings_use_the_generic_engine() {
     // 70 places of 16 bits: 18 words per marking, beyond the specialised sizes.
@@ -232,6 +302,7 @@ fn wide_markings_use_the_generic_engine() {
         assert_eq!(par.marking(s), seq.marking(s));
         assert_eq!(par.path_to(s), seq.path_to(s));
     }
+    assert_unordered_agrees(&net, &opts(Semantics::Plain), &seq, 2);
 }
 
 #[test]
@@ -271,8 +342,8 @@ fn token_overflow_stops_cleanly() {
     let t = b.add_transition(Transition::new("gen"));
     b.add_output(t, p, 1 << 31);
     let net = b.build().unwrap();
-    for threads in [1, 2] {
-        let r = analyze(&net, &Options { threads, ..opts(Semantics::Plain) });
+    for (threads, exact_order) in [(1, true), (2, true), (2, false), (3, false)] {
+        let r = analyze(&net, &Options { threads, exact_order, ..opts(Semantics::Plain) });
         assert!(!r.complete);
         assert_eq!(r.stop_reason, Some(StopReason::TokenOverflow));
         assert_eq!(r.states, 2);
@@ -457,6 +528,10 @@ proptest! {
                 prop_assert_eq!(par.path_to(st), ss.path_to(st));
                 prop_assert_eq!(par.is_vanishing(st), ss.is_vanishing(st));
             }
+        }
+        // The unordered engine finds the same states, in another order.
+        for threads in [2, 3, 4] {
+            assert_unordered_agrees(&net, &o, &ss, threads);
         }
     }
 }

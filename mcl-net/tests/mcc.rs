@@ -12,7 +12,9 @@ fn mcc_dir() -> PathBuf {
 /// The three nets with 1.8 to 2.9 million states (benchmarks).
 const LARGE: [&str; 3] = ["SharedMemory-PT-000010", "Kanban-PT-00005", "FMS-PT-00005"];
 
-fn check(names: &dyn Fn(&str) -> bool, configs: &[(Semantics, usize)]) {
+/// Checks the nets `names` accepts with every `(semantics, threads, exact
+/// order)` of `configs`.
+fn check(names: &dyn Fn(&str) -> bool, configs: &[(Semantics, usize, bool)]) {
     let dir = mcc_dir();
     let oracle: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("oracle.json")).unwrap()).unwrap();
@@ -24,12 +26,12 @@ fn check(names: &dyn Fn(&str) -> bool, configs: &[(Semantics, usize)]) {
         }
         let text = std::fs::read_to_string(dir.join(format!("{name}.pnml"))).unwrap();
         let net = read_pnml(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
-        for &(semantics, threads) in configs {
-            let opts = Options { semantics, threads, ..Options::default() };
+        for &(semantics, threads, exact_order) in configs {
+            let opts = Options { semantics, threads, exact_order, ..Options::default() };
             let start = std::time::Instant::now();
             let r = analyze(&net, &opts);
             eprintln!(
-                "{name} {semantics:?} ({threads} threads): {} states, {} edges in {:.2?}",
+                "{name} {semantics:?} ({threads} threads, exact order {exact_order}): {} states, {} edges in {:.2?}",
                 r.states,
                 r.edges,
                 start.elapsed()
@@ -57,15 +59,26 @@ fn check(names: &dyn Fn(&str) -> bool, configs: &[(Semantics, usize)]) {
 
 #[test]
 fn mcc_nets_match_oracle() {
-    check(&|n| !LARGE.contains(&n), &[(Semantics::Plain, 1), (Semantics::Mcl, 1), (Semantics::Plain, 2)]);
+    check(
+        &|n| !LARGE.contains(&n),
+        &[
+            (Semantics::Plain, 1, true),
+            (Semantics::Mcl, 1, true),
+            (Semantics::Plain, 2, true),
+            (Semantics::Plain, 2, false),
+            (Semantics::Mcl, 3, false),
+            (Semantics::Plain, 4, false),
+        ],
+    );
 }
 
 /// ~2-3 million states each (a few seconds each: mcl-net is optimised in
 /// the test profile). Nets without MCL data have only immediate
-/// transitions, so one semantics is enough.
+/// transitions, so one semantics is enough; the unordered engine runs them
+/// on three threads.
 #[test]
 fn mcc_large_nets_match_oracle() {
-    check(&|n| LARGE.contains(&n), &[(Semantics::Plain, 1)]);
+    check(&|n| LARGE.contains(&n), &[(Semantics::Plain, 1, true), (Semantics::Plain, 3, false)]);
 }
 
 /// `mcl analyze --method por`: the stubborn-set exploration gives the

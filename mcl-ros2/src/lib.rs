@@ -15,13 +15,19 @@
 //! - [`raw`]: an encoded body carried through a CDR serde serializer (the
 //!   typed API of `ros2-client`/`rustdds`).
 //!
-//! All of it is sans-IO but [`node`], the ROS 2 node of `mcl run --ros2`
-//! (on `ros2-client`: topics for now). Only the binary and the tests that
-//! need it link this crate.
+//! - [`status`]: the mission's state on the status topic.
+//!
+//! All of it is sans-IO but `node`, the ROS 2 node of `mcl run --ros2`
+//! (on `ros2-client`: topics, services, actions), and `raw`, which exist with the
+//! feature `node` (on by default; the binary asks for it). Without it the
+//! crate links no DDS: the language server checks bridge files with it.
 
 pub mod bridge;
 pub mod cdr;
 pub mod idl;
+#[cfg(feature = "node")]
 pub mod node;
 pub mod path;
+#[cfg(feature = "node")]
 pub mod raw;
+pub mod status;

@@ -50,3 +50,7 @@ impl<'de> Deserialize<'de> for RawCdr {
         d.deserialize_tuple(usize::MAX, Octets)
     }
 }
+
+/// A body can be a service's request or response and an action's goal,
+/// result or feedback (`ros2-client`'s message bound).
+impl ros2_client::Message for RawCdr {}

@@ -107,6 +107,35 @@ fn each_mistake_is_an_error_at_its_line() {
     one_error("domain", "domain_id = 7", "domain_id = 400", 3, "232");
     one_error("unknown key", "aborted =", "abort =", 11, "unknown field");
     one_error("both", "publish = \"/alarm/enable\"", "publish = \"/alarm/enable\", call = \"/x\"", 15, "one of");
+    one_error("mapping", "domain_id = 7", "domain_id = 7\nservice_mapping = \"fast\"", 4, "not a service mapping");
+    one_error(
+        "timeout",
+        "type = \"std_srvs/srv/Trigger\"",
+        "type = \"std_srvs/srv/Trigger\", timeout = -1",
+        21,
+        "timeout -1",
+    );
+    one_error("acttimeout", "aborted = \"eventGotoFail\"", "aborted = \"eventGotoFail\"\ntimeout = 0", 12, "timeout 0");
+    one_error(
+        "failure topic",
+        "fields = { data = false } }",
+        "fields = { data = false }, on_failure = \"eventAlarm\" }",
+        16,
+        "`on_failure` goes with `call`",
+    );
+    one_error(
+        "failure event",
+        "type = \"std_srvs/srv/Trigger\"",
+        "type = \"std_srvs/srv/Trigger\", on_failure = \"eventGotoFail\"",
+        21,
+        "no event `eventGotoFail`",
+    );
+    assert!(errors(
+        "fine",
+        "type = \"std_srvs/srv/Trigger\"",
+        "type = \"std_srvs/srv/Trigger\", timeout = 2.5, on_failure = \"eventDepthFail\""
+    )
+    .is_empty());
 }
 
 #[test]

@@ -26,6 +26,7 @@ perceptions = [{ topic = "/alarm", type = "std_msgs/msg/Bool", field = "data", n
 
 [primitives.DepthPrimitive]
 enable = { call = "/captain/depth", type = "std_srvs/srv/SetBool", fields = { data = true }, on_response = [{ when = "success == false", event = "eventDepthFail" }] }
+disable = { call = "/captain/stop", type = "std_srvs/srv/Trigger", timeout = 2.5, on_failure = "eventDepthFail" }
 "#;
 
 /// The engine of `BRIDGE`, from a folder of its own per test (`name`):
@@ -134,6 +135,18 @@ fn service_responses_raise_their_events_and_failures_warn() {
     assert!(e.on_response(*call, Ok(json!({"success": true}))).is_empty());
     let out = e.on_command("DepthPrimitive", "enable", &params(json!({"depth": 10})));
     let Out::Call { call, .. } = &out[0] else { panic!("{out:?}") };
-    assert!(matches!(&e.on_response(*call, Err("no answer".into()))[0], Out::Warning(w) if w.contains("no answer")));
+    let failed = e.on_response(*call, Err("no answer".into()));
+    assert!(matches!(&failed[..], [Out::Warning(w)] if w.contains("no answer")), "{failed:?}");
     assert!(matches!(&e.on_command("Nope", "enable", &Map::new())[0], Out::Warning(_)));
+    // The answer to an enable that comes after the disable raises nothing.
+    let out = e.on_command("DepthPrimitive", "enable", &params(json!({"depth": 10})));
+    let Out::Call { call: late, .. } = &out[0] else { panic!("{out:?}") };
+    // A call with `on_failure` raises it when there is no response, and has its own timeout.
+    let out = e.on_command("DepthPrimitive", "disable", &Map::new());
+    let Out::Call { call, timeout, .. } = &out[0] else { panic!("{out:?}") };
+    assert_eq!(*timeout, std::time::Duration::from_millis(2500));
+    let failed = e.on_response(*call, Err("no answer".into()));
+    assert!(matches!(&failed[..], [Out::Warning(_), Out::Event(ev)] if ev == "eventDepthFail"), "{failed:?}");
+    assert!(e.on_response(*late, Ok(json!({"success": false}))).is_empty());
+    assert_eq!(e.goal_timeout("GotoPrimitive"), std::time::Duration::from_secs(10));
 }

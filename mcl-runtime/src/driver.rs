@@ -173,6 +173,9 @@ impl<'a> Session<'a> {
     /// Records a record made by the driver.
     pub fn emit_record(&mut self, mut r: Record) {
         r.mission = self.tracer.mission().map(str::to_string);
+        if self.operator_aborted {
+            operator::mark_aborted(&mut r);
+        }
         self.sink.record(&r);
     }
 
@@ -407,8 +410,10 @@ pub async fn run_paced(
         let actions = s.step(Input::Start(0.0))?;
         feed_mock(s, vehicle, 0.0, &actions);
     }
+    // The operator's commands (`mcl run --sim --operator-token`).
+    let commands: Vec<operator::Receiver> = s.operator.take().into_iter().collect();
     let mut one = Single { s, vehicle };
-    let stop = virtual_loop::run_paced(&mut one, &limits, Some(clock)).await?;
+    let stop = virtual_loop::run_operated(&mut one, &limits, Some(clock), commands).await?;
     Ok(single_end(one.s, stop, &limits))
 }
 
@@ -484,6 +489,12 @@ impl<V: VirtualVehicle + ?Sized> Discrete for Single<'_, '_, V> {
         };
         let now = s.player.now();
         feed_mock(s, vehicle, now, &actions);
+        Ok(())
+    }
+
+    async fn operator(&mut self, t: f64, _who: usize, c: Command) -> Result<(), String> {
+        let actions = self.s.operator_input(t, c)?;
+        feed_mock(self.s, self.vehicle, t, &actions);
         Ok(())
     }
 }
@@ -688,33 +699,56 @@ fn on_operator(
         );
         return Ok(Vec::new());
     }
-    s.emit_record(Record::new(now, RecordKind::Operator { command: c.clone() }));
-    s.journal_entry(&Entry::Operator { t: now, command: c.clone() });
     match c {
-        Command::Pause => {
-            *paused = Some(now);
-            s.sync()?;
-            Ok(Vec::new())
-        }
+        Command::Pause => *paused = Some(now),
         Command::Resume => {
             let at = paused.take().unwrap_or(now);
             *clock = Clock::new(clock.speed(), at);
-            s.sync()?;
-            Ok(Vec::new())
         }
-        Command::Abort => {
-            if !operator::has_abort_hook(s.player.net()) {
-                s.sync()?;
-                s.warn(
-                    now,
-                    "operator: abort refused: the net has no abort hook (mcl run adds it with --operator-token)".into(),
-                );
-                return Ok(Vec::new());
+        _ => {}
+    }
+    s.operator_input(now, c)
+}
+
+impl Session<'_> {
+    /// Takes an operator's command at mission time `now` (the caller pauses
+    /// or resumes its clock): traces and journals it; `abort` and `answer`
+    /// become inputs, whose outputs are returned (the caller sends their
+    /// actions). Used by every driver that takes commands.
+    pub fn operator_input(&mut self, now: f64, c: Command) -> Result<Vec<Output>, String> {
+        self.emit_record(Record::new(now, RecordKind::Operator { command: c.clone() }));
+        self.journal_entry(&Entry::Operator { t: now, command: c.clone() });
+        match c {
+            Command::Pause | Command::Resume => {
+                self.sync()?;
+                Ok(Vec::new())
             }
-            s.operator_aborted = true;
-            s.step(Input::Event(now, operator::ABORT_EVENT.to_string(), None))
+            Command::Abort => {
+                if !operator::has_abort_hook(self.player.net()) {
+                    self.sync()?;
+                    self.warn(
+                        now,
+                        "operator: abort refused: the net has no abort hook (mcl run adds it with --operator-token)"
+                            .into(),
+                    );
+                    return Ok(Vec::new());
+                }
+                self.operator_aborted = true;
+                self.step(Input::Event(now, operator::ABORT_EVENT.to_string(), None))
+            }
+            Command::Answer { event } => self.step(Input::Event(now, event, None)),
         }
-        Command::Answer { event } => s.step(Input::Event(now, event, None)),
+    }
+
+    /// The mission was aborted by an operator (a resumed run whose journal
+    /// says so): its `stuck` end is recorded as `aborted`.
+    pub fn set_operator_aborted(&mut self) {
+        self.operator_aborted = true;
+    }
+
+    /// Whether an operator aborted the mission.
+    pub fn operator_aborted(&self) -> bool {
+        self.operator_aborted
     }
 }
 

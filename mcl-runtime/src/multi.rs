@@ -52,6 +52,7 @@ use crate::clock::Clock;
 use crate::coord::{send_table, token_table, CoordMessage, CoordTransport, Incoming, MutexMessages, TokenMutex};
 use crate::driver::{drain_poses, feed_mock, perception_or_event, End, Limits, Session, Sink};
 use crate::journal::{Entry, Input, JournalWriter, Replay, Step};
+use crate::operator::{self, Command};
 use crate::player::{Outcome, Output, Player, PlayerOptions};
 use crate::trace::{Record, RecordKind, Tracer};
 use crate::vehicle::VirtualVehicle;
@@ -104,6 +105,7 @@ pub struct Vehicle {
     crash_after: Option<u64>,
     start_at: f64,
     delays: Vec<(String, u64, f64)>,
+    operator: Option<operator::Receiver>,
 }
 
 impl Vehicle {
@@ -138,7 +140,20 @@ impl Vehicle {
             crash_after: None,
             start_at: 0.0,
             delays: Vec::new(),
+            operator: None,
         })
+    }
+
+    /// Takes an operator's commands from `commands` (`mcl run
+    /// --operator-token`, docs/monitor.md): in [`run_real_time`] the
+    /// vehicle alone pauses (it takes no input and its mission time stands
+    /// still), resumes, aborts (its abort hook, [`operator::with_abort_hook`])
+    /// or takes an answer (an abort ends its pause); in [`run_virtual_paced`]
+    /// a pause stops the whole fleet (one clock). Commands are traced and
+    /// journaled as in a single run.
+    pub fn with_operator(mut self, commands: operator::Receiver) -> Self {
+        self.operator = Some(commands);
+        self
     }
 
     /// The vehicle's mission begins at `t` seconds of virtual time
@@ -556,6 +571,8 @@ impl Live<'_> {
                     }
                 }
                 Step::Other(Entry::CoordEnded { t }) => self.send_ended(peers, *t)?,
+                // The operator aborted: the mission's end is `aborted`.
+                Step::Other(Entry::Operator { command: Command::Abort, .. }) => self.s.set_operator_aborted(),
                 Step::Other(_) => {}
             }
         }
@@ -790,10 +807,14 @@ pub async fn run_virtual_with_link(
         }
         None => None,
     };
+    let mut vehicles = vehicles;
+    // The operator's commands, each receiver with its vehicle.
+    let (operated, commands): (Vec<usize>, Vec<operator::Receiver>) =
+        vehicles.iter_mut().enumerate().filter_map(|(i, v)| v.operator.take().map(|c| (i, c))).unzip();
     let mut handles: Vec<SharedHandle> = vehicles.iter().map(|_| SharedHandle(sink.clone())).collect();
     let vs = live(vehicles, &mut handles);
     let index: HashMap<String, usize> = vs.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();
-    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel, held: Vec::new() };
+    let mut fleet = Fleet { vs, index, work: VecDeque::new(), sent: 0, now: 0.0, channel, held: Vec::new(), operated };
     // Vehicles start one after the other at 0, each after the messages of
     // the previous ones' first firings; those given a later start time
     // start then (`Due::Start`).
@@ -806,7 +827,7 @@ pub async fn run_virtual_with_link(
         fleet.work.push_back((i, outs));
         fleet.exchange_messages().await?;
     }
-    let stop = virtual_loop::run_paced(&mut fleet, &limits, pace).await?;
+    let stop = virtual_loop::run_operated(&mut fleet, &limits, pace, commands).await?;
     let running = fleet.vs.iter_mut().filter(|v| v.end.is_none());
     match stop {
         Stop::Over => {}
@@ -865,6 +886,8 @@ struct Fleet<'a> {
     /// Without one, the messages delivered late ([`Vehicle::delaying`]),
     /// in the order sent, each with its delivery time.
     held: Vec<(f64, CoordMessage)>,
+    /// The vehicle of each operator's receiver ([`Vehicle::with_operator`]).
+    operated: Vec<usize>,
 }
 
 /// The [`Discrete`] source of the modelled link's events.
@@ -975,6 +998,20 @@ impl Discrete for Fleet<'_> {
         out.extend(self.held.iter().map(|h| h.0).reduce(f64::min).map(|t| (t, HELD)));
     }
 
+    async fn operator(&mut self, t: f64, who: usize, c: Command) -> Result<(), String> {
+        let Some(i) = self.operated.get(who).copied() else { return Ok(()) };
+        self.now = self.now.max(t);
+        let v = &mut self.vs[i];
+        if v.end.is_some() || !v.s.player.is_started() {
+            let why = if v.end.is_some() { "has ended" } else { "has not started" };
+            v.s.warn(t, format!("operator: {} ignored: the mission {why}", command_name(&c)));
+            return Ok(());
+        }
+        let outs = v.s.operator_input(t, c)?;
+        self.work.push_back((i, outs));
+        self.exchange_messages().await
+    }
+
     async fn step(&mut self, t: f64, (i, due): (usize, Due)) -> Result<(), String> {
         self.now = self.now.max(t);
         if due == Due::Link || due == Due::Held {
@@ -1060,6 +1097,16 @@ fn lock(g: &Mutex<Global>) -> Result<std::sync::MutexGuard<'_, Global>, String> 
     g.lock().map_err(|_| "a vehicle task panicked".to_string())
 }
 
+/// `pause`, `resume`, `abort` or `answer`.
+fn command_name(c: &Command) -> &'static str {
+    match c {
+        Command::Pause => "pause",
+        Command::Resume => "resume",
+        Command::Abort => "abort",
+        Command::Answer { .. } => "answer",
+    }
+}
+
 /// Runs `vehicles` in real time with `clock` (see the [module
 /// documentation](self)), one task per vehicle on the current tokio runtime.
 pub async fn run_real_time(
@@ -1111,6 +1158,7 @@ pub async fn run_real_time_with_peers(
         let on_error = global.clone();
         let mut v = v;
         let resume = v.resume.take();
+        let mut commands = v.operator.take();
         tasks.push(tokio::spawn(async move {
             let r = async move {
                 let mut handle = [SharedHandle(sink)];
@@ -1126,28 +1174,84 @@ pub async fn run_real_time_with_peers(
                 if !v.s.player.is_started() {
                     outs = v.start(clock.now())?;
                 }
+                // The operator's pause: this vehicle's clock stops at that
+                // instant, and the outputs of commands taken meanwhile
+                // (an answer) wait for `resume` (or the mission's end).
+                let mut clock = clock;
+                let mut paused: Option<f64> = None;
+                let mut held: Vec<Output> = Vec::new();
                 let result: Result<End, String> = loop {
+                    if paused.is_some() && v.s.player.outcome().is_none() {
+                        held.append(&mut outs);
+                    } else if !held.is_empty() {
+                        held.append(&mut outs);
+                        outs = std::mem::take(&mut held);
+                    }
                     let msgs = v.after(&outs)?;
                     count_sent(&mut *lock(&global)?, &index, &msgs);
                     outs = Vec::new();
-                    if let Some(o) = v.deliver(clock.now())? {
-                        outs = o;
-                        continue;
+                    if paused.is_none() {
+                        if let Some(o) = v.deliver(clock.now())? {
+                            outs = o;
+                            continue;
+                        }
                     }
                     if let Some(o) = v.s.player.outcome() {
                         break Ok(End::Outcome(o));
                     }
-                    lock(&global)?.set_idle(i, v.idle());
+                    // An aborted mission is over once nothing more happens in
+                    // it (its peers in other processes cannot tell: they wait
+                    // for its `ENDED`); it is recorded `aborted`.
+                    if v.s.operator_aborted() && v.idle() && paused.is_none() {
+                        let t = clock.now().max(v.s.player.now());
+                        break Ok(v.stuck(t));
+                    }
+                    lock(&global)?.set_idle(i, v.idle() && paused.is_none());
                     let (tp, tm) = (v.s.player.next_deadline(), v.mock.next_deadline());
                     let wake = [tp, tm, limits.time_limit].into_iter().flatten().reduce(f64::min);
-                    let sleep = async {
-                        match wake {
-                            Some(w) => tokio::time::sleep_until(clock.instant_at(w)).await,
+                    let until = wake.map(|w| clock.instant_at(w));
+                    let sleep = async move {
+                        match until {
+                            Some(u) => tokio::time::sleep_until(u).await,
                             None => std::future::pending::<()>().await,
                         }
                     };
                     tokio::select! {
-                        m = v.transport.recv() => match m {
+                        c = async {
+                            match &mut commands {
+                                Some(c) => c.recv().await,
+                                None => std::future::pending().await,
+                            }
+                        } => match c {
+                            // The operator's side is gone: no more commands.
+                            None => commands = None,
+                            Some(c) => {
+                                let now = paused.unwrap_or_else(|| clock.now()).max(v.s.player.now());
+                                let ignored = match &c {
+                                    Command::Pause => paused.is_some(),
+                                    Command::Resume => paused.is_none(),
+                                    Command::Abort | Command::Answer { .. } => false,
+                                };
+                                if ignored {
+                                    let state = if paused.is_some() { "paused" } else { "running" };
+                                    v.s.warn(now, format!("operator: {} ignored (`{}` is {state})", command_name(&c), v.name));
+                                } else {
+                                    match &c {
+                                        Command::Pause => paused = Some(now),
+                                        // An abort ends the pause: nothing is left to resume,
+                                        // and the run may then end.
+                                        Command::Resume | Command::Abort => {
+                                            if let Some(at) = paused.take() {
+                                                clock = Clock::new(clock.speed(), at);
+                                            }
+                                        }
+                                        Command::Answer { .. } => {}
+                                    }
+                                    outs = v.s.operator_input(now, c)?;
+                                }
+                            }
+                        },
+                        m = v.transport.recv(), if paused.is_none() => match m {
                             Some(Incoming::Message(m)) => {
                                 let local = index.contains_key(&m.from);
                                 let ended = v.received(m, clock.now())?;
@@ -1162,7 +1266,7 @@ pub async fn run_real_time_with_peers(
                             Some(Incoming::Rejected(why)) => v.rejected(why, clock.now()),
                             None => break Err(format!("the coordination transport of `{}` closed", v.name)),
                         },
-                        _ = sleep => {
+                        _ = sleep, if paused.is_none() => {
                             let now = clock.now().max(v.s.player.now());
                             if tp.is_some_and(|d| d <= now) {
                                 outs = v.s.step(Input::Timer(now))?;

@@ -17,6 +17,7 @@ use std::task::{Context, Poll, Waker};
 
 use crate::clock::Clock;
 use crate::driver::Limits;
+use crate::operator::{self, Command};
 
 /// Inputs in a row at one instant of virtual time after which a run is
 /// stopped as a zero-time loop (tasks that answer at once, in a loop).
@@ -38,6 +39,15 @@ pub trait Discrete {
     /// at that instant. The future of a driver without transport (a single
     /// run, a plan) is ready at once.
     fn step(&mut self, t: f64, source: Self::Source) -> impl Future<Output = Result<(), String>>;
+
+    /// Takes an operator's command for participant `who` (the index of the
+    /// receiver it came on, [`run_operated`]) at `t`: traces and journals
+    /// it; `abort` and `answer` become inputs. The loop itself pauses and
+    /// resumes. A driver that takes no commands ignores them.
+    fn operator(&mut self, t: f64, who: usize, c: Command) -> impl Future<Output = Result<(), String>> {
+        let _ = (t, who, c);
+        std::future::ready(Ok(()))
+    }
 }
 
 /// How [`run`] ended.
@@ -64,8 +74,28 @@ pub async fn run<D: Discrete>(d: &mut D, limits: &Limits) -> Result<Stop, String
 /// wall clock scaled by X). The inputs, their order and their times are
 /// those of [`run`]: only when they happen changes.
 pub async fn run_paced<D: Discrete>(d: &mut D, limits: &Limits, pace: Option<Clock>) -> Result<Stop, String> {
+    run_operated(d, limits, pace, Vec::new()).await
+}
+
+/// [`run_paced`] taking an operator's commands from `commands` while it
+/// waits for the clock (`mcl run --sim --operator-token`, docs/monitor.md):
+/// `pause` stops the loop and mission time until `resume` (the clock then
+/// goes on from the instant of the pause; a `pause` while paused and a
+/// `resume` while running are ignored); `abort` and `answer` become inputs
+/// at the clock's mission time ([`Discrete::operator`]), between the last
+/// input and the next. The run ends when it is over even while paused.
+pub async fn run_operated<D: Discrete>(
+    d: &mut D,
+    limits: &Limits,
+    mut pace: Option<Clock>,
+    commands: Vec<operator::Receiver>,
+) -> Result<Stop, String> {
+    let mut commands: Vec<Option<operator::Receiver>> = commands.into_iter().map(Some).collect();
     let mut same = SameInstant::default();
     let mut next = Vec::new();
+    // The time of the last input; the instant of the pause while paused.
+    let mut last = 0.0_f64;
+    let mut paused: Option<f64> = None;
     loop {
         if d.is_over() {
             return Ok(Stop::Over);
@@ -78,25 +108,80 @@ pub async fn run_paced<D: Discrete>(d: &mut D, limits: &Limits, pace: Option<Clo
                 earliest = Some((t, source));
             }
         }
-        let Some((t, source)) = earliest else {
-            return Ok(Stop::Quiescent);
-        };
-        if let Some(limit) = limits.time_limit {
-            if t > limit {
-                return Ok(Stop::TimeLimit(limit));
+        if paused.is_none() {
+            let Some((t, _)) = earliest else {
+                return Ok(Stop::Quiescent);
+            };
+            if let Some(limit) = limits.time_limit {
+                if t > limit {
+                    return Ok(Stop::TimeLimit(limit));
+                }
             }
         }
+        // Until the clock reaches the next input (never while paused).
+        let at = match (paused, earliest) {
+            (None, Some((t, _))) => pace.map(|c| c.instant_at(t)),
+            _ => None,
+        };
+        let wait = async move {
+            match (paused, at) {
+                (Some(_), _) => std::future::pending::<()>().await,
+                // Behind the clock (the timer's resolution is a millisecond): no wait.
+                (None, Some(at)) if at > tokio::time::Instant::now() => tokio::time::sleep_until(at).await,
+                _ => {}
+            }
+        };
+        let command = if commands.iter().all(Option::is_none) {
+            wait.await;
+            None
+        } else {
+            tokio::select! {
+                biased;
+                c = next_command(&mut commands) => Some(c),
+                _ = wait => None,
+            }
+        };
+        if let Some((who, c)) = command {
+            let next_t = earliest.map_or(f64::INFINITY, |(t, _)| t);
+            let now = paused.unwrap_or_else(|| pace.map_or(last, |k| k.now()).max(last).min(next_t));
+            match &c {
+                Command::Pause if paused.is_some() => continue,
+                Command::Resume if paused.is_none() => continue,
+                Command::Pause => paused = Some(now),
+                Command::Resume => {
+                    paused = None;
+                    pace = pace.map(|k| Clock::new(k.speed(), now));
+                }
+                Command::Abort | Command::Answer { .. } => last = now,
+            }
+            d.operator(now, who, c).await?;
+            continue;
+        }
+        let Some((t, source)) = earliest else { continue };
         if same.tick(t) {
             return Ok(Stop::ZeroTimeLoop(t));
         }
-        if let Some(at) = pace.map(|c| c.instant_at(t)) {
-            // Behind the clock (the timer's resolution is a millisecond): no wait.
-            if at > tokio::time::Instant::now() {
-                tokio::time::sleep_until(at).await;
-            }
-        }
+        last = t;
         d.step(t, source).await?;
     }
+}
+
+/// The next command on any of `commands`, with the index of its receiver
+/// (a closed one is dropped; none left: never ready).
+async fn next_command(commands: &mut [Option<operator::Receiver>]) -> (usize, Command) {
+    std::future::poll_fn(|cx| {
+        for (i, slot) in commands.iter_mut().enumerate() {
+            if let Some(rx) = slot {
+                match rx.poll_recv(cx) {
+                    Poll::Ready(Some(c)) => return Poll::Ready((i, c)),
+                    Poll::Ready(None) => *slot = None,
+                    Poll::Pending => {}
+                }
+            }
+        }
+        Poll::Pending
+    })
+    .await
 }
 
 /// [`run`] for a driver whose steps never wait (no transport): a single run,

@@ -31,6 +31,7 @@ pub fn run(
     max_states: usize,
     semantics: SemanticsChoice,
     threads: usize,
+    shortest_paths: bool,
     method: Method,
 ) -> u8 {
     let text = match mcl_net::input::read_source(path) {
@@ -56,7 +57,9 @@ pub fn run(
     if method == Method::Por {
         return run_por(&net, format, max_states, semantics);
     }
-    let opts = Options { semantics, max_states, threads, ..Options::default() };
+    // Several threads explore without levels (`unordered.rs`) unless
+    // shortest paths to the dead markings are asked for.
+    let opts = Options { semantics, max_states, threads, exact_order: shortest_paths, ..Options::default() };
     let r = analyze(&net, &opts);
     match format {
         Format::Json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_else(|_| "{}".into())),

@@ -5,30 +5,45 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use mcl_compiler::compile::structure_tree::{self, StructureNode};
 use mcl_monitor::tree::{MissionTree, Node};
 use mcl_monitor::{Hub, Mode, Monitor};
 use mcl_runtime::operator;
 use mcl_runtime::trace::{read_trace, Record};
-use mcl_syntax::ast::{Block, Item, MonitorKind, ParallelOp, Stmt, StmtKind, Value};
+use mcl_syntax::ast::Item;
 
 /// The monitor of a live run: the hub its trace sink feeds, and the
-/// operator's commands for the real-time driver (with `--operator-token`).
+/// operator's commands for the drivers (with `--operator-token`).
 pub struct Live {
     /// Where the run's records go.
     pub hub: Arc<Hub>,
-    /// The operator's commands (None without `--operator-token`).
-    pub commands: Option<operator::Receiver>,
+    /// The operator's commands for each vehicle (empty without `--operator-token`).
+    commands: Vec<(String, operator::Receiver)>,
 }
 
-/// Starts the server of `mcl run --monitor=ADDR` for the run of `title`,
-/// and says where it is on stderr. Err: the exit status.
-pub fn start_live(addr: &str, title: String, operator_token: Option<String>) -> Result<Live, u8> {
+impl Live {
+    /// The operator's commands for the vehicle of `mission` (None without
+    /// `--operator-token`, or once taken).
+    pub fn commands_for(&mut self, mission: &str) -> Option<operator::Receiver> {
+        let k = self.commands.iter().position(|(n, _)| n == mission)?;
+        Some(self.commands.swap_remove(k).1)
+    }
+}
+
+/// Starts the server of `mcl run --monitor=ADDR` for the run of `title`
+/// whose vehicles run the missions `vehicles`, and says where it is on
+/// stderr. Err: the exit status.
+pub fn start_live(addr: &str, title: String, operator_token: Option<String>, vehicles: &[String]) -> Result<Live, u8> {
     let mut hub = Hub::new(Mode::Live, title.clone());
-    let mut commands = None;
+    let mut commands = Vec::new();
     if let Some(token) = operator_token {
-        let (tx, rx) = operator::channel();
-        hub = hub.with_operator(token, tx);
-        commands = Some(rx);
+        let mut senders = Vec::new();
+        for v in vehicles {
+            let (tx, rx) = operator::channel();
+            senders.push((v.clone(), tx));
+            commands.push((v.clone(), rx));
+        }
+        hub = hub.with_operator(token, senders);
     }
     if title.ends_with(".mcl") {
         hub.add_trees(trees_of(&title));
@@ -131,14 +146,15 @@ fn load(traces: &[PathBuf]) -> Result<Vec<Record>, String> {
 }
 
 /// The control-structure trees of the missions written in `file` (none
-/// when it cannot be read).
+/// when it cannot be read): mcl-compiler's walk of the syntax tree
+/// (`structure_tree`, also drawn by `mcl compile --view structure`), with
+/// lines for offsets.
 pub fn trees_of(file: &str) -> Vec<MissionTree> {
     let Ok(text) = mcl_net::input::read_source(std::path::Path::new(file)) else { return Vec::new() };
     let parsed = mcl_syntax::parse(&text);
     let names = mcl_compiler::scope::mission_names(&parsed.file);
-    let line = |offset: u32| {
-        text.as_bytes()[..(offset as usize).min(text.len())].iter().filter(|&&b| b == b'\n').count() as u32 + 1
-    };
+    let line =
+        |offset: usize| text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() as u32 + 1;
     parsed
         .file
         .items
@@ -148,83 +164,20 @@ pub fn trees_of(file: &str) -> Vec<MissionTree> {
             _ => None,
         })
         .zip(names)
-        .map(|(m, mission)| MissionTree { mission, file: file.to_string(), root: block(&m.body, &line) })
+        .map(|(m, mission)| MissionTree {
+            mission,
+            file: file.to_string(),
+            root: node(&structure_tree::block(&m.body), &line),
+        })
         .collect()
 }
 
-/// A block: its statement, or a sequence of them (the walk of
-/// mcl-compiler's `tree_dot.rs`, as data).
-fn block(b: &Block, line: &dyn Fn(u32) -> u32) -> Node {
-    match b.stmts.as_slice() {
-        [one] => stmt(one, line),
-        stmts => Node {
-            kind: "sequence".into(),
-            text: String::new(),
-            line: line(b.span.start),
-            children: stmts.iter().enumerate().map(|(i, s)| ((i + 1).to_string(), stmt(s, line))).collect(),
-        },
-    }
-}
-
-fn structure(kind: &str, s: &Stmt, parts: &[(String, &Block)], line: &dyn Fn(u32) -> u32) -> Node {
+/// The monitor's node of a node of the tree.
+fn node(n: &StructureNode, line: &dyn Fn(usize) -> u32) -> Node {
     Node {
-        kind: kind.into(),
-        text: String::new(),
-        line: line(s.span.start),
-        children: parts.iter().map(|(p, b)| (p.clone(), block(b, line))).collect(),
-    }
-}
-
-fn stmt(s: &Stmt, line: &dyn Fn(u32) -> u32) -> Node {
-    let part = |p: &str| p.to_string();
-    match &s.kind {
-        StmtKind::Call(c) => {
-            let args: Vec<String> = c.args.iter().map(Value::written).collect();
-            let label = c.label.as_ref().map(|l| format!(" : {}", l.text)).unwrap_or_default();
-            Node {
-                kind: "call".into(),
-                text: format!("{}({}){label}", c.name.text, args.join(", ")),
-                line: line(c.span.start),
-                children: Vec::new(),
-            }
-        }
-        StmtKind::While { cond, body, .. } => {
-            structure("while", s, &[(part("condition"), cond), (part("do"), body)], line)
-        }
-        StmtKind::If { cond, then, otherwise, .. } => match otherwise {
-            Some(e) => structure(
-                "if-then-else",
-                s,
-                &[(part("condition"), cond), (part("then"), then), (part("else"), e)],
-                line,
-            ),
-            None => structure("if-then", s, &[(part("condition"), cond), (part("then"), then)], line),
-        },
-        StmtKind::Parallel { branches, ops, .. } => {
-            let kind =
-                if ops.first().is_some_and(|(o, _)| *o == ParallelOp::Or) { "parallel-or" } else { "parallel-and" };
-            let parts: Vec<(String, &Block)> =
-                branches.iter().enumerate().map(|(i, b)| (format!("branch {}", i + 1), b)).collect();
-            structure(kind, s, &parts, line)
-        }
-        StmtKind::Try { body, catch, .. } => {
-            structure("try-catch", s, &[(part("try"), body), (part("catch"), catch)], line)
-        }
-        StmtKind::Not { body, .. } => structure("not", s, &[(String::new(), body)], line),
-        StmtKind::Monitor { body, handlers, .. } => {
-            let mut parts = vec![(part("watched"), body)];
-            for (j, h) in handlers.iter().enumerate() {
-                let kw = match h.kind {
-                    MonitorKind::Condition => "condition",
-                    MonitorKind::WhileCondition => "while_condition",
-                };
-                parts.push((format!("{kw} {}", j + 1), &h.condition));
-                parts.push((format!("do {}", j + 1), &h.action));
-            }
-            structure("monitor", s, &parts, line)
-        }
-        StmtKind::Error => {
-            Node { kind: "error".into(), text: "(syntax error)".into(), line: line(s.span.start), children: Vec::new() }
-        }
+        kind: n.kind.to_string(),
+        text: n.text.clone(),
+        line: line(n.offset),
+        children: n.children.iter().map(|(p, c)| (p.clone(), node(c, line))).collect(),
     }
 }

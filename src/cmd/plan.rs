@@ -74,7 +74,7 @@ pub struct Options {
     #[arg(long)]
     pub stats: bool,
     /// Execute the plan: run each step's MCL mission on the player, watch the world through
-    /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock or --aac).
+    /// perceptions (world.xml beside FILE.mcl), re-plan when it differs (needs --mock, --sim, --aac or --ros2).
     #[arg(long)]
     pub run: bool,
     /// How to execute it (with `--run`).
@@ -92,9 +92,13 @@ pub struct Execute {
     /// `mcl mock-aac --plan FILE.mcl`).
     #[arg(long, value_name = "HOST:PORT", requires = "run", conflicts_with = "mock")]
     pub aac: Option<String>,
+    /// With --run: against a ROS 2 vehicle whose primitives this bridge file maps to topics,
+    /// services and actions, in real time (docs/ros2.md).
+    #[arg(long, value_name = "BRIDGE.toml", requires = "run", conflicts_with_all = ["mock", "aac"])]
+    pub ros2: Option<PathBuf>,
     /// With --run: against a simulated vehicle in a simulated world, in virtual time
     /// (docs/simulator.md); its perceptions go to the world modeler.
-    #[arg(long, requires = "run", conflicts_with_all = ["mock", "aac"])]
+    #[arg(long, requires = "run", conflicts_with_all = ["mock", "aac", "ros2"])]
     pub sim: bool,
     /// With --sim: the simulated world (TOML; --world is the fact-provider scripts).
     #[arg(long, value_name = "W.toml", requires = "sim")]
@@ -379,6 +383,8 @@ struct RunSink {
     trace: Option<mcl_runtime::trace::TraceWriter>,
     live: bool,
     error: Option<String>,
+    /// Feeds the ROS 2 node's status topic (`--ros2`).
+    ros2_status: Option<mcl_ros2::status::Feed>,
 }
 
 impl mcl_plan::run::RecordSink for RunSink {
@@ -396,6 +402,9 @@ impl mcl_plan::run::RecordSink for RunSink {
     }
 
     fn record_typed(&mut self, record: &mcl_runtime::trace::Record, live: Option<String>) {
+        if let Some(f) = &self.ros2_status {
+            f.record(record);
+        }
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.write(record) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
@@ -507,8 +516,9 @@ fn connect_aac(
 /// How long `--run --aac` waits for the AAC's `welcome` before giving up.
 const AAC_CONNECT_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
 
-/// `mcl plan FILE.mcl --run --mock|--aac`: plans, executes each step's MCL
-/// mission on the player against the mock vehicle or a vehicle's AAC, and
+/// `mcl plan FILE.mcl --run --mock|--sim|--aac|--ros2`: plans, executes each
+/// step's MCL mission on the player against the mock vehicle, a simulated
+/// one, a vehicle's AAC or a ROS 2 vehicle through the bridge, and
 /// re-plans on divergence.
 fn execute(
     domain: mcl_plan::Domain,
@@ -522,10 +532,21 @@ fn execute(
     use mcl_plan::executor::Executor;
     use mcl_runtime::scenario::Scenario;
     crate::interrupt::install();
-    if [x.mock, x.sim, x.aac.is_some()].iter().filter(|b| **b).count() != 1 {
-        eprintln!("error: --run needs --mock (the in-process mock vehicle), --sim (a simulated vehicle) or --aac HOST:PORT (a vehicle's AAC)");
+    if [x.mock, x.sim, x.aac.is_some(), x.ros2.is_some()].iter().filter(|b| **b).count() != 1 {
+        eprintln!("error: --run needs --mock (the in-process mock vehicle), --sim (a simulated vehicle), --aac HOST:PORT (a vehicle's AAC) or --ros2 BRIDGE.toml (a ROS 2 vehicle)");
         return 2;
     }
+    if x.ros2.is_some() && (x.virtual_time || x.scenario.is_some()) {
+        eprintln!(
+            "error: --ros2 runs in real time against the ROS 2 vehicle: --virtual-time and --scenario go with --mock"
+        );
+        return 2;
+    }
+    // The ROS 2 bridge, checked against the operators' vehicle before anything runs.
+    let ros2_engine = match x.ros2.as_deref().map(|b| super::ros2::engine_for(b, &[file])).transpose() {
+        Ok(e) => e,
+        Err(code) => return code,
+    };
     if x.sim && !x.virtual_time {
         eprintln!("error: --sim runs in virtual time only for now: add --virtual-time");
         return 2;
@@ -597,7 +618,7 @@ fn execute(
         Ok(t) => t,
         Err(code) => return code,
     };
-    let mut sink = RunSink { trace, live: !x.quiet, error: None };
+    let mut sink = RunSink { trace, live: !x.quiet, error: None, ros2_status: None };
     let opts = mcl_plan::run::RunOptions {
         seed,
         virtual_time: x.virtual_time,
@@ -606,13 +627,27 @@ fn execute(
         holding: x.holding.clone(),
         max_plans: x.max_plans.max(1),
     };
+    let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
     let report = match &x.aac {
+        None if ros2_engine.is_some() => {
+            let (feed, listener) = mcl_ros2::status::channel(&format!("plan:{stem}"));
+            sink.ros2_status = Some(feed);
+            let mut node = match super::ros2::NodeLink::start(ros2_engine, listener) {
+                Ok(n) => n,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 2;
+                }
+            };
+            let r = mcl_plan::run::run_planned_aac(ex, world, ops, &mut node, opts, &mut sink);
+            node.close();
+            r
+        }
         None => match &sim {
             Some(s) => run_sim(s, ex, world, ops, scenario, opts, &mut sink, x.trajectory.as_deref(), file),
             None => mcl_plan::run::run_planned(ex, world, ops, scenario, opts, &mut sink),
         },
         Some(addr) => {
-            let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
             let mut aac = match connect_aac(addr, x.token.clone(), format!("plan:{stem}"), AAC_CONNECT_WAIT) {
                 Ok(a) => a,
                 Err(e) => {

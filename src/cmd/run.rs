@@ -171,8 +171,8 @@ pub struct Options {
     #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
     pub monitor_linger: f64,
     /// With --monitor, in real time: take an operator's commands (pause, resume, abort, answer)
-    /// from requests that carry this token (`Authorization: Bearer TOKEN`). The mission's net gets
-    /// an abort hook: resume its journal with the same option.
+    /// from requests that carry this token (`Authorization: Bearer TOKEN`), for every vehicle of
+    /// the run. Each mission's net gets an abort hook: resume its journal with the same option.
     #[arg(long, value_name = "TOKEN")]
     pub operator_token: Option<String>,
 }
@@ -301,6 +301,8 @@ pub fn parse_set(s: &str) -> Result<(String, Value), String> {
 struct RunSink {
     /// Publishes each vehicle's mission state over Zenoh (`mcl/<vehicle>/status`).
     status: Option<mcl_zenoh::StatusPublisher>,
+    /// Feeds the ROS 2 node's status topic (`--ros2`, docs/ros2.md).
+    ros2_status: Option<mcl_ros2::status::Feed>,
     trace: Option<TraceWriter>,
     live: bool,
     verbose: bool,
@@ -365,6 +367,9 @@ impl Sink for RunSink {
         if let Some(s) = &mut self.status {
             s.record(r);
         }
+        if let Some(f) = &self.ros2_status {
+            f.record(r);
+        }
         if let Some(w) = &mut self.trace {
             if let Err(e) = w.write(r) {
                 self.error.get_or_insert(format!("cannot write the trace: {e}"));
@@ -425,8 +430,8 @@ pub fn run(o: Options) -> u8 {
     // with 130 or 143.
     crate::interrupt::install();
     // Usage checks.
-    if o.operator_token.is_some() && (o.monitor.is_none() || o.virtual_time || o.sim) {
-        return usage("--operator-token takes commands through the monitor of a real-time run: give --monitor, with --mock or --aac, without --virtual-time");
+    if o.operator_token.is_some() && (o.monitor.is_none() || o.virtual_time) {
+        return usage("--operator-token takes commands through the monitor of a real-time run: give --monitor, with --mock, --sim or --aac, without --virtual-time");
     }
     if o.operator_token.as_deref().is_some_and(str::is_empty) {
         return usage("--operator-token is empty");
@@ -447,7 +452,7 @@ pub fn run(o: Options) -> u8 {
     }
     // The ROS 2 bridge, checked against the file's vehicle before anything runs.
     let mut ros2_engine = match &o.ros2 {
-        Some(b) => match super::ros2::engine_for(b, &o.file) {
+        Some(b) => match super::ros2::engine_for(b, &[o.file.as_path()]) {
             Ok(e) => Some(e),
             Err(code) => return code,
         },
@@ -522,9 +527,6 @@ pub fn run(o: Options) -> u8 {
         }
     }
     if several && o.mission.is_none() && (o.mock || o.sim) && is_mcl {
-        if o.operator_token.is_some() {
-            return usage("--operator-token takes commands for one mission: pick it with --mission NAME");
-        }
         return run_coordinated(&o, sets);
     }
     if o.link.is_some() {
@@ -677,7 +679,12 @@ pub fn run(o: Options) -> u8 {
         Err(code) => return code,
     };
     let mut live_monitor = match &o.monitor {
-        Some(addr) => match super::monitor::start_live(addr, o.file.display().to_string(), o.operator_token.clone()) {
+        Some(addr) => match super::monitor::start_live(
+            addr,
+            o.file.display().to_string(),
+            o.operator_token.clone(),
+            std::slice::from_ref(&chosen.name),
+        ) {
             Ok(m) => Some(m),
             Err(code) => return code,
         },
@@ -685,6 +692,7 @@ pub fn run(o: Options) -> u8 {
     };
     let mut sink = RunSink {
         status: None,
+        ros2_status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,
@@ -707,6 +715,12 @@ pub fn run(o: Options) -> u8 {
         }
         sink.status = Some(mcl_zenoh::StatusPublisher::new(n.clone(), Some((&zenoh_vehicle, &chosen.name))));
     }
+    // The ROS 2 node's status topic hears the run's records.
+    let ros2_status = ros2_engine.as_ref().map(|_| {
+        let (feed, listener) = mcl_ros2::status::channel(&chosen.name);
+        sink.ros2_status = Some(feed);
+        listener
+    });
     if o.mock || o.sim {
         let errors = scenario.check_against(&ProgramNames::of([net.as_ref()]));
         for e in &errors {
@@ -808,7 +822,7 @@ pub fn run(o: Options) -> u8 {
     let mut session = Session::new(player, tracer, &mut sink);
     session.journal = journal_writer;
     session.crash_after = o.crash_after;
-    session.operator = live_monitor.as_mut().and_then(|m| m.commands.take());
+    session.operator = live_monitor.as_mut().and_then(|m| m.commands_for(&chosen.name));
     // Until the AAC welcomes the player, actions are queued.
     session.link_down = o.aac.is_some() || o.zenoh;
     // The events the run handled in its AAC session: told to the AAC once
@@ -859,7 +873,7 @@ pub fn run(o: Options) -> u8 {
             match aac {
                 None if ros2_engine.is_some() => {
                     let (mut link, end) = mcl_runtime::link::pair();
-                    let node = super::ros2::spawn_node(ros2_engine.take(), end);
+                    let node = super::ros2::spawn_node(ros2_engine.take(), end, ros2_status);
                     let r = driver::run_real_time(&mut session, &mut link, clock, limits, resend).await;
                     // Closing the link ends the node.
                     drop(link);
@@ -1297,15 +1311,18 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
         Ok(m) => m,
         Err(code) => return code,
     };
-    let live_monitor = match &o.monitor {
-        Some(addr) => match super::monitor::start_live(addr, o.file.display().to_string(), None) {
-            Ok(m) => Some(m),
-            Err(code) => return code,
-        },
+    let mut live_monitor = match &o.monitor {
+        Some(addr) => {
+            match super::monitor::start_live(addr, o.file.display().to_string(), o.operator_token.clone(), &names) {
+                Ok(m) => Some(m),
+                Err(code) => return code,
+            }
+        }
         None => None,
     };
     let sink = Arc::new(std::sync::Mutex::new(RunSink {
         status: None,
+        ros2_status: None,
         trace,
         live: !o.quiet,
         verbose: o.verbose,
@@ -1327,7 +1344,14 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             sim_setup.as_ref().map(|s| s.symbols_of(&v.mission)).unwrap_or_default();
         symbols.extend(scenario.symbols.clone());
         symbols.extend(sets.iter().cloned());
-        let net = Arc::new(v.net);
+        // The operator's abort marks each vehicle's `mission.abort` through a hook in its net.
+        let net = match &o.operator_token {
+            Some(_) => match mcl_runtime::operator::with_abort_hook(&v.net) {
+                Ok(n) => Arc::new(n),
+                Err(e) => return usage(&e),
+            },
+            None => Arc::new(v.net),
+        };
         if o.vehicle.is_some() {
             let recorded = Recorded {
                 scenario: text.as_ref().map(|t| t.0.clone()),
@@ -1432,6 +1456,9 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
             for d in delays.iter().filter(|d| d.from == name) {
                 v = v.delaying(&d.to, d.seq, d.at);
             }
+            if let Some(c) = live_monitor.as_mut().and_then(|m| m.commands_for(&name)) {
+                v = v.with_operator(c);
+            }
             vs.push(match journal_writer.take() {
                 Some(w) => v.with_journal(w, resume_entries.clone(), o.crash_after),
                 None => v,
@@ -1476,9 +1503,14 @@ pub fn run_coordinated(o: &Options, sets: Vec<(String, Value)>) -> u8 {
     }
     for ((name, e, t), fired) in end.ends.iter().zip(&end.fired) {
         let c = Counts::of(sink.records.iter().filter(|r| r.mission.as_deref() == Some(name.as_str())));
+        // An operator's abort ends a mission that the player sees stuck.
+        let aborted = sink.records.iter().any(|r| {
+            r.mission.as_deref() == Some(name.as_str())
+                && matches!(&r.kind, RecordKind::Outcome { result, .. } if result == "aborted")
+        });
         eprintln!(
             "mission `{name}`: {} at t={t:.3} s ({} actions, {} events, {} unexpected events, {fired} firings, {} messages sent, {} received)",
-            e.result().to_uppercase(),
+            if aborted { "ABORTED".to_string() } else { e.result().to_uppercase() },
             c.actions,
             c.events,
             c.unexpected,

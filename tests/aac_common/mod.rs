@@ -344,8 +344,14 @@ pub enum Kill {
 
 /// `mcl run --aac ADDR FILE --journal JOURNAL ARGS`, killed as `kill` says.
 pub fn crashed_run(addr: &str, file: &Path, journal: &Path, args: &[&str], kill: Kill) {
+    crashed_run_over(&["--aac", addr], file, journal, args, kill)
+}
+
+/// `mcl run PLAYER FILE --journal JOURNAL ARGS` (`PLAYER`: how it reaches
+/// the vehicle, `--aac ADDR` or `--zenoh …`), killed as `kill` says.
+pub fn crashed_run_over(player: &[&str], file: &Path, journal: &Path, args: &[&str], kill: Kill) {
     let mut cmd = mcl();
-    cmd.args(["run", "--aac", addr, "-q"]).arg(file).arg("--journal").arg(journal).args(args);
+    cmd.arg("run").args(player).arg("-q").arg(file).arg("--journal").arg(journal).args(args);
     match kill {
         Kill::After(n) => {
             cmd.args(["--crash-after", &n.to_string()]);
@@ -370,8 +376,20 @@ pub fn crashed_run(addr: &str, file: &Path, journal: &Path, args: &[&str], kill:
 /// `mcl run --aac ADDR FILE --resume JOURNAL --trace TRACE ARGS`: its exit
 /// status, standard output and standard error.
 pub fn resumed_run(addr: &str, file: &Path, journal: &Path, trace: &Path, args: &[&str]) -> (Option<i32>, String) {
+    resumed_run_over(&["--aac", addr], file, journal, trace, args)
+}
+
+/// `mcl run PLAYER FILE --resume JOURNAL --trace TRACE ARGS` (`PLAYER` as
+/// in [`crashed_run_over`]).
+pub fn resumed_run_over(
+    player: &[&str],
+    file: &Path,
+    journal: &Path,
+    trace: &Path,
+    args: &[&str],
+) -> (Option<i32>, String) {
     let mut cmd = mcl();
-    cmd.args(["run", "--aac", addr]).arg(file).arg("--resume").arg(journal).arg("--trace").arg(trace).args(args);
+    cmd.arg("run").args(player).arg(file).arg("--resume").arg(journal).arg("--trace").arg(trace).args(args);
     let (code, out, err) = run_bounded(cmd, Duration::from_secs(30));
     (code, format!("resumed player stdout:\n{out}\nresumed player stderr:\n{err}"))
 }

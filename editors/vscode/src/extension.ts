@@ -22,7 +22,7 @@ export async function activate(context: vscode.ExtensionContext): Promise<void> 
     vscode.commands.registerCommand('mcl.restartServer', () => restart()),
     vscode.commands.registerCommand('mcl.showServerOutput', () => output?.show(true)),
     vscode.workspace.onDidChangeConfiguration((e) => {
-      if (e.affectsConfiguration('mcl.server')) {
+      if (e.affectsConfiguration('mcl.server') || e.affectsConfiguration('mcl.ros2Bridge')) {
         void restart();
       }
     }),
@@ -57,9 +57,15 @@ async function start(): Promise<void> {
     ],
     outputChannel: output,
     synchronize: {
-      // Imported files that change on disk are re-read by the server.
-      fileEvents: vscode.workspace.createFileSystemWatcher('**/*.mcl'),
+      // Imported files that change on disk are re-read by the server, and
+      // so is the ROS 2 bridge file (mcl.ros2Bridge) when it is saved.
+      fileEvents: [
+        vscode.workspace.createFileSystemWatcher('**/*.mcl'),
+        vscode.workspace.createFileSystemWatcher('**/*.toml'),
+      ],
     },
+    // The ROS 2 bridge file checked against the open vehicle (docs/ros2.md).
+    initializationOptions: { ros2Bridge: config.get<string>('ros2Bridge') || undefined },
   };
   client = new LanguageClient('mcl', 'MCL Language Server', serverOptions, clientOptions);
   try {

@@ -14,6 +14,7 @@
 pub mod builder;
 pub mod calls;
 pub mod dot;
+pub mod structure_tree;
 pub mod structures;
 pub mod tree_dot;
 pub mod verify;

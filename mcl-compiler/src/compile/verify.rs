@@ -263,6 +263,7 @@ fn options(max_states: usize) -> Options {
         max_states,
         max_dead_examples: 0,
         threads: 1,
+        exact_order: true,
         record_edges: true,
         // A marking with two tokens in a place already breaks 1-safeness: it
         // is reported and not expanded, which keeps unbounded nets finite.

@@ -9,6 +9,7 @@ use super::lts::Lts;
 use super::product::{explore_product, Effect, Product, NOBODY};
 use super::quotient::Quotient;
 use super::replay::{concretize, Replay, ReplayRules};
+use super::structural_proof::{self, Proof};
 use super::stubborn::Deps;
 use super::{VerifyOptions, VerifyStats, Witness, WitnessKind};
 use crate::central::Plant;
@@ -131,12 +132,38 @@ pub(super) fn verify_group(
         init.push(NOBODY);
         init
     };
-    // A large product: look for a deadlock by random walks first.
     let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
+    // A large product: the state equation may prove it free at once, or
+    // give candidate dead states that walks are directed to.
+    let mut candidates = Vec::new();
+    if nv > 1 && estimate > opts.structural_threshold as f64 {
+        let init: Vec<u32> = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).collect();
+        match structural_proof::prove(quots, &effects, &init) {
+            Proof::Free => {
+                stats.structural_proofs += 1;
+                return GroupOutcome::Verified;
+            }
+            Proof::Candidates(cs) => candidates = cs,
+            Proof::Unknown => {}
+        }
+    }
+    // Then look for a deadlock by random walks (directed ones first).
+    if nv > 1 && (estimate > opts.hunt_threshold as f64 || !candidates.is_empty()) {
+        let prod =
+            Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
+        let budget = opts.hunt_steps / (2 * candidates.len()).max(1);
+        for c in &candidates {
+            let guide = structural_proof::on_the_way(quots, c);
+            if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, budget, Some(&guide)) {
+                stats.counter_cap = stats.counter_cap.max(cap);
+                return GroupOutcome::Problems(vec![w]);
+            }
+        }
+    }
     if nv > 1 && estimate > opts.hunt_threshold as f64 {
         let prod =
             Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
-        if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, opts.hunt_steps) {
+        if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, opts.hunt_steps, None) {
             stats.counter_cap = stats.counter_cap.max(cap);
             return GroupOutcome::Problems(vec![w]);
         }

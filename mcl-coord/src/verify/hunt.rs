@@ -8,13 +8,18 @@ use super::{Witness, WitnessKind};
 
 /// Random walks through the product, looking for a dead state that replays
 /// on the real net (a deadlock found this way is real; finding none proves
-/// nothing). Seeded: the same input gives the same walks.
+/// nothing). Seeded: the same input gives the same walks. With `guide`
+/// (per vehicle, the classes from which it can still reach its class in a
+/// candidate dead state of the state equation, `structural_proof.rs`), a
+/// walk only takes moves that keep every vehicle on its way there, and
+/// stops where none is left.
 pub(super) fn hunt(
     p: &Product<'_>,
     init: Vec<u32>,
     ltss: &[&Lts],
     replay: &Replay<'_>,
     budget: usize,
+    guide: Option<&[Vec<bool>]>,
 ) -> Option<Witness> {
     let mut rng: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut next = move |n: usize| {
@@ -36,7 +41,14 @@ pub(super) fn hunt(
             used += 1;
             succ.clear();
             p.successors(&cur, 0..p.nv, &mut succ, &mut over);
-            if succ.is_empty() {
+            let dead = succ.is_empty();
+            if let Some(on_way) = guide {
+                succ.retain(|(x, v, ..)| on_way[*v][x[*v] as usize]);
+                if succ.is_empty() && !dead {
+                    break;
+                }
+            }
+            if dead {
                 let is_end = (0..p.nv).all(|v| p.quots[v].fin[cur[v] as usize]);
                 if !is_end {
                     tried += 1;

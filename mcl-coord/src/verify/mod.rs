@@ -54,6 +54,12 @@
 //! (one rule for all vehicles) allows, and more: a deadlock-free verdict
 //! holds for both.
 //!
+//! A large group whose vehicles' graphs have no cycle is first tried by the
+//! state equation of the product (`structural_proof.rs`): when no
+//! combination of the vehicles' positions and path effects can be dead,
+//! the group is free without exploring its product (docs/coordination.md,
+//! "The state equation").
+//!
 //! Scaling (docs/coordination.md, "Scaling"): vehicles that no supervisor
 //! links are verified as separate groups (exact: they share no place), and
 //! when a group's product of class counts is large, seeded random walks look
@@ -67,6 +73,7 @@ mod product;
 mod quotient;
 mod replay;
 mod settle;
+mod structural_proof;
 mod stubborn;
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
@@ -109,6 +116,11 @@ pub struct VerifyOptions {
     /// counterexamples are the shortest ones and the dry-run scenarios built
     /// from them replay as often as before the reduction existed.
     pub reduction_threshold: u64,
+    /// Above this many combinations of the vehicles' reduced states, a
+    /// group of vehicles without loops is first tried by the state
+    /// equation (`structural_proof.rs`), which proves it free without
+    /// exploring the product; `u64::MAX`: never.
+    pub structural_threshold: u64,
 }
 
 impl Default for VerifyOptions {
@@ -122,6 +134,7 @@ impl Default for VerifyOptions {
             hunt_steps: 200_000,
             reduction: true,
             reduction_threshold: 100_000,
+            structural_threshold: 100_000,
         }
     }
 }
@@ -137,6 +150,9 @@ pub struct VerifyStats {
     pub product_states: usize,
     /// K used.
     pub counter_cap: u32,
+    /// Groups of vehicles proven free by the state equation, without their
+    /// product (`structural_proof.rs`).
+    pub structural_proofs: usize,
     /// True when no supervisor place ever exceeded K (the product is then
     /// exact, not an over-approximation).
     pub exact: bool,
@@ -354,4 +370,35 @@ fn verify_mode(
 /// The places of a marking that hold no token (for siphon analysis).
 pub fn empty_places(m: &Marking) -> Vec<PlaceId> {
     m.0.iter().enumerate().filter(|(_, &n)| n == 0).map(|(i, _)| PlaceId(i as u32)).collect()
+}
+
+/// One vehicle's graph for the link report (`crate::link_report`): the
+/// markings of mission `m`'s net alone under the per-vehicle firing rule,
+/// its transitions `gated` (indexed by its own transitions) free to be
+/// held, as step 1 builds them (`lts.rs`: every run of the vehicle, whatever
+/// its supervisors and messages do, is a path from marking 0). Per
+/// marking: its moves (transition, next marking) and the gated immediate
+/// transitions enabled in it. An error beyond `max` markings or 200 tokens
+/// in a place.
+pub(crate) fn vehicle_graph(m: &Mission, gated: &[bool], max: usize) -> Result<VehicleGraph, String> {
+    // Each gated transition its own effect, so that a marking's waiting
+    // effects name its enabled gated immediate transitions.
+    let effect_of: Vec<u32> = (0..gated.len() as u32).map(|t| t + 1).collect();
+    let lts = lts::build_lts(m, 0, &effect_of, gated, &[], false, max).map_err(|e| match e {
+        lts::LtsError::TooMany => format!("mission `{}` has more than {max} markings", m.name),
+        lts::LtsError::Unbounded => format!("a place of mission `{}` exceeds 200 tokens", m.name),
+    })?;
+    let n = lts.len() as u32;
+    Ok(VehicleGraph {
+        moves: (0..n).map(|s| lts.out(s).iter().map(|e| (e.t, e.to)).collect()).collect(),
+        waiting: (0..n).map(|s| lts.gates(s).iter().map(|&g| g - 1).collect()).collect(),
+    })
+}
+
+/// See [`vehicle_graph`].
+pub(crate) struct VehicleGraph {
+    /// Per marking: (transition index, next marking).
+    pub(crate) moves: Vec<Vec<(u32, u32)>>,
+    /// Per marking: the gated immediate transitions enabled in it.
+    pub(crate) waiting: Vec<Vec<u32>>,
 }

@@ -6,6 +6,7 @@
 //! unwinding with `salsa::Cancelled` when an edit arrives; the server catches
 //! that and answers `ContentModified`.
 
+pub mod bridge;
 pub mod completion;
 pub mod coordination;
 pub mod diagnostics;
@@ -223,6 +224,9 @@ impl<'a> Analysis<'a> {
         for p in open {
             if Some(p) == self.world.std_copy.as_ref() {
                 continue; // the standard library, opened from its copy
+            }
+            if bridge::is_bridge_like(p) {
+                continue; // a ROS 2 bridge file (TOML), checked by `bridge`
             }
             let f = self.db.file(p);
             for &g in &program(self.db, f).files {

@@ -544,7 +544,11 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
             }
         } else {
             let n = if opts.threads == 0 { default_threads() } else { opts.threads };
-            super::parallel::run(&c, net, max, n)
+            if opts.exact_order {
+                super::parallel::run(&c, net, max, n)
+            } else {
+                super::unordered::run(&c, net, max, n)
+            }
         };
         match result {
             Some(ss) => return ss,

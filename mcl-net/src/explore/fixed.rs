@@ -17,21 +17,25 @@ struct Slot<const W: usize> {
 }
 
 /// Open-addressing hash set of `[u64; W]` markings (linear probing).
-struct FixedTable<const W: usize> {
+pub(super) struct FixedTable<const W: usize> {
     slots: Vec<Slot<W>>,
     mask: usize,
-    len: usize,
+    pub(super) len: usize,
 }
 
 impl<const W: usize> FixedTable<W> {
     const EMPTY: Slot<W> = Slot { key: [0; W], meta: 0 };
 
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         let cap = 1 << 12;
         FixedTable { slots: vec![Self::EMPTY; cap], mask: cap - 1, len: 0 }
     }
 
-    fn grow(&mut self) {
+    pub(super) fn capacity(&self) -> usize {
+        self.slots.len()
+    }
+
+    pub(super) fn grow(&mut self) {
         let cap = self.slots.len() * 2;
         let mask = cap - 1;
         let mut slots = vec![Self::EMPTY; cap];
@@ -47,12 +51,12 @@ impl<const W: usize> FixedTable<W> {
     }
 
     #[inline]
-    fn touch(&self, mixed: u64) -> u64 {
+    pub(super) fn touch(&self, mixed: u64) -> u64 {
         self.slots[mixed as usize & self.mask].meta
     }
 
     #[inline]
-    fn find(&self, key: &[u64; W], mixed: u64) -> Result<u32, usize> {
+    pub(super) fn find(&self, key: &[u64; W], mixed: u64) -> Result<u32, usize> {
         let tag = mixed << 32;
         let mut pos = mixed as usize & self.mask;
         loop {
@@ -68,7 +72,7 @@ impl<const W: usize> FixedTable<W> {
     }
 
     #[inline]
-    fn insert_at(&mut self, pos: usize, key: [u64; W], mixed: u64, idx: u32) {
+    pub(super) fn insert_at(&mut self, pos: usize, key: [u64; W], mixed: u64, idx: u32) {
         self.slots[pos] = Slot { key, meta: (mixed << 32) | (u64::from(idx) + 1) };
         self.len += 1;
     }

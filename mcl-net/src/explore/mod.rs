@@ -11,8 +11,20 @@
 //! a flat arena that doubles as the BFS queue and looks successors up in an
 //! open-addressing table with the packed marking stored inline (`fixed.rs`
 //! specialises it for markings of up to 8 words). With [`Options::threads`]
-//! above 1, `parallel.rs` partitions the states by hash over worker threads
-//! and numbers them exactly as the sequential search does. `stubborn.rs`
+//! above 1, the states are partitioned by hash over worker threads, in one
+//! of two ways ([`Options::exact_order`]):
+//!
+//! * `parallel.rs` (exact order, the default) goes level by level and numbers
+//!   the states exactly as the sequential search does, so dead markings come
+//!   with shortest paths; the barrier at every level limits its speed-up.
+//!   Used wherever a shortest counterexample or the BFS numbering matters.
+//! * `unordered.rs` lets every worker expand its own states continuously and
+//!   send successors to their owners in batches, with no barrier; it gives
+//!   the same counts, deadlock verdict, bounds and vanishing markings, and
+//!   real (not always shortest) paths. `mcl analyze --threads N` uses it
+//!   unless `--shortest-paths` is given.
+//!
+//! `stubborn.rs`
 //! explores with stubborn sets instead ([`explore_por`]: deadlocks exact,
 //! fewer states).
 
@@ -26,6 +38,7 @@ mod engine;
 mod fixed;
 mod parallel;
 mod stubborn;
+mod unordered;
 
 pub use stubborn::{explore_por, PorReport};
 
@@ -51,11 +64,20 @@ pub struct Options {
     pub max_states: usize,
     /// How many dead markings to describe with a shortest path.
     pub max_dead_examples: usize,
-    /// Worker threads (0 = one per core, at most 8; default 1). Results do not
-    /// depend on it, state numbering included, except which states are kept
-    /// at the BFS level where `max_states` is reached. Recording edges and
-    /// cutting markings always run on one thread.
+    /// Worker threads (0 = one per core, at most 8; default 1). With
+    /// [`Options::exact_order`] results do not depend on it, state numbering
+    /// included, except which states are kept at the BFS level where
+    /// `max_states` is reached. Recording edges and cutting markings always
+    /// run on one thread.
     pub threads: usize,
+    /// With several threads: number the states in BFS order and keep
+    /// shortest paths (the level-synchronous `parallel.rs`; default). When
+    /// false, the asynchronous `unordered.rs` explores without levels:
+    /// the same states, edges, dead markings, vanishing markings and bounds,
+    /// but other ids, and paths that are real but not always shortest. One
+    /// thread always runs the sequential BFS. The unordered engine may stop
+    /// a few states short of `max_states` (see `unordered.rs`).
+    pub exact_order: bool,
     /// Keep the edges (state, ready transition, successor) for
     /// [`StateSpace::successors`] and [`StateSpace::coreachable`].
     pub record_edges: bool,
@@ -75,6 +97,7 @@ impl Default for Options {
             max_states: DEFAULT_MAX_STATES,
             max_dead_examples: 10,
             threads: 1,
+            exact_order: true,
             record_edges: false,
             cut_above: None,
         }
@@ -169,7 +192,7 @@ impl StateSpace {
         self.stop
     }
 
-    /// All state ids, in BFS order.
+    /// All state ids, in BFS order (unless [`Options::exact_order`] was false).
     pub fn states(&self) -> impl ExactSizeIterator<Item = StateId> {
         (0..self.len() as u32).map(StateId)
     }
@@ -188,7 +211,8 @@ impl StateSpace {
         Marking((0..self.layout.places as u32).map(|p| self.tokens(s, PlaceId(p))).collect())
     }
 
-    /// A shortest firing sequence from the initial marking to `s`.
+    /// A firing sequence from the initial marking to `s`: a shortest one
+    /// unless [`Options::exact_order`] was false.
     pub fn path_to(&self, s: StateId) -> Vec<TransitionId> {
         let mut path = Vec::new();
         let mut cur = s.0;
@@ -203,7 +227,7 @@ impl StateSpace {
         path
     }
 
-    /// States in which no transition is enabled, in BFS order.
+    /// States in which no transition is enabled, by increasing id.
     pub fn dead_states(&self) -> impl ExactSizeIterator<Item = StateId> + '_ {
         self.dead.iter().map(|&s| StateId(s))
     }
@@ -303,14 +327,14 @@ pub fn explore(net: &Net, opts: &Options) -> StateSpace {
     engine::explore(net, opts)
 }
 
-/// A dead marking with a shortest path to it.
+/// A dead marking with a path to it (shortest unless [`Options::exact_order`] was false).
 #[derive(Clone, Debug, Serialize)]
 pub struct DeadMarking {
     /// State index.
     pub state: StateId,
     /// Marked places as `(place id, tokens)`.
     pub marking: Vec<(String, u32)>,
-    /// Shortest firing sequence from the initial marking, as transition indices.
+    /// Firing sequence from the initial marking, as transition indices.
     pub path: Vec<TransitionId>,
     /// The same sequence as transition names.
     pub path_names: Vec<String>,
@@ -344,7 +368,7 @@ pub struct AnalysisReport {
     pub deadlock: bool,
     /// Number of dead markings.
     pub dead_markings: u64,
-    /// Up to [`Options::max_dead_examples`] dead markings, in BFS order.
+    /// Up to [`Options::max_dead_examples`] dead markings, by increasing state id.
     pub dead_examples: Vec<DeadMarking>,
     /// Every place holds at most one token in every reachable marking.
     pub one_safe: bool,

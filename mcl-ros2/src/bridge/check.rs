@@ -39,10 +39,17 @@ pub struct Loaded {
 /// top of the bundled ones, and checks it against `vehicle`.
 pub fn load(file: &Path, vehicle: &Vehicle) -> Result<Loaded, Vec<BridgeError>> {
     let at_start = |message: String| BridgeError { file: file.to_path_buf(), line: 1, column: 1, message };
+    // The bounded reader: a regular file only, never a FIFO that blocks.
     let text =
-        std::fs::read_to_string(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
-    let bridge = parse(file, &text).map_err(|e| vec![e])?;
-    let loc = Locator { file, text: &text };
+        mcl_net::input::read_source(file).map_err(|e| vec![at_start(format!("cannot read the bridge file: {e}"))])?;
+    load_text(file, &text, vehicle)
+}
+
+/// [`load`] of the text of `file` (an editor's buffer): the interface
+/// folders it names are read from disk, relative to `file`.
+pub fn load_text(file: &Path, text: &str, vehicle: &Vehicle) -> Result<Loaded, Vec<BridgeError>> {
+    let bridge = parse(file, text).map_err(|e| vec![e])?;
+    let loc = Locator { file, text };
     let mut registry = Registry::bundled();
     let base = file.parent().unwrap_or(Path::new("."));
     for dir in &bridge.interfaces {
@@ -92,6 +99,11 @@ pub fn check(loc: &Locator<'_>, bridge: &Bridge, registry: &Registry, vehicle: &
     if let Some(t) = &bridge.status_topic {
         c.name(t, "topic");
     }
+    if let Some(m) = &bridge.service_mapping {
+        if super::config::Mapping::parse(m.get_ref()).is_none() {
+            c.err(m, format!("`{}` is not a service mapping (`cyclone`, `enhanced` or `basic`)", m.get_ref()));
+        }
+    }
     for (pname, p) in &bridge.primitives {
         let Some(vp) = vehicle.primitives.iter().find(|v| v.name == *pname.get_ref()) else {
             let known: Vec<&str> = vehicle.primitives.iter().map(|v| v.name.as_str()).collect();
@@ -138,6 +150,7 @@ pub fn check(loc: &Locator<'_>, bridge: &Bridge, registry: &Registry, vehicle: &
             for ev in [Some(&a.succeeded), Some(&a.aborted), a.canceled.as_ref()].into_iter().flatten() {
                 c.event(ev, vp, vehicle);
             }
+            c.timeout(a.timeout.as_ref());
             let ty = a.ty.get_ref();
             if !c.reg.has_action(ty) {
                 c.err(&a.ty, format!("no action type `{ty}` (bundled or in `interfaces`; written `pkg/action/Name`)"));
@@ -195,6 +208,15 @@ impl Checker<'_> {
                 ev,
                 format!("primitive `{}` has no event `{name}` (its events: {})", vp.name, vp.events.join(", ")),
             ),
+        }
+    }
+
+    fn timeout(&mut self, t: Option<&Spanned<f64>>) {
+        if let Some(t) = t {
+            let s = *t.get_ref();
+            if !(s > 0.0 && s <= 86_400.0) {
+                self.err(t, format!("timeout {s} is not a number of seconds in (0, 86400]"));
+            }
         }
     }
 
@@ -289,9 +311,17 @@ impl Checker<'_> {
             }
             _ => self.err(map, "give one of `publish = \"/topic\"` and `call = \"/service\"`"),
         }
+        if c.call.is_none() {
+            if let Some(f) = &c.on_failure {
+                self.err(f, "`on_failure` goes with `call` (a service)");
+            }
+            if let Some(t) = &c.timeout {
+                self.err(t, "`timeout` goes with `call` (a service)");
+            }
+        }
+        self.timeout(c.timeout.as_ref());
         // Events of responses are checked against the primitive.
-        for r in &c.on_response {
-            let ev = &r.get_ref().event;
+        for ev in c.on_response.iter().map(|r| &r.get_ref().event).chain(&c.on_failure) {
             if !vp.events.iter().any(|e| e == ev.get_ref()) {
                 self.err(
                     ev,

@@ -7,6 +7,7 @@
 //! domain_id = 7                # optional, 0 by default
 //! interfaces = ["interfaces"]  # optional: folders of .msg/.srv/.action, relative to this file
 //! status_topic = "/mcl/status" # optional: the mission's state (std_msgs/String, JSON)
+//! service_mapping = "cyclone"  # optional: "cyclone" (default), "enhanced" or "basic"
 //!
 //! [primitives.AlarmPrimitive]
 //! enable = { publish = "/alarm/enable", type = "std_msgs/msg/Bool", fields = { data = true } }
@@ -20,6 +21,7 @@
 //! goal = { "target.x" = "$way-point[0]", "target.y" = "$way-point[1]", speed = 0.5 }
 //! succeeded = "eventGotoOk"
 //! aborted = "eventGotoFail"
+//! timeout = 5                  # optional: seconds to accept a goal (10 by default)
 //! ```
 
 use serde::Deserialize;
@@ -40,8 +42,43 @@ pub struct Bridge {
     pub interfaces: Vec<Spanned<String>>,
     #[serde(default)]
     pub status_topic: Option<Spanned<String>>,
+    /// How requests and replies of services carry their request id on DDS:
+    /// `"cyclone"` (rmw_cyclonedds, the default), `"enhanced"` (rmw_fastrtps,
+    /// rmw_connextdds) or `"basic"` (RPC over DDS).
+    #[serde(default)]
+    pub service_mapping: Option<Spanned<String>>,
     #[serde(default)]
     pub primitives: BTreeMap<Spanned<String>, Primitive>,
+}
+
+/// How a service's request id travels on DDS (`service_mapping`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mapping {
+    /// rmw_cyclonedds: a 16-octet header before the request and the reply.
+    Cyclone,
+    /// rmw_fastrtps, rmw_connextdds: the related sample identity inline.
+    Enhanced,
+    /// RPC over DDS "basic": a request and a reply header.
+    Basic,
+}
+
+impl Mapping {
+    /// The mapping written `s` in the bridge file.
+    pub fn parse(s: &str) -> Option<Mapping> {
+        match s {
+            "cyclone" => Some(Mapping::Cyclone),
+            "enhanced" => Some(Mapping::Enhanced),
+            "basic" => Some(Mapping::Basic),
+            _ => None,
+        }
+    }
+}
+
+impl Bridge {
+    /// The service mapping of the bridge (`cyclone` when not given).
+    pub fn mapping(&self) -> Mapping {
+        self.service_mapping.as_ref().and_then(|m| Mapping::parse(m.get_ref())).unwrap_or(Mapping::Cyclone)
+    }
 }
 
 /// What stands for one primitive of the vehicle file.
@@ -84,7 +121,18 @@ pub struct Command {
     /// A service's response: events raised when it meets a condition.
     #[serde(default)]
     pub on_response: Vec<Spanned<Raise>>,
+    /// A service's event when it gives no response: no answer within
+    /// `timeout`, or a response that does not decode.
+    #[serde(default)]
+    pub on_failure: Option<Spanned<String>>,
+    /// Seconds a service has to answer ([`DEFAULT_TIMEOUT_S`] when absent).
+    #[serde(default)]
+    pub timeout: Option<Spanned<f64>>,
 }
+
+/// Seconds a service has to answer, or an action server to accept or
+/// cancel a goal, when the bridge file does not say.
+pub const DEFAULT_TIMEOUT_S: f64 = 10.0;
 
 /// `when` the condition holds, raise `event`.
 #[derive(Clone, Debug, Deserialize)]
@@ -140,6 +188,10 @@ pub struct ActionMap {
     /// Perceptions from feedback fields.
     #[serde(default)]
     pub feedback: Vec<Spanned<FeedbackPerception>>,
+    /// Seconds the server has to accept a goal or answer a cancel
+    /// ([`DEFAULT_TIMEOUT_S`] when absent); the goal itself may run longer.
+    #[serde(default)]
+    pub timeout: Option<Spanned<f64>>,
 }
 
 /// A perception from a field of an action's feedback.

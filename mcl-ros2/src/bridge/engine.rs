@@ -13,6 +13,7 @@ use super::config::{Command, Raise};
 use super::expr::{Condition, Source};
 use serde_json::{Map, Value};
 use std::collections::{BTreeMap, BTreeSet};
+use std::time::Duration;
 
 /// What the bridge asks the transport, or tells the player.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,8 +21,9 @@ pub enum Out {
     /// Publish `value` (a message of type `ty`) on `topic`.
     Publish { topic: String, ty: String, value: Value },
     /// Call `service` (of type `ty`) with `request`; answer with
-    /// [`Engine::on_response`] and the same `call`.
-    Call { call: u64, service: String, ty: String, request: Value },
+    /// [`Engine::on_response`] and the same `call`, an error once
+    /// `timeout` has passed without a response.
+    Call { call: u64, service: String, ty: String, request: Value, timeout: Duration },
     /// Send a goal to the action server `action` (of type `ty`) for `primitive`.
     SendGoal { primitive: String, action: String, ty: String, goal: Value },
     /// Cancel the goal of `primitive` at `action`.
@@ -57,9 +59,16 @@ impl GoalEnd {
     }
 }
 
-/// A service call waiting for its response: the primitive, and the
-/// response's rules (condition, event).
-type PendingCall = (String, Vec<(Option<Condition>, String)>);
+/// A service call waiting for its response.
+struct PendingCall {
+    primitive: String,
+    /// The response's rules (condition, event).
+    rules: Vec<(Option<Condition>, String)>,
+    /// The event of no response (`on_failure`).
+    failure: Option<String>,
+    /// Made by `enable`: its answer counts only while the primitive is enabled.
+    by_enable: bool,
+}
 
 struct TopicRule {
     primitive: String,
@@ -195,8 +204,11 @@ impl Engine {
         let call = self.next_call;
         self.next_call += 1;
         let rules = c.on_response.iter().map(|r| raise_rule(r.get_ref())).collect();
-        self.calls.insert(call, (primitive.to_string(), rules));
-        vec![Out::Call { call, service: service.get_ref().clone(), ty, request: value }]
+        let failure = c.on_failure.as_ref().map(|f| f.get_ref().clone());
+        let by_enable = command == "enable";
+        self.calls.insert(call, PendingCall { primitive: primitive.to_string(), rules, failure, by_enable });
+        let timeout = seconds(c.timeout.as_ref());
+        vec![Out::Call { call, service: service.get_ref().clone(), ty, request: value, timeout }]
     }
 
     /// A message arrived on `topic` (decoded).
@@ -217,17 +229,32 @@ impl Engine {
 
     /// The response to call `call`, or why there is none (a server that
     /// never answered, a response that does not decode): the error is a
-    /// warning, and raises nothing.
+    /// warning, and raises the command's `on_failure` event if it has one.
+    /// The answer to an `enable` raises nothing once the primitive has been
+    /// disabled (an abort, the losing branch of a parallel-or).
     pub fn on_response(&mut self, call: u64, response: Result<Value, String>) -> Vec<Out> {
-        let Some((primitive, rules)) = self.calls.remove(&call) else { return Vec::new() };
+        let Some(p) = self.calls.remove(&call) else { return Vec::new() };
+        if p.by_enable && !self.enabled.contains(&p.primitive) {
+            return Vec::new();
+        }
         match response {
-            Ok(v) => rules
+            Ok(v) => p
+                .rules
                 .iter()
                 .filter(|(when, _)| when.as_ref().is_none_or(|c| c.holds(&v)))
                 .map(|(_, e)| Out::Event(e.clone()))
                 .collect(),
-            Err(e) => vec![Out::Warning(format!("service call of `{primitive}`: {e}"))],
+            Err(e) => std::iter::once(Out::Warning(format!("service call of `{}`: {e}", p.primitive)))
+                .chain(p.failure.map(Out::Event))
+                .collect(),
         }
+    }
+
+    /// How long the action server of `primitive` has to accept its goal or
+    /// answer its cancel.
+    pub fn goal_timeout(&self, primitive: &str) -> Duration {
+        let a = self.loaded.bridge.primitives.get(primitive).and_then(|p| p.action.as_ref());
+        seconds(a.and_then(|a| a.get_ref().timeout.as_ref()))
     }
 
     /// The goal of `primitive` ended.
@@ -263,6 +290,12 @@ impl Engine {
             })
             .collect()
     }
+}
+
+/// A `timeout` of the bridge file (checked positive), or the default.
+fn seconds(t: Option<&toml::Spanned<f64>>) -> Duration {
+    let s = t.map_or(super::config::DEFAULT_TIMEOUT_S, |t| *t.get_ref());
+    Duration::try_from_secs_f64(s).unwrap_or(Duration::from_secs_f64(super::config::DEFAULT_TIMEOUT_S))
 }
 
 fn raise_rule(r: &Raise) -> (Option<Condition>, String) {

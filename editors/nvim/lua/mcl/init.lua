@@ -6,6 +6,7 @@
 --     lsp = true,                      -- start it for every MCL buffer
 --     treesitter = true,               -- register the parser with nvim-treesitter
 --     grammar = nil,                   -- editors/tree-sitter-mcl (found from this file by default)
+--     ros2_bridge = nil,               -- a ROS 2 bridge file to check (docs/ros2.md), e.g. 'BRIDGE.toml'
 --   })
 
 local M = {}
@@ -67,6 +68,9 @@ function M.start_lsp(buf, opts)
     return
   end
   local config = { name = 'mcl', cmd = opts.cmd, root_dir = root_dir(buf, opts.root_markers) }
+  if opts.ros2_bridge then
+    config.init_options = { ros2Bridge = opts.ros2_bridge }
+  end
   if vim.lsp.start then
     return vim.lsp.start(config, { bufnr = buf })
   end
