@@ -76,6 +76,8 @@ mod settle;
 mod structural_proof;
 mod stubborn;
 
+use std::cell::OnceCell;
+
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
@@ -83,8 +85,8 @@ use serde::Serialize;
 use crate::central::Plant;
 use crate::model::Mission;
 use crate::supervisor::Supervisor;
-use group::{groups, verify_group, Group, GroupOutcome};
-use lts::{build_lts, can_end_alone, LtsError};
+use group::{groups, verify_group, Group, GroupOutcome, Settled};
+use lts::{build_lts, can_end_alone, Lts, LtsError};
 use product::Effect;
 use quotient::{reduce, Quotient};
 use replay::ReplayRules;
@@ -284,8 +286,7 @@ fn verify_mode(
     let mut stats = VerifyStats::default();
     let mut ltss = Vec::new();
     for (m, part) in missions.iter().zip(&plant.parts) {
-        match build_lts(m, part.transitions.start, &effect_of, &gated, &urgency.remote, quiet, opts.max_vehicle_states)
-        {
+        match build_lts(m, part.transitions.start, &effect_of, &gated, &[], quiet, opts.max_vehicle_states) {
             Ok(l) => {
                 stats.vehicle_states.push(l.len());
                 ltss.push(l);
@@ -305,8 +306,27 @@ fn verify_mode(
         }
     }
     let quots: Vec<Quotient> = ltss.iter().map(|l| reduce(l, false)).collect();
-    // Finer, for the products explored whole with settling (`product.rs`).
-    let settled: Vec<Quotient> = ltss.iter().map(|l| reduce(l, true)).collect();
+    // The graphs for settling (`product.rs`), built only when a product
+    // has counterexamples to choose among: the remote starts wait for their
+    // vehicle to settle, and vanishing markings are a label.
+    let settled_graphs: OnceCell<Option<Settled>> = OnceCell::new();
+    let settled = || {
+        settled_graphs
+            .get_or_init(|| {
+                let remote_ltss = if urgency.remote.iter().any(|&r| r) {
+                    let built = missions.iter().zip(&plant.parts).map(|(m, part)| {
+                        let t0 = part.transitions.start;
+                        build_lts(m, t0, &effect_of, &gated, &urgency.remote, quiet, opts.max_vehicle_states).ok()
+                    });
+                    Some(built.collect::<Option<Vec<Lts>>>()?)
+                } else {
+                    None
+                };
+                let quots = remote_ltss.as_ref().unwrap_or(&ltss).iter().map(|l| reduce(l, true)).collect();
+                Some(Settled { ltss: remote_ltss, quots })
+            })
+            .as_ref()
+    };
     stats.vehicle_classes = quots.iter().map(|q| q.n).collect();
     // Which vehicles can end when nothing holds them.
     let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
@@ -323,13 +343,9 @@ fn verify_mode(
     }
     let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
     let finals: Vec<Vec<PlaceId>> = plant.parts.iter().map(|p| p.final_places.clone()).collect();
-    let rules = ReplayRules {
-        vehicles: &vehicles,
-        take_back: &take_back,
-        quiet: &quiet_ts,
-        finals: &finals,
-        remote: &urgency.remote,
-    };
+    let rules =
+        ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals, remote: &[] };
+    let settled_rules = ReplayRules { remote: &urgency.remote, ..rules };
 
     // Vehicles that no supervisor links are independent: each group of
     // linked vehicles is verified alone (docs/coordination.md).
@@ -343,10 +359,11 @@ fn verify_mode(
             sups: ss,
             ltss: vs.iter().map(|&v| &ltss[v]).collect(),
             quots: vs.iter().map(|&v| &quots[v]).collect(),
-            settled: vs.iter().map(|&v| &settled[v]).collect(),
+            settled: &settled,
             can_end: vs.iter().map(|&v| can_end[v]).collect(),
             whole: groups.len() == 1,
             rules: &rules,
+            settled_rules: &settled_rules,
             urgent: vs.iter().map(|&v| urgency.urgent[v].as_slice()).collect(),
             holders: &urgency.holders,
         };

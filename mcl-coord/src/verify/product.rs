@@ -110,8 +110,16 @@ impl Product<'_> {
         for v in vehicles.into_iter().filter(|&v| owing.is_none_or(|o| o == v)) {
             let q = st[v];
             let qt = &self.quots[v];
-            // Events wait while an urgent start is allowed (it fires first).
-            let any_gate_allowed = || self.urgent_allowed(st, v, q);
+            // Events wait while a start is allowed (it fires first); when
+            // settling, only an urgent one (a remote start waits for its
+            // grant, and its vehicle's events may come meanwhile).
+            let any_gate_allowed = || {
+                if self.settling {
+                    self.urgent_allowed(st, v, q)
+                } else {
+                    qt.gates[q as usize].iter().any(|&g| self.allowed(st, g))
+                }
+            };
             for &(label, q2) in qt.out(q) {
                 if lab_blocked(label) && any_gate_allowed() {
                     continue;
@@ -121,7 +129,8 @@ impl Product<'_> {
                 match lab_action(label) {
                     None => out.push((base, v, label, true)),
                     Some(t) => {
-                        if !self.allowed(st, t) || self.unsettled_holders(st, v, t).next().is_some() {
+                        let waits = self.settling && self.unsettled_holders(st, v, t).next().is_some();
+                        if !self.allowed(st, t) || waits {
                             continue;
                         }
                         let e = &self.effects[t as usize];

@@ -199,26 +199,11 @@ impl Deps {
             k += 1;
             let q = &p.quots[u];
             let c = st[u];
-            let allowed_gate =
-                q.gates[c as usize].iter().copied().find(|&g| p.urgent[u][g as usize] && p.allowed(st, g));
+            let allowed_gate = q.gates[c as usize].iter().copied().find(|&g| p.allowed(st, g));
             for &(label, _) in q.out(c) {
                 let e = lab_action(label).map_or(&none, |a| &p.effects[a as usize]);
                 let blocked = lab_blocked(label);
                 let need_ok = lab_action(label).is_none_or(|a| p.allowed(st, a));
-                // A start waiting for a holder that has not begun: that
-                // holder's first moves enable it (and no move disables it
-                // again: a holder is vanishing only while it owes).
-                let waits: Vec<usize> =
-                    lab_action(label).map_or_else(Vec::new, |a| p.unsettled_holders(st, u, a).collect());
-                if !waits.is_empty() {
-                    for w in waits {
-                        if !inside[w] {
-                            inside[w] = true;
-                            out.push(w);
-                        }
-                    }
-                    continue;
-                }
                 if need_ok && !(blocked && allowed_gate.is_some()) {
                     short.clear();
                     if blocked {
