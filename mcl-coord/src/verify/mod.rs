@@ -30,9 +30,11 @@
 //!    marking*. The end of the missions must stay reachable from every image
 //!    through *pessimistic* steps (`>K` minus one is `K`), which every real
 //!    marking with that image can follow, so this proves that no vehicle can
-//!    be blocked forever. A vehicle settles as its player does: after its
-//!    own step, its ready immediate steps (and its allowed starts on its
-//!    own supervisors) come before any other vehicle's move. (`product.rs`)
+//!    be blocked forever. The verdict is this interleaving product's; when
+//!    it has counterexamples, a *settled* product (a vehicle's ready
+//!    immediate steps and its allowed starts on its own supervisors come
+//!    before any other vehicle's move, as its player does) only picks
+//!    counterexamples that replay as dry runs. (`product.rs`, `group.rs`)
 //!
 //! The product is explored breadth-first with stubborn sets of vehicles
 //! (`stubborn.rs`): in each state only the moves of a set of vehicles that

@@ -7,7 +7,9 @@
 //! has an image. A step is *pessimistic* when every real marking with that
 //! image can follow it (`>K` minus one is `K`).
 //!
-//! **Settling** (docs/coordination.md, "Settling"): a player fires every
+//! **Settling** (docs/coordination.md, "Settling"; only in the product
+//! that picks counterexamples, never in the one that gives the verdict,
+//! which interleaves every vehicle's moves): a player fires every
 //! ready immediate transition of its vehicle before it takes its next
 //! input, and sends its messages only then. A vehicle whose own step leads
 //! to an *unstable* class (every marking in it vanishing:
