@@ -24,8 +24,10 @@
 //! included, exact counts) under the per-vehicle firing rule that the
 //! verifier applies (`check_joint`): a start on a mutex that another
 //! vehicle holds may be held while its vehicle takes other steps (its token
-//! comes from the holder, a round trip), as in the product; no other start
-//! may.
+//! comes from the holder, a round trip), as in the settled product (the
+//! interleaving product, which gives the verdict, lets such a vehicle's
+//! events wait while the start is allowed, as before settling); no other
+//! start may.
 //!
 //! `MCL_DIFFERENTIAL_CASES` (default 40 per kind) and
 //! `MCL_DIFFERENTIAL_SEED` change the run.
@@ -436,7 +438,7 @@ struct Joint {
 /// its vehicle under the per-vehicle firing rule (`select_ready` among its
 /// enabled transitions, as the verifier's transition systems and replay
 /// apply it), where a start on a mutex that another vehicle holds may be
-/// held (its token may be on its way; the product holds it too) and no
+/// held (its token may be on its way; the settled product holds it too) and no
 /// other start may. The vehicle nets' own coordination transitions
 /// (receptions, `coord.*`) have no counterpart there; a mission fires
 /// nothing of its own after its outcome (its supervisor copies still
@@ -499,7 +501,7 @@ fn check_joint(
             .filter(|u| central.transitions()[u.index()].id.starts_with(&prefix))
             .collect();
         // A start on a mutex that another vehicle holds may wait for its
-        // token (the product holds it too); no other start may.
+        // token (the settled product holds it too); no other start may.
         ready.retain(|&u| u == t || !remote_starts.contains(&u));
         mcl_net::semantics::select_ready(central, &mut ready);
         if !ready.contains(&t) {
