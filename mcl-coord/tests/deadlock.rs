@@ -8,7 +8,7 @@ use mcl_coord::supervisor::{apply, synthesize};
 use mcl_coord::verify::WitnessKind;
 use mcl_coord::{analyze, centralize, Activity, CallRef, Constraint, Mission, Origin, Verdict};
 use mcl_net::structural::Limits;
-use mcl_net::{explore, Net, Options};
+use mcl_net::{explore, Net, Options, TransitionKind};
 
 fn pw(net: Net, p: &str) -> Net {
     let id = place(&net, p);
@@ -39,10 +39,16 @@ fn figure_6_9a() -> (Vec<Mission>, Vec<Constraint>) {
 /// `P6 → … → P10`, the mutual exclusions M([P2 → T2 → P3 → T3 → P4], P8)
 /// and M(P3, [P7 → T6 → P8 → T7 → P9]), with P2, P3, P7, P8 PW-transformed
 /// (a region includes the wait places inside it).
+///
+/// The steps of the sequences are events (the vehicles' activities take
+/// time); only the PW-transformation's entries, which the supervisors
+/// control, are immediate. With every step immediate, each vehicle's player
+/// would run its whole mission in one settle and the regions could not
+/// deadlock (docs/coordination.md, "Settling").
 fn figure_6_9b() -> (Vec<Mission>, Vec<Constraint>) {
-    let v1 = sequence("v1", &["P1", "P2", "P3", "P4", "P5"], &["T1", "T2", "T3", "T4"]);
+    let v1 = events(sequence("v1", &["P1", "P2", "P3", "P4", "P5"], &["T1", "T2", "T3", "T4"]));
     let v1 = pw(pw(v1, "P2"), "P3");
-    let v2 = sequence("v2", &["P6", "P7", "P8", "P9", "P10"], &["T5", "T6", "T7", "T8"]);
+    let v2 = events(sequence("v2", &["P6", "P7", "P8", "P9", "P10"], &["T5", "T6", "T7", "T8"]));
     let v2 = pw(pw(v2, "P7"), "P8");
     let m1 = Mission::new("v1", v1.clone(), vec![place(&v1, "P1")], vec![place(&v1, "P5")])
         .with_activity(activity(&v1, "R1", &["P2", "P3wait", "P3", "P4"]))
@@ -55,6 +61,17 @@ fn figure_6_9b() -> (Vec<Mission>, Vec<Constraint>) {
         Constraint::mutex([CallRef::new("v1", "P3"), CallRef::new("v2", "R2")], 1),
     ];
     (vec![m1, m2], cs)
+}
+
+/// `net` with every transition event-driven (the event named as it).
+fn events(net: Net) -> Net {
+    let mut b = net.to_builder();
+    for t in net.transition_ids() {
+        if let Some(tr) = b.transition_mut(t) {
+            tr.kind = TransitionKind::Event(tr.id.to_string());
+        }
+    }
+    b.build().unwrap()
 }
 
 fn sorted(mut v: Vec<String>) -> Vec<String> {

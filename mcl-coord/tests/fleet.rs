@@ -88,7 +88,7 @@ fn eight_vehicles_get_the_generated_verdict() {
         let (ms, cs) = load(&format!("8-1-{deadlock}"), &f.text);
         let r = analyze_with(&ms, &cs, &opts(true)).unwrap();
         let expect = if deadlock { Verdict::Deadlock } else { Verdict::Free };
-        assert_eq!(r.verdict, expect, "{:?}\n{}", r.problems, f.text);
+        assert_eq!(r.verdict, expect, "{:?} {:?}\n{}", r.problems, r.stats, f.text);
         replays(&r);
     }
 }

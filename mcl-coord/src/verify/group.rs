@@ -6,7 +6,7 @@ use mcl_net::{Net, TransitionId};
 
 use super::hunt::hunt;
 use super::lts::Lts;
-use super::product::{explore_product, Effect, Product};
+use super::product::{explore_product, Effect, Product, NOBODY};
 use super::quotient::Quotient;
 use super::replay::{concretize, Replay, ReplayRules};
 use super::structural_proof::{self, Proof};
@@ -61,11 +61,34 @@ pub(super) struct Group<'a> {
     pub(super) sups: &'a [usize],
     pub(super) ltss: Vec<&'a Lts>,
     pub(super) quots: Vec<&'a Quotient>,
+    /// The graphs of every vehicle of the plant for settling, built on
+    /// first use (`None`: a vehicle's graph passed the cap): they only
+    /// choose counterexamples, never the verdict.
+    pub(super) settled: &'a dyn Fn() -> Option<&'a Settled>,
     pub(super) can_end: Vec<bool>,
     /// The group holds every vehicle.
     pub(super) whole: bool,
     /// What a replay of its counterexamples applies.
     pub(super) rules: &'a ReplayRules<'a>,
+    /// The same, with the remote starts waiting for their vehicle to settle
+    /// (for the settled product's counterexamples).
+    pub(super) settled_rules: &'a ReplayRules<'a>,
+    /// Per vehicle of the group and effect: its gated starts fire as soon
+    /// as allowed ([`Product::urgent`]).
+    pub(super) urgent: Vec<&'a [bool]>,
+    /// Per effect: the holders of the mutexes between vehicles it consumes
+    /// from (vehicles of the plant, `settle.rs`).
+    pub(super) holders: &'a [Vec<usize>],
+}
+
+/// The vehicle graphs for settling (docs/coordination.md, "Settling"), of
+/// every vehicle of the plant.
+pub(super) struct Settled {
+    /// Built with the remote starts waiting for their vehicle to settle
+    /// (`None`: there are none, the plain graphs serve).
+    pub(super) ltss: Option<Vec<Lts>>,
+    /// Reduced with vanishing markings as a label.
+    pub(super) quots: Vec<Quotient>,
 }
 
 /// The verdict on one group.
@@ -103,17 +126,25 @@ pub(super) fn verify_group(
         .collect();
     let quots = &grp.quots;
     let nv = grp.vehicles.len();
+    // The holders, as vehicles of the group (a mutex links its holder in).
+    let holders: Vec<Vec<usize>> = grp
+        .holders
+        .iter()
+        .map(|hs| hs.iter().filter_map(|h| grp.vehicles.iter().position(|v| v == h)).collect())
+        .collect();
     let can_end = &grp.can_end;
     let group_ts: Vec<TransitionId> =
         grp.vehicles.iter().flat_map(|&v| plant.parts[v].transitions.clone().map(TransitionId)).collect();
-    let replay =
-        Replay { snet, nsups: sups_all.len(), group_ts: if grp.whole { None } else { Some(&group_ts) }, rules };
+    let group_ts = if grp.whole { None } else { Some(group_ts.as_slice()) };
+    let replay = Replay { snet, nsups: sups_all.len(), group_ts, rules };
+    let replay_settled = Replay { snet, nsups: sups_all.len(), group_ts, rules: grp.settled_rules };
     let max_w = sups.iter().flat_map(|s| s.consumed_by.iter().map(|&(_, w)| w)).max().unwrap_or(1);
     let max_init = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).max().unwrap_or(0);
     let mut cap = opts.counter_cap.max(max_w).max(max_init).max(1);
-    let init_of = |cap: u32| -> Vec<u32> {
+    let init_of = |quots: &[&Quotient], cap: u32| -> Vec<u32> {
         let mut init: Vec<u32> = quots.iter().map(|q| q.block[0]).collect();
         init.extend(sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX).min(cap + 1)));
+        init.push(NOBODY);
         init
     };
     let estimate: f64 = quots.iter().map(|q| q.n as f64).product();
@@ -133,19 +164,21 @@ pub(super) fn verify_group(
     }
     // Then look for a deadlock by random walks (directed ones first).
     if nv > 1 && (estimate > opts.hunt_threshold as f64 || !candidates.is_empty()) {
-        let prod = Product { quots, effects: &effects, cap, nv };
+        let prod =
+            Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
         let budget = opts.hunt_steps / (2 * candidates.len()).max(1);
         for c in &candidates {
             let guide = structural_proof::on_the_way(quots, c);
-            if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, budget, Some(&guide)) {
+            if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, budget, Some(&guide)) {
                 stats.counter_cap = stats.counter_cap.max(cap);
                 return GroupOutcome::Problems(vec![w]);
             }
         }
     }
     if nv > 1 && estimate > opts.hunt_threshold as f64 {
-        let prod = Product { quots, effects: &effects, cap, nv };
-        if let Some(w) = hunt(&prod, init_of(cap), &grp.ltss, &replay, opts.hunt_steps, None) {
+        let prod =
+            Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
+        if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, opts.hunt_steps, None) {
             stats.counter_cap = stats.counter_cap.max(cap);
             return GroupOutcome::Problems(vec![w]);
         }
@@ -157,9 +190,28 @@ pub(super) fn verify_group(
     let mut reduce = opts.reduction && estimate > opts.reduction_threshold as f64;
     let mut exact_deps = true;
     let mut deps = reduce.then(|| Deps::new(quots, &effects, sups.len(), true));
+    // The verdict is the interleaving product's: it holds every run the
+    // players can take over any link, so "free" is a proof. When it finds
+    // problems, explored whole, the settled product (docs/coordination.md,
+    // "Settling": a vehicle fires its ready immediate steps before another
+    // vehicle moves, as every player does) is explored whole too, only to
+    // pick counterexamples that a dry run reproduces; if it finds none (a
+    // deadlock that needs a late message, or a product past the cap), the
+    // interleaving product's counterexamples stand.
+    let mut found: Option<(Vec<Witness>, &Settled)> = None;
+    let mut reduced_first = false;
+    let (mut s_ltss, mut s_quots) = (Vec::new(), Vec::new());
     loop {
-        let prod = Product { quots, effects: &effects, cap, nv };
-        let g = explore_product(&prod, init_of(cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
+        let settling = found.is_some();
+        if let Some((_, st)) = &found {
+            let ltss = st.ltss.as_ref();
+            s_ltss = grp.vehicles.iter().map(|&v| ltss.map_or(grp_lts(grp, v), |l| &l[v])).collect();
+            s_quots = grp.vehicles.iter().map(|&v| &st.quots[v]).collect();
+        }
+        let (quots, ltss, replay) =
+            if settling { (&s_quots, &s_ltss, &replay_settled) } else { (&grp.quots, &grp.ltss, &replay) };
+        let prod = Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling };
+        let g = explore_product(&prod, init_of(quots, cap), opts.max_product_states, deps.as_ref().filter(|_| reduce));
         if reduce && exact_deps && g.over {
             exact_deps = false;
             deps = Some(Deps::new(quots, &effects, sups.len(), false));
@@ -167,6 +219,9 @@ pub(super) fn verify_group(
         }
         let states = g.states.len() / g.width.max(1);
         stats.counter_cap = stats.counter_cap.max(cap);
+        if let (true, Some((ws, _))) = (!g.complete || g.over, &found) {
+            return GroupOutcome::Problems(ws.clone());
+        }
         if !g.complete {
             stats.product_states += states;
             stats.exact &= !g.over;
@@ -216,12 +271,15 @@ pub(super) fn verify_group(
         }
         let dead: Vec<u32> = g.dead.iter().copied().filter(|&s| !is_end(g.state(s))).collect();
         let blocked: Vec<u32> = (0..n as u32).filter(|&s| !co[s as usize] && !is_dead[s as usize]).collect();
-        let settle = |stats: &mut VerifyStats| {
+        let count = |stats: &mut VerifyStats| {
             stats.product_states += states;
             stats.exact &= !g.over;
         };
         if dead.is_empty() && blocked.is_empty() {
-            settle(stats);
+            if let Some((ws, _)) = found {
+                return GroupOutcome::Problems(ws);
+            }
+            count(stats);
             return GroupOutcome::Verified;
         }
         // Counterexamples: every dead state (up to a few), and the first
@@ -238,6 +296,7 @@ pub(super) fn verify_group(
         // product decides (dead states are exact either way).
         if picks.is_empty() && reduce {
             reduce = false;
+            reduced_first = true;
             continue;
         }
         // A dead marking explains itself; a blocked one is reported only
@@ -248,17 +307,28 @@ pub(super) fn verify_group(
             }
         }
         for (s, kind) in picks {
-            match concretize(&g, s, &grp.ltss, quots, &replay, kind) {
+            match concretize(&g, s, ltss, quots, replay, kind) {
                 Some(w) => witnesses.push(w),
                 None => spurious = true,
             }
+        }
+        if let Some((ws, _)) = found {
+            // The settled counterexamples, where they replay and are as
+            // strong (a dead marking where the interleaving product has one).
+            let dead_before = ws.iter().any(|w| w.kind == WitnessKind::Dead);
+            let dead_here = witnesses.iter().any(|w| w.kind == WitnessKind::Dead);
+            return GroupOutcome::Problems(if witnesses.is_empty() || (dead_before && !dead_here) {
+                ws
+            } else {
+                witnesses
+            });
         }
         if witnesses.is_empty() && spurious {
             if g.over && cap < opts.max_counter_cap {
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            settle(stats);
+            count(stats);
             return GroupOutcome::Unknown(format!(
                 "counterexamples found with supervisor places counted up to {cap} tokens do not replay"
             ));
@@ -270,15 +340,32 @@ pub(super) fn verify_group(
                 cap = (cap * 2).min(opts.max_counter_cap);
                 continue;
             }
-            settle(stats);
+            count(stats);
             return GroupOutcome::Unknown(format!(
                 "no deadlock, but whether every mission can always end is not decided: supervisor places \
                  exceed {cap} tokens"
             ));
         }
-        settle(stats);
+        count(stats);
+        // A product explored whole and small enough: explored again settled.
+        if !reduce && !reduced_first && states <= SETTLED_RETRY_STATES {
+            if let Some(st) = (grp.settled)() {
+                found = Some((witnesses, st));
+                continue;
+            }
+        }
         return GroupOutcome::Problems(witnesses);
     }
+}
+
+/// The interleaving products with more states than this are not explored
+/// again settled for counterexamples that replay as dry runs.
+const SETTLED_RETRY_STATES: usize = 1_000_000;
+
+/// The plain graph of vehicle `v` of the plant (a vehicle of `grp`).
+fn grp_lts<'a>(grp: &Group<'a>, v: usize) -> &'a Lts {
+    let i = grp.vehicles.iter().position(|&x| x == v).unwrap_or(0);
+    grp.ltss[i]
 }
 
 fn names(plant: &Plant, vs: &[usize]) -> String {

@@ -70,6 +70,9 @@ pub(super) struct Lts {
     /// gated immediate transitions waiting in it (allowed, they fire before
     /// the player looks; held, the mission has ended).
     pub(super) fin: Vec<bool>,
+    /// Markings in which an immediate transition that no supervisor
+    /// controls is ready: the player fires it before its next input.
+    pub(super) vanishing: Vec<bool>,
 }
 
 impl Lts {
@@ -98,13 +101,17 @@ pub(super) enum LtsError {
 }
 
 /// The graph of `m`'s net, whose transitions are those of the plant from
-/// `t_off` on (`effect_of` and `gated` are indexed by plant transitions);
-/// with `quiet`, the off-nominal answers never come.
+/// `t_off` on (`effect_of`, `gated` and `remote` are indexed by plant
+/// transitions); with `quiet`, the off-nominal answers never come. A
+/// `remote` start (on a mutex between vehicles that another vehicle holds)
+/// fires only in a marking where nothing else immediate is ready: its
+/// token is granted in answer to a request sent once the vehicle settled.
 pub(super) fn build_lts(
     m: &Mission,
     t_off: u32,
     effect_of: &[u32],
     gated: &[bool],
+    remote: &[bool],
     quiet: bool,
     max: usize,
 ) -> Result<Lts, LtsError> {
@@ -124,8 +131,15 @@ pub(super) fn build_lts(
     }
     let imm: Vec<bool> = net.transitions().iter().map(|t| t.kind.is_immediate()).collect();
     let mut index: FxHashMap<Vec<u8>, u32> = FxHashMap::default();
-    let mut lts =
-        Lts { marks: Vec::new(), off: vec![0], edges: Vec::new(), goff: vec![0], gated: Vec::new(), fin: Vec::new() };
+    let mut lts = Lts {
+        marks: Vec::new(),
+        off: vec![0],
+        edges: Vec::new(),
+        goff: vec![0],
+        gated: Vec::new(),
+        fin: Vec::new(),
+        vanishing: Vec::new(),
+    };
     index.insert(m0.clone(), 0);
     lts.marks.extend_from_slice(&m0);
     let mut next = 0usize;
@@ -171,6 +185,7 @@ pub(super) fn build_lts(
         let settles = |t: TransitionId| net.transitions()[t.index()].kind.is_deferred() || imm[t.index()];
         let ended = final_marked && !ready.iter().any(|&t| settles(t));
         lts.fin.push(ended);
+        lts.vanishing.push(ready.iter().any(|&u| imm[u.index()]));
         // A gated transition is ready when allowed if the rule picks it
         // beside the best of the others (the ready ones all rank alike).
         for &t in &gated_en {
@@ -178,6 +193,10 @@ pub(super) fn build_lts(
                 waiting.push(v(t));
             }
             if ended && !settles(t) {
+                continue;
+            }
+            let r = remote.get((t.0 + t_off) as usize).copied().unwrap_or(false);
+            if r && ready.iter().any(|&u| imm[u.index()]) {
                 continue;
             }
             pair.clear();
@@ -299,7 +318,7 @@ mod tests {
             b.add_input(p, t, 1);
         }
         let m = mission(b.build().unwrap());
-        let Ok(lts) = build_lts(&m, 0, &[0; 3], &[false; 3], false, 100) else { panic!("built") };
+        let Ok(lts) = build_lts(&m, 0, &[0; 3], &[false; 3], &[], false, 100) else { panic!("built") };
         let fired: Vec<u32> = lts.out(0).iter().map(|e| e.t).collect();
         assert_eq!(fired, vec![kill.0]);
     }
@@ -314,7 +333,7 @@ mod tests {
         let ev = b.add_transition(Transition::new("ev").with_kind(TransitionKind::Event("e".into())));
         b.add_input(p, start, 1).add_input(q, ev, 1);
         let m = mission(b.build().unwrap());
-        let Ok(lts) = build_lts(&m, 0, &[1, 0], &[true, false], false, 100) else { panic!("built") };
+        let Ok(lts) = build_lts(&m, 0, &[1, 0], &[true, false], &[], false, 100) else { panic!("built") };
         let out: Vec<(u32, u32)> = lts.out(0).iter().map(|e| (e.t, e.label)).collect();
         assert_eq!(out, vec![(start.0, lab(1, false)), (ev.0, lab(0, true))]);
         assert_eq!(lts.gates(0), &[1]);

@@ -19,9 +19,10 @@
 //!    *visible*; the others are silent (τ). (`lts.rs`)
 //! 2. **Reduction.** Each vehicle graph is reduced modulo divergence-
 //!    preserving branching bisimulation (signature refinement, Blom and
-//!    Orzan), with the gated transitions waiting and the end of the mission
-//!    as state labels. Deadlocks, the reachability of the missions' ends and
-//!    every visible behaviour are preserved. (`quotient.rs`)
+//!    Orzan), with the gated transitions waiting, the end of the mission
+//!    and vanishing markings as state labels. Deadlocks, the reachability
+//!    of the missions' ends and every visible behaviour are preserved.
+//!    (`quotient.rs`)
 //! 3. **Product.** The reduced graphs run together with the supervisor
 //!    places. A supervisor place holds 0..=K tokens exactly, or `>K`
 //!    (consuming from `>K` may leave `K` or `>K`): every reachable marking of
@@ -29,7 +30,11 @@
 //!    marking*. The end of the missions must stay reachable from every image
 //!    through *pessimistic* steps (`>K` minus one is `K`), which every real
 //!    marking with that image can follow, so this proves that no vehicle can
-//!    be blocked forever. (`product.rs`)
+//!    be blocked forever. The verdict is this interleaving product's; when
+//!    it has counterexamples, a *settled* product (a vehicle's ready
+//!    immediate steps and its allowed starts on its own supervisors come
+//!    before any other vehicle's move, as its player does) only picks
+//!    counterexamples that replay as dry runs. (`product.rs`, `group.rs`)
 //!
 //! The product is explored breadth-first with stubborn sets of vehicles
 //! (`stubborn.rs`): in each state only the moves of a set of vehicles that
@@ -69,8 +74,11 @@ mod lts;
 mod product;
 mod quotient;
 mod replay;
+mod settle;
 mod structural_proof;
 mod stubborn;
+
+use std::cell::OnceCell;
 
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
 use rustc_hash::FxHashMap;
@@ -79,11 +87,12 @@ use serde::Serialize;
 use crate::central::Plant;
 use crate::model::Mission;
 use crate::supervisor::Supervisor;
-use group::{groups, verify_group, Group, GroupOutcome};
-use lts::{build_lts, can_end_alone, LtsError};
+use group::{groups, verify_group, Group, GroupOutcome, Settled};
+use lts::{build_lts, can_end_alone, Lts, LtsError};
 use product::Effect;
 use quotient::{reduce, Quotient};
 use replay::ReplayRules;
+use settle::urgency;
 
 /// Caps of the verification.
 #[derive(Clone, Debug, Serialize)]
@@ -275,10 +284,11 @@ fn verify_mode(
             })
         })
         .collect();
+    let urgency = urgency(plant, sups, &effects, nt);
     let mut stats = VerifyStats::default();
     let mut ltss = Vec::new();
     for (m, part) in missions.iter().zip(&plant.parts) {
-        match build_lts(m, part.transitions.start, &effect_of, &gated, quiet, opts.max_vehicle_states) {
+        match build_lts(m, part.transitions.start, &effect_of, &gated, &[], quiet, opts.max_vehicle_states) {
             Ok(l) => {
                 stats.vehicle_states.push(l.len());
                 ltss.push(l);
@@ -297,7 +307,28 @@ fn verify_mode(
             }
         }
     }
-    let quots: Vec<Quotient> = ltss.iter().map(reduce).collect();
+    let quots: Vec<Quotient> = ltss.iter().map(|l| reduce(l, false)).collect();
+    // The graphs for settling (`product.rs`), built only when a product
+    // has counterexamples to choose among: the remote starts wait for their
+    // vehicle to settle, and vanishing markings are a label.
+    let settled_graphs: OnceCell<Option<Settled>> = OnceCell::new();
+    let settled = || {
+        settled_graphs
+            .get_or_init(|| {
+                let remote_ltss = if urgency.remote.iter().any(|&r| r) {
+                    let built = missions.iter().zip(&plant.parts).map(|(m, part)| {
+                        let t0 = part.transitions.start;
+                        build_lts(m, t0, &effect_of, &gated, &urgency.remote, quiet, opts.max_vehicle_states).ok()
+                    });
+                    Some(built.collect::<Option<Vec<Lts>>>()?)
+                } else {
+                    None
+                };
+                let quots = remote_ltss.as_ref().unwrap_or(&ltss).iter().map(|l| reduce(l, true)).collect();
+                Some(Settled { ltss: remote_ltss, quots })
+            })
+            .as_ref()
+    };
     stats.vehicle_classes = quots.iter().map(|q| q.n).collect();
     // Which vehicles can end when nothing holds them.
     let can_end: Vec<bool> = ltss.iter().map(can_end_alone).collect();
@@ -314,7 +345,9 @@ fn verify_mode(
     }
     let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
     let finals: Vec<Vec<PlaceId>> = plant.parts.iter().map(|p| p.final_places.clone()).collect();
-    let rules = ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals };
+    let rules =
+        ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals, remote: &[] };
+    let settled_rules = ReplayRules { remote: &urgency.remote, ..rules };
 
     // Vehicles that no supervisor links are independent: each group of
     // linked vehicles is verified alone (docs/coordination.md).
@@ -328,9 +361,13 @@ fn verify_mode(
             sups: ss,
             ltss: vs.iter().map(|&v| &ltss[v]).collect(),
             quots: vs.iter().map(|&v| &quots[v]).collect(),
+            settled: &settled,
             can_end: vs.iter().map(|&v| can_end[v]).collect(),
             whole: groups.len() == 1,
             rules: &rules,
+            settled_rules: &settled_rules,
+            urgent: vs.iter().map(|&v| urgency.urgent[v].as_slice()).collect(),
+            holders: &urgency.holders,
         };
         match verify_group(&g, plant, &effects, sups, snet, opts, &mut stats) {
             GroupOutcome::Verified => {}
@@ -366,7 +403,7 @@ pub(crate) fn vehicle_graph(m: &Mission, gated: &[bool], max: usize) -> Result<V
     // Each gated transition its own effect, so that a marking's waiting
     // effects name its enabled gated immediate transitions.
     let effect_of: Vec<u32> = (0..gated.len() as u32).map(|t| t + 1).collect();
-    let lts = lts::build_lts(m, 0, &effect_of, gated, false, max).map_err(|e| match e {
+    let lts = lts::build_lts(m, 0, &effect_of, gated, &[], false, max).map_err(|e| match e {
         lts::LtsError::TooMany => format!("mission `{}` has more than {max} markings", m.name),
         lts::LtsError::Unbounded => format!("a place of mission `{}` exceeds 200 tokens", m.name),
     })?;

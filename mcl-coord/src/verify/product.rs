@@ -6,6 +6,20 @@
 //! `>K` may leave `K` or `>K`): every reachable marking of the real system
 //! has an image. A step is *pessimistic* when every real marking with that
 //! image can follow it (`>K` minus one is `K`).
+//!
+//! **Settling** (docs/coordination.md, "Settling"; only in the product
+//! that picks counterexamples, never in the one that gives the verdict,
+//! which interleaves every vehicle's moves): a player fires every
+//! ready immediate transition of its vehicle before it takes its next
+//! input, and sends its messages only then. A vehicle whose own step leads
+//! to an *unstable* class (every marking in it vanishing:
+//! [`Quotient::unstable`]), or to one in which an *urgent* gated start
+//! waits, allowed (its supervisors are its own, or it holds the mutex
+//! between vehicles among them: [`Product::urgent`]), *owes* a move: the next step of the product is
+//! one of its own (the last slot of a state names it). A start allowed by another vehicle's step owes nothing (the message
+//! that allows it may be late), and a start on a mutex between vehicles
+//! that another vehicle holds waits for its grant: it makes the vehicle
+//! owe nothing, nor its events wait (its *blocked* edges stay enabled).
 
 use rustc_hash::FxHashMap;
 
@@ -34,7 +48,20 @@ pub(super) struct Product<'a> {
     pub(super) effects: &'a [Effect],
     pub(super) cap: u32,
     pub(super) nv: usize,
+    /// Per vehicle and effect: a gated start of that effect fires as soon
+    /// as it is allowed (`settle.rs`).
+    pub(super) urgent: &'a [&'a [bool]],
+    /// Per effect: the vehicles holding the mutexes between vehicles that
+    /// it consumes from (`settle.rs`).
+    pub(super) holders: &'a [Vec<usize>],
+    /// Settling applies (a vehicle owes the next move after its own step
+    /// into a vanishing class or to an allowed urgent start); off, every
+    /// interleaving of the vehicles' moves is explored.
+    pub(super) settling: bool,
 }
+
+/// The last slot of a product state when no vehicle owes a move.
+pub(super) const NOBODY: u32 = u32::MAX;
 
 impl Product<'_> {
     /// True when the supervisor places of `st` allow `effect`.
@@ -42,7 +69,37 @@ impl Product<'_> {
         self.effects[effect as usize].consume.iter().all(|&(s, w)| st[self.nv + s] >= w)
     }
 
-    /// Successors of `st` by the moves of the vehicles in `vehicles`.
+    /// The vehicle that owes the next move in `st` (settling), if any.
+    pub(super) fn owing(&self, st: &[u32]) -> Option<usize> {
+        st.last().filter(|&&v| v != NOBODY).map(|&v| v as usize)
+    }
+
+    /// True when an urgent gated start waits in class `c` of vehicle `v`,
+    /// allowed by the supervisor places of `st`.
+    pub(super) fn urgent_allowed(&self, st: &[u32], v: usize, c: u32) -> bool {
+        self.quots[v].gates[c as usize].iter().any(|&g| self.urgent[v][g as usize] && self.allowed(st, g))
+    }
+
+    /// The holders that must settle before vehicle `v` may take a start of
+    /// effect `a` (another vehicle holds its mutex, and has not begun: its
+    /// class is vanishing, which, when it owes nothing, only its first one
+    /// can be).
+    pub(super) fn unsettled_holders(&self, st: &[u32], v: usize, a: u32) -> impl Iterator<Item = usize> + '_ {
+        let hs: &[usize] = if self.urgent[v][a as usize] { &[] } else { &self.holders[a as usize] };
+        let st: Vec<u32> = hs.iter().map(|&h| st[h]).collect();
+        hs.iter().zip(st).filter(|&(&h, c)| self.quots[h].unstable[c as usize]).map(|(&h, _)| h)
+    }
+
+    /// True when vehicle `v`, having moved into class `c` of state `st`,
+    /// owes the next move: the class is unstable, or an urgent start is
+    /// allowed in it.
+    fn owes(&self, st: &[u32], v: usize, c: u32) -> bool {
+        self.settling && (self.quots[v].unstable[c as usize] || self.urgent_allowed(st, v, c))
+    }
+
+    /// Successors of `st` by the moves of the vehicles in `vehicles`; when
+    /// a vehicle owes a move, by its moves alone (none if it is not among
+    /// `vehicles`).
     pub(super) fn successors(
         &self,
         st: &[u32],
@@ -50,10 +107,21 @@ impl Product<'_> {
         out: &mut Vec<Succ>,
         over: &mut bool,
     ) {
-        for v in vehicles {
+        let owing = self.owing(st);
+        let first = out.len();
+        for v in vehicles.into_iter().filter(|&v| owing.is_none_or(|o| o == v)) {
             let q = st[v];
             let qt = &self.quots[v];
-            let any_gate_allowed = || qt.gates[q as usize].iter().any(|&g| self.allowed(st, g));
+            // Events wait while a start is allowed (it fires first); when
+            // settling, only an urgent one (a remote start waits for its
+            // grant, and its vehicle's events may come meanwhile).
+            let any_gate_allowed = || {
+                if self.settling {
+                    self.urgent_allowed(st, v, q)
+                } else {
+                    qt.gates[q as usize].iter().any(|&g| self.allowed(st, g))
+                }
+            };
             for &(label, q2) in qt.out(q) {
                 if lab_blocked(label) && any_gate_allowed() {
                     continue;
@@ -63,7 +131,8 @@ impl Product<'_> {
                 match lab_action(label) {
                     None => out.push((base, v, label, true)),
                     Some(t) => {
-                        if !self.allowed(st, t) {
+                        let waits = self.settling && self.unsettled_holders(st, v, t).next().is_some();
+                        if !self.allowed(st, t) || waits {
                             continue;
                         }
                         let e = &self.effects[t as usize];
@@ -124,6 +193,14 @@ impl Product<'_> {
                 }
             }
         }
+        // Who owes the next move: the vehicle that moved, if its own step
+        // left an urgent start allowed.
+        for (x, v, ..) in &mut out[first..] {
+            let owes = self.owes(x, *v, x[*v]);
+            if let Some(o) = x.last_mut() {
+                *o = if owes { *v as u32 } else { NOBODY };
+            }
+        }
     }
 }
 
@@ -157,7 +234,8 @@ impl ProductGraph {
         }
     }
 
-    /// State `i` (vehicle classes, then supervisor counts).
+    /// State `i` (vehicle classes, then supervisor counts, then the vehicle
+    /// that owes a move or [`NOBODY`]).
     pub(super) fn state(&self, i: u32) -> &[u32] {
         &self.states[i as usize * self.width..(i as usize + 1) * self.width]
     }
@@ -187,7 +265,8 @@ pub(super) fn explore_product(p: &Product<'_>, init: Vec<u32>, max: usize, deps:
         // no cycle or goes up in the order of expansion, so every cycle
         // keeps a fully expanded state (docs/coordination.md).
         let mut reduced = false;
-        if let Some(d) = deps {
+        // The reduction is used without settling (`Product::settling`).
+        if let Some(d) = deps.filter(|_| !p.settling) {
             // A vehicle with a single silent, unguarded move is a stubborn
             // set alone with one successor: nothing does better.
             for v in 0..p.nv {

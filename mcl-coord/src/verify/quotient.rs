@@ -1,6 +1,7 @@
 //! Step 2: a vehicle graph reduced modulo divergence-preserving branching
 //! bisimulation (signature refinement, Blom and Orzan), with the gated
-//! transitions waiting and the end of the mission as state labels.
+//! transitions waiting, the end of the mission and vanishing markings (an
+//! immediate step ready: the vehicle settles, `product.rs`) as state labels.
 //! Deadlocks, the reachability of the missions' ends and every visible
 //! behaviour are preserved.
 
@@ -20,6 +21,10 @@ pub(super) struct Quotient {
     pub(super) gates: Vec<Vec<u32>>,
     /// Classes in which the mission has ended.
     pub(super) fin: Vec<bool>,
+    /// Classes whose every marking is vanishing ([`Lts::vanishing`]; a
+    /// state label like the end and the gates when reduced for settling):
+    /// the vehicle leaves them by an immediate step before its next input.
+    pub(super) unstable: Vec<bool>,
 }
 
 impl Quotient {
@@ -38,13 +43,17 @@ type SigKey<'a> = (u32, bool, &'a [(u32, u32)]);
 /// a class) are collapsed through the strongly connected components of the
 /// inert graph, and a class with an inert cycle is divergent (it keeps a
 /// silent self-loop).
-pub(super) fn reduce(lts: &Lts) -> Quotient {
+///
+/// With `settling`, vanishing markings are a state label too, so that a
+/// class is all vanishing or all tangible ([`Quotient::unstable`]); the
+/// product applies settling only to such quotients (`product.rs`).
+pub(super) fn reduce(lts: &Lts, settling: bool) -> Quotient {
     let n = lts.len();
-    // Initial partition: end of mission and waiting gated transitions.
-    let mut keys: FxHashMap<(bool, Vec<u32>), u32> = FxHashMap::default();
+    // Initial partition: end of mission, vanishing, waiting gated transitions.
+    let mut keys: FxHashMap<(bool, bool, Vec<u32>), u32> = FxHashMap::default();
     let mut block: Vec<u32> = (0..n as u32)
         .map(|s| {
-            let k = (lts.fin[s as usize], lts.gates(s).to_vec());
+            let k = (lts.fin[s as usize], settling && lts.vanishing[s as usize], lts.gates(s).to_vec());
             let next = keys.len() as u32;
             *keys.entry(k).or_insert(next)
         })
@@ -111,8 +120,10 @@ pub(super) fn reduce(lts: &Lts) -> Quotient {
     let mut edges: Vec<Vec<(u32, u32)>> = vec![Vec::new(); count];
     let mut gates = vec![Vec::new(); count];
     let mut fin = vec![false; count];
+    let mut unstable = vec![true; count];
     for s in 0..n as u32 {
         let b = block[s as usize];
+        unstable[b as usize] &= lts.vanishing[s as usize];
         for e in lts.out(s) {
             let tb = block[e.to as usize];
             if !(e.label == TAU && tb == b) {
@@ -133,5 +144,5 @@ pub(super) fn reduce(lts: &Lts) -> Quotient {
         flat.extend(e);
         off.push(flat.len() as u32);
     }
-    Quotient { block, n: count, off, edges: flat, gates, fin }
+    Quotient { block, n: count, off, edges: flat, gates, fin, unstable }
 }

@@ -6,7 +6,7 @@
 
 use std::ops::Range;
 
-use mcl_net::semantics::{select_ready, EnabledTracker};
+use mcl_net::semantics::{is_enabled_with, select_ready, EnabledTracker};
 use mcl_net::{Marking, Net, PlaceId, TransitionId};
 use rustc_hash::FxHashMap;
 
@@ -40,6 +40,11 @@ pub(super) struct ReplayRules<'a> {
     /// ids): once one is marked in a marking stable for its vehicle, the
     /// vehicle has ended and fires nothing more, as the player.
     pub(super) finals: &'a [Vec<PlaceId>],
+    /// Per transition of the plant: a start on a mutex between vehicles of
+    /// a vehicle that is not its holder, which may wait for its token while
+    /// its vehicle takes other steps, and fires only once its vehicle has
+    /// no other immediate step ready (empty: none).
+    pub(super) remote: &'a [bool],
 }
 
 /// The end of a replay: the marking reached and, per vehicle, whether its
@@ -121,9 +126,16 @@ impl ReplayRules<'_> {
         buf: &mut Vec<TransitionId>,
     ) -> bool {
         let Some(range) = self.vehicles.iter().find(|r| r.contains(&t.0)) else { return false };
-        let mine = |u: &&TransitionId| range.contains(&u.0) && !self.silent(m, **u);
+        // Another vehicle's mutex start may be waiting for its token.
+        let flag = |f: &[bool], u: TransitionId| f.get(u.index()).copied().unwrap_or(false);
+        let held = |u: TransitionId| u != t && flag(self.remote, u);
+        let mine = |u: &&TransitionId| range.contains(&u.0) && !self.silent(m, **u) && !held(**u);
         buf.clear();
         buf.extend(tracker.enabled_immediate().iter().filter(mine));
+        // Its grant comes once the vehicle has settled.
+        if flag(self.remote, t) && buf.iter().any(|&u| u != t) {
+            return false;
+        }
         if buf.is_empty() {
             buf.extend(tracker.enabled_non_immediate().iter().filter(mine));
         }
@@ -239,7 +251,7 @@ pub(super) fn concretize(
             // whole net is dead only if the other vehicles are too.
             if kind == WitnessKind::Dead {
                 let live = ts.iter().any(|&t| {
-                    snet.pre(t).iter().all(|&(p, w)| m.get(p) >= w)
+                    mcl_net::semantics::is_enabled(snet, &m, t)
                         && !replay.rules.silent(&m, t)
                         && !replay.rules.of_ended(&ended, t)
                 });
@@ -255,9 +267,11 @@ pub(super) fn concretize(
     let np_plant = snet.place_count() - replay.nsups;
     let mut held = Vec::new();
     for t in snet.transition_ids().filter(|&t| !replay.rules.of_ended(&ended, t)) {
-        let pre = snet.pre(t);
-        let plant_ok = pre.iter().filter(|(p, _)| p.index() < np_plant).all(|&(p, w)| m.get(p) >= w);
-        let missing: Vec<usize> = pre
+        // Enabled but for the supervisor places (the one enabledness test,
+        // with those places counted as full).
+        let plant_ok = is_enabled_with(snet, t, |p| if p.index() < np_plant { m.get(p) } else { u32::MAX });
+        let missing: Vec<usize> = snet
+            .pre(t)
             .iter()
             .filter(|(p, _)| p.index() >= np_plant)
             .filter(|&&(p, w)| m.get(p) < w)
@@ -300,7 +314,7 @@ mod tests {
     fn a_step_replays_only_if_its_vehicle_could_choose_it() {
         let snet = net();
         let vehicles = [0..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[] };
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[] };
         let replays = |path: &[u32]| {
             let path: Vec<TransitionId> = path.iter().map(|&t| TransitionId(t)).collect();
             rules.replay(&snet, 0, &path).is_some()
@@ -322,7 +336,7 @@ mod tests {
         // vehicle 1..4 sees only `e`, `lo` and `hi`; `hi` goes first.
         let snet = net();
         let vehicles = [1..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[] };
+        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[] };
         let m = snet.initial_marking();
         let tracker = EnabledTracker::new(&snet, &m).unwrap();
         let mut buf = Vec::new();
