@@ -6,14 +6,14 @@
 //!
 //! The run's trace records reach the node through a [`Feed`] (the sink's
 //! end, in the player's thread) and a [`Listener`] (the node's end); the
-//! [`StatusTracker`] that rebuilds the state from them is sans-IO. Only
+//! [`StatusTracker`] that rebuilds the state from them is mcl-runtime's
+//! (sans-IO, shared with the Zenoh status key). Only
 //! [`Outlet`], the publisher, needs the `node` feature.
 
 use crate::bridge::config::Bridge;
 use crate::idl::Registry;
-use mcl_runtime::trace::{Ends, Record, RecordKind};
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
+pub use mcl_runtime::status::{RunningCall, Status, StatusTracker};
+use mcl_runtime::trace::Record;
 use std::sync::mpsc;
 
 /// The ROS 2 type of the status messages.
@@ -34,127 +34,6 @@ pub fn topic_of(bridge: &Bridge) -> String {
     }
 }
 
-/// A call whose primitive runs (it was sent an action and has not ended).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RunningCall {
-    /// The task called.
-    pub task: String,
-    /// The call site (numbered by the compiler).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub call_site: Option<u32>,
-    /// The call's label.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub label: Option<String>,
-    /// The file of the call.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub file: Option<String>,
-    /// The line of the call (1-based).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub line: Option<u32>,
-    /// Mission time of its first action (seconds).
-    pub since: f64,
-}
-
-/// The JSON text of each status message.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Status {
-    /// The mission (`plan:STEM` for a planned run).
-    pub mission: String,
-    /// Mission time of the last change (seconds).
-    pub t: f64,
-    /// The calls running, by task and call site.
-    pub running: Vec<RunningCall>,
-    /// `ok`, `fail`, `stuck`, `time_limit` once the mission ended (for a
-    /// planned run: the last step's, until the next step starts).
-    pub outcome: Option<String>,
-    /// Why, when it did not end by itself.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reason: Option<String>,
-    /// Actions sent so far.
-    pub actions: u64,
-    /// Events taken so far.
-    pub events: u64,
-}
-
-/// Rebuilds a [`Status`] from trace records.
-#[derive(Clone, Debug, Default)]
-pub struct StatusTracker {
-    status: Status,
-    running: BTreeMap<(String, Option<u32>), RunningCall>,
-}
-
-/// `FILE:LINE` of a trace's `src` as its file and line.
-fn file_line(src: &Option<String>) -> (Option<String>, Option<u32>) {
-    match src.as_deref().and_then(|s| s.rsplit_once(':')) {
-        Some((f, l)) => match l.parse() {
-            Ok(n) => (Some(f.to_string()), Some(n)),
-            Err(_) => (src.clone(), None),
-        },
-        None => (src.clone(), None),
-    }
-}
-
-impl StatusTracker {
-    /// The state of `mission` before it starts.
-    pub fn new(mission: &str) -> StatusTracker {
-        StatusTracker { status: Status { mission: mission.to_string(), ..Default::default() }, ..Default::default() }
-    }
-
-    /// Takes one record; returns whether the state changed.
-    pub fn record(&mut self, r: &Record) -> bool {
-        let end = |s: &mut Self, task: &Option<String>, site: Option<u32>| {
-            task.as_ref().is_some_and(|t| s.running.remove(&(t.clone(), site)).is_some())
-        };
-        let changed = match &r.kind {
-            RecordKind::Action { command, call, .. } => {
-                self.status.actions += 1;
-                // A planned run's next step: a new mission begins.
-                self.status.outcome = None;
-                self.status.reason = None;
-                if command == "disable" {
-                    end(self, &call.task, call.call_site);
-                } else if let Some(task) = &call.task {
-                    let (file, line) = file_line(&call.src);
-                    self.running.entry((task.clone(), call.call_site)).or_insert_with(|| RunningCall {
-                        task: task.clone(),
-                        call_site: call.call_site,
-                        label: call.label.clone(),
-                        file,
-                        line,
-                        since: r.t,
-                    });
-                }
-                true
-            }
-            RecordKind::Event { call, ends, .. } => {
-                self.status.events += 1;
-                if matches!(ends, Some(Ends::Ok | Ends::Fail)) {
-                    end(self, &call.task, call.call_site);
-                }
-                true
-            }
-            RecordKind::Fire { call, ends: Some(Ends::Timeout), .. } => end(self, &call.task, call.call_site),
-            RecordKind::Outcome { result, reason, .. } => {
-                self.status.outcome = Some(result.clone());
-                self.status.reason = reason.clone();
-                self.running.clear();
-                true
-            }
-            _ => false,
-        };
-        if changed {
-            self.status.t = r.t;
-            self.status.running = self.running.values().cloned().collect();
-        }
-        changed
-    }
-
-    /// The state now.
-    pub fn status(&self) -> &Status {
-        &self.status
-    }
-}
-
 /// The run's end of the status feed: gives the node the records that
 /// change the state (a closed node is ignored).
 #[derive(Clone, Debug)]
@@ -163,13 +42,7 @@ pub struct Feed(mpsc::Sender<Record>);
 impl Feed {
     /// Passes `r` on when it can change the state.
     pub fn record(&self, r: &Record) {
-        let relevant = matches!(
-            r.kind,
-            RecordKind::Action { .. }
-                | RecordKind::Event { .. }
-                | RecordKind::Outcome { .. }
-                | RecordKind::Fire { ends: Some(Ends::Timeout), .. }
-        );
+        let relevant = StatusTracker::relevant(&r.kind);
         if relevant {
             let _ = self.0.send(r.clone());
         }
@@ -248,7 +121,7 @@ impl Outlet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mcl_runtime::trace::Call;
+    use mcl_runtime::trace::{Call, Ends, RecordKind};
 
     fn call(task: &str, site: u32, line: u32) -> Call {
         Call {

@@ -693,7 +693,7 @@ fn on_operator(
             now,
             format!(
                 "operator: {} ignored (the run is {})",
-                command_name(&c),
+                c.name(),
                 if paused.is_some() { "paused" } else { "running" }
             ),
         );
@@ -749,16 +749,6 @@ impl Session<'_> {
     /// Whether an operator aborted the mission.
     pub fn operator_aborted(&self) -> bool {
         self.operator_aborted
-    }
-}
-
-/// `pause`, `resume`, `abort` or `answer`.
-fn command_name(c: &Command) -> &'static str {
-    match c {
-        Command::Pause => "pause",
-        Command::Resume => "resume",
-        Command::Abort => "abort",
-        Command::Answer { .. } => "answer",
     }
 }
 

@@ -23,6 +23,7 @@ pub mod params;
 pub mod player;
 pub mod protocol;
 pub mod scenario;
+pub mod status;
 pub mod tcp;
 pub mod trace;
 pub mod vehicle;

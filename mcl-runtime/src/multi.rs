@@ -1004,7 +1004,7 @@ impl Discrete for Fleet<'_> {
         let v = &mut self.vs[i];
         if v.end.is_some() || !v.s.player.is_started() {
             let why = if v.end.is_some() { "has ended" } else { "has not started" };
-            v.s.warn(t, format!("operator: {} ignored: the mission {why}", command_name(&c)));
+            v.s.warn(t, format!("operator: {} ignored: the mission {why}", c.name()));
             return Ok(());
         }
         let outs = v.s.operator_input(t, c)?;
@@ -1095,16 +1095,6 @@ fn count_sent(g: &mut Global, index: &HashMap<String, usize>, msgs: &[CoordMessa
 
 fn lock(g: &Mutex<Global>) -> Result<std::sync::MutexGuard<'_, Global>, String> {
     g.lock().map_err(|_| "a vehicle task panicked".to_string())
-}
-
-/// `pause`, `resume`, `abort` or `answer`.
-fn command_name(c: &Command) -> &'static str {
-    match c {
-        Command::Pause => "pause",
-        Command::Resume => "resume",
-        Command::Abort => "abort",
-        Command::Answer { .. } => "answer",
-    }
 }
 
 /// Runs `vehicles` in real time with `clock` (see the [module
@@ -1234,7 +1224,7 @@ pub async fn run_real_time_with_peers(
                                 };
                                 if ignored {
                                     let state = if paused.is_some() { "paused" } else { "running" };
-                                    v.s.warn(now, format!("operator: {} ignored (`{}` is {state})", command_name(&c), v.name));
+                                    v.s.warn(now, format!("operator: {} ignored (`{}` is {state})", c.name(), v.name));
                                 } else {
                                     match &c {
                                         Command::Pause => paused = Some(now),

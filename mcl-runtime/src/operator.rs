@@ -45,6 +45,18 @@ pub enum Command {
     },
 }
 
+impl Command {
+    /// `pause`, `resume`, `abort` or `answer` (the `command` of its JSON).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Command::Pause => "pause",
+            Command::Resume => "resume",
+            Command::Abort => "abort",
+            Command::Answer { .. } => "answer",
+        }
+    }
+}
+
 /// The sending end of the operator channel (held by the monitor).
 pub type Sender = tokio::sync::mpsc::UnboundedSender<Command>;
 
