@@ -5,8 +5,8 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use mcl_runtime::trace::Record;
 pub use mcl_runtime::status::{Pose, RunningCall, Status, StatusTracker};
+use mcl_runtime::trace::Record;
 
 use crate::keys;
 use crate::node::Node;
