@@ -469,17 +469,31 @@ impl mcl_plan::run::AacLink for TcpAac {
 
     fn recv(&mut self, timeout: Option<std::time::Duration>) -> Result<Option<mcl_runtime::link::Inbound>, String> {
         let Some(link) = self.link.as_mut() else { return Err(self.closed()) };
-        let got = self.rt.block_on(async {
-            match timeout {
-                Some(d) => tokio::time::timeout(d, link.inbound.recv()).await.ok(),
-                None => Some(link.inbound.recv().await),
-            }
-        });
-        match got {
-            None => Ok(None),
-            Some(Some(m)) => Ok(Some(m)),
-            Some(None) => Err(self.closed()),
+        match recv_on(&self.rt, link, timeout) {
+            Some(got) => Ok(got),
+            None => Err(self.closed()),
         }
+    }
+}
+
+/// The next message from the vehicle's end of `link`, waited for on `rt` at
+/// most `timeout` (none: as long as it takes): `Some(None)` when the time
+/// passed, `None` when that end has closed.
+pub(crate) fn recv_on(
+    rt: &tokio::runtime::Runtime,
+    link: &mut mcl_runtime::link::Link,
+    timeout: Option<std::time::Duration>,
+) -> Option<Option<mcl_runtime::link::Inbound>> {
+    let got = rt.block_on(async {
+        match timeout {
+            Some(d) => tokio::time::timeout(d, link.inbound.recv()).await.ok(),
+            None => Some(link.inbound.recv().await),
+        }
+    });
+    match got {
+        None => Some(None),
+        Some(Some(m)) => Some(Some(m)),
+        Some(None) => None,
     }
 }
 

@@ -120,16 +120,6 @@ impl mcl_plan::run::AacLink for NodeLink {
 
     fn recv(&mut self, timeout: Option<std::time::Duration>) -> Result<Option<mcl_runtime::link::Inbound>, String> {
         let Some(link) = self.link.as_mut() else { return Err("the ROS 2 node has stopped".into()) };
-        let got = self.rt.block_on(async {
-            match timeout {
-                Some(d) => tokio::time::timeout(d, link.inbound.recv()).await.ok(),
-                None => Some(link.inbound.recv().await),
-            }
-        });
-        match got {
-            None => Ok(None),
-            Some(Some(m)) => Ok(Some(m)),
-            Some(None) => Err("the ROS 2 node has stopped".into()),
-        }
+        super::plan::recv_on(&self.rt, link, timeout).ok_or_else(|| "the ROS 2 node has stopped".into())
     }
 }
