@@ -162,25 +162,19 @@ pub(super) fn verify_group(
             Proof::Unknown => {}
         }
     }
-    // Then look for a deadlock by random walks (directed ones first).
-    if nv > 1 && (estimate > opts.hunt_threshold as f64 || !candidates.is_empty()) {
+    // Then look for a deadlock by random walks: directed ones first, then
+    // plain ones when the product is large.
+    let large = estimate > opts.hunt_threshold as f64;
+    if nv > 1 && (large || !candidates.is_empty()) {
         let prod =
             Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
         let budget = opts.hunt_steps / (2 * candidates.len()).max(1);
-        for c in &candidates {
-            let guide = structural_proof::on_the_way(quots, c);
-            if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, budget, Some(&guide)) {
+        let directed = candidates.iter().map(|c| (budget, Some(structural_proof::on_the_way(quots, c))));
+        for (steps, guide) in directed.chain(large.then_some((opts.hunt_steps, None))) {
+            if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, steps, guide.as_deref()) {
                 stats.counter_cap = stats.counter_cap.max(cap);
                 return GroupOutcome::Problems(vec![w]);
             }
-        }
-    }
-    if nv > 1 && estimate > opts.hunt_threshold as f64 {
-        let prod =
-            Product { quots, effects: &effects, cap, nv, urgent: &grp.urgent, holders: &holders, settling: false };
-        if let Some(w) = hunt(&prod, init_of(quots, cap), &grp.ltss, &replay, opts.hunt_steps, None) {
-            stats.counter_cap = stats.counter_cap.max(cap);
-            return GroupOutcome::Problems(vec![w]);
         }
     }
     // The stubborn sets of vehicles, unless turned off; a blocked state
