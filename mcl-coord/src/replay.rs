@@ -206,14 +206,52 @@ pub fn deadlock_replays(missions: &[Mission], constraints: &[Constraint]) -> Res
     replays_of(missions, report)
 }
 
+/// A run of the exact product to a stuck state, on the supervised
+/// centralized net: the firings of the missions' own transitions, in the
+/// order the players took them, and the missions' marking at its end.
+struct ExactRun {
+    path: Vec<TransitionId>,
+    marking: Marking,
+}
+
+/// The [`ExactRun`] of `missions` (their vehicle nets `vnets`) on `net`.
+fn exact_run(net: &Net, missions: &[Mission], vnets: &[crate::VehicleNet], quiet: bool) -> Option<ExactRun> {
+    let run = crate::verify::flight::stuck_run(missions, vnets, quiet, MAX_STATES)?;
+    let mut path = Vec::new();
+    for (v, fired) in &run.steps {
+        let vn = vnets.get(*v)?;
+        for &t in fired {
+            let id = &vn.net.transitions().get(t.index())?.id;
+            // The vehicle net's own coordination nodes have no counterpart.
+            if let Some(c) = net.transition_by_id(&format!("{}{}{id}", vn.mission, crate::central::SEP)) {
+                path.push(c);
+            }
+        }
+    }
+    let mut marking = Marking(vec![0; net.place_count()]);
+    for (vn, m) in vnets.iter().zip(&run.markings) {
+        for (p, &k) in vn.net.places().iter().zip(m) {
+            if k > 0 && !p.id.starts_with("coord.") {
+                if let Some(c) = net.place_by_id(&format!("{}{}{}", vn.mission, crate::central::SEP, p.id)) {
+                    marking.0[c.index()] = k;
+                }
+            }
+        }
+    }
+    Some(ExactRun { path, marking })
+}
+
 fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>, String> {
     let net =
         Arc::new(crate::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?);
-    let vehicles: Vec<(String, Arc<Net>)> = crate::decentralize(missions, &report.supervisors)
-        .map_err(|e| format!("the vehicle nets cannot be built ({e})"))?
-        .into_iter()
-        .map(|v| (v.mission, Arc::new(v.net)))
-        .collect();
+    let vnets = crate::decentralize(missions, &report.supervisors)
+        .map_err(|e| format!("the vehicle nets cannot be built ({e})"))?;
+    let vehicles: Vec<(String, Arc<Net>)> =
+        vnets.iter().map(|v| (v.mission.clone(), Arc::new(v.net.clone()))).collect();
+    // The runs of the exact product to a stuck state (`verify::flight`),
+    // found on first use: all runs, and nominal ones.
+    let runs: Arc<[std::sync::OnceLock<Option<ExactRun>>; 2]> = Arc::new(Default::default());
+    let (missions_all, vnets) = (Arc::new(missions.to_vec()), Arc::new(vnets));
     let vehicles = Arc::new(vehicles);
     let tasks = ProgramNames::of(vehicles.iter().map(|(_, n)| n.as_ref())).tasks;
     let mut out: Vec<Build> = Vec::new();
@@ -242,12 +280,26 @@ fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>,
             .map(|(m, _)| m.to_string())
             .collect();
         let (net, vehicles, tasks) = (net.clone(), vehicles.clone(), tasks.clone());
+        let (runs, missions_all, vnets) = (runs.clone(), missions_all.clone(), vnets.clone());
+        let quiet = p.kind == WitnessKind::Stuck;
         out.push(Box::new(move |e: &Expected| {
             let path = path.as_ref().ok_or("the counterexample names a transition the net does not have")?;
             let cx = Counterexample { net: &net, path, centralized: true, mission: "", waiting: &held };
             let want =
                 Expected { kind: kind.to_string(), waiting: waiting.clone(), marking: cx.marking(&m), ..e.clone() };
+            let why = match cex::build(&cx, &tasks, &want, true, |t| cex::check_vehicles(&vehicles, t)) {
+                Ok(text) => return Ok(text),
+                Err(why) => why,
+            };
+            // The analysis' path may hold steps that no player takes: the
+            // exact product's own run to a stuck state (the players with
+            // their messages in flight) is tried instead.
+            let run = runs[usize::from(quiet)].get_or_init(|| exact_run(&net, &missions_all, &vnets, quiet));
+            let Some(run) = run else { return Err(why) };
+            let cx = Counterexample { path: &run.path, ..cx };
+            let want = Expected { marking: cx.marking(&run.marking), ..want };
             cex::build(&cx, &tasks, &want, true, |t| cex::check_vehicles(&vehicles, t))
+                .map_err(|e| format!("{why}; along the run of the players with messages in flight: {e}"))
         }));
     }
     Ok(out)

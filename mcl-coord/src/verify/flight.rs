@@ -14,7 +14,9 @@
 //! can fire, taken as one batch, `Live::deliver`; once its mission has
 //! ended, a vehicle's supervisor places still serve). A message sent waits
 //! in the FIFO buffer of its link (in order, once, any delay), and its
-//! arrival at the receiver is a separate step. A vehicle may start late:
+//! arrival at the receiver is a separate step, after which the receiver
+//! reacts at once (a real link) or takes more messages first and reacts to
+//! them together (a virtual-time run). A vehicle may start late:
 //! the messages that arrived before fire on its initial marking first
 //! (`Live::start`). Time is abstracted as in the vehicle graphs (`lts.rs`):
 //! any event of a mission and any running timer may come next.
@@ -56,6 +58,11 @@ struct VState {
     asked: Vec<u32>,
     /// Messages arrived and not yet taken (ids into [`Flight::msgs`]).
     inbox: Vec<u32>,
+    /// Messages arrived that the vehicle has not reacted to yet: a
+    /// virtual-time run hands a vehicle every message of another's
+    /// reaction before it reacts (`Fleet::exchange_messages`), a real link
+    /// one at a time; until it reacts, it takes no input.
+    pending: bool,
 }
 
 /// A state of the exact product: the vehicles and, per ordered pair of
@@ -66,8 +73,9 @@ struct State {
     links: Vec<Vec<u32>>,
 }
 
-/// A vehicle's state with the messages its step sent, in order.
-type Run = (VState, Vec<u32>);
+/// A vehicle's state with the messages its step sent, in order, and the
+/// transitions it fired (for [`stuck_run`]).
+type Run = (VState, Vec<u32>, Vec<TransitionId>);
 
 /// A message: the receiving vehicle and the event it raises there.
 struct Msg {
@@ -118,9 +126,31 @@ pub(super) fn fly(
     max: usize,
 ) -> Flown {
     match Flight::new(missions, nets, group, quiet) {
-        Some(f) => f.explore(can_end, max),
+        Some(f) => f.explore(can_end, max, false).0,
         None => Flown::Unknown,
     }
+}
+
+/// A run of the players, over links that may delay their messages, to a
+/// stuck state of the exact product.
+pub struct StuckRun {
+    /// Per step: the vehicle (an index into the missions) and the
+    /// transitions of its vehicle net that the step fired, in order.
+    pub steps: Vec<(usize, Vec<TransitionId>)>,
+    /// The marking of each vehicle net in the stuck state.
+    pub markings: Vec<Vec<u32>>,
+}
+
+/// The run to a stuck state of the exact product of every vehicle of
+/// `nets` (the vehicle nets of `missions`, in order), if it has one within
+/// `max` states: a dead one when there is one on the way of its depth-first
+/// search, else one from which some mission can no longer end. With
+/// `quiet`, the off-nominal answers never come. Every mission counts as
+/// able to end alone.
+pub fn stuck_run(missions: &[Mission], nets: &[VehicleNet], quiet: bool, max: usize) -> Option<StuckRun> {
+    let all: Vec<usize> = (0..nets.len().min(missions.len())).collect();
+    let f = Flight::new(missions, nets, &all, quiet)?;
+    f.explore(&vec![true; all.len()], max, true).1
 }
 
 struct Flight {
@@ -206,19 +236,34 @@ impl Flight {
                     marking: v.net.places().iter().map(|p| p.initial).collect(),
                     asked: vec![0; v.tokens.len()],
                     inbox: Vec::new(),
+                    pending: false,
                 })
                 .collect(),
             links: vec![Vec::new(); n * n],
         }
     }
 
-    /// Explores the product from its initial state.
-    fn explore(&self, can_end: &[bool], max: usize) -> Flown {
+    /// Explores the product from its initial state; with `record`, the
+    /// run to the stuck state found ([`StuckRun`]).
+    fn explore(&self, can_end: &[bool], max: usize, record: bool) -> (Flown, Option<StuckRun>) {
         let n = self.vehs.len();
         let mut index: FxHashMap<State, u32> = FxHashMap::default();
         let mut states: Vec<State> = vec![self.initial()];
         index.insert(states[0].clone(), 0);
         let mut succ: Vec<Vec<u32>> = Vec::new();
+        // How each state was first reached: (parent, vehicle, its firings).
+        let mut parent: Vec<(u32, usize, Vec<TransitionId>)> = vec![(u32::MAX, 0, Vec::new())];
+        let run_to = |target: u32, states: &[State], parent: &[(u32, usize, Vec<TransitionId>)]| {
+            let mut steps = Vec::new();
+            let mut cur = target;
+            while let Some((p, v, log)) = parent.get(cur as usize).filter(|x| x.0 != u32::MAX) {
+                steps.push((*v, log.clone()));
+                cur = *p;
+            }
+            steps.reverse();
+            let markings = states[target as usize].vs.iter().map(|v| v.marking.clone()).collect();
+            Some(StuckRun { steps, markings })
+        };
         let is_target = |s: &State| (0..n).all(|v| !can_end[v] || s.vs[v].phase == ENDED);
         // Depth first: a stuck state is met early, and one ends the search.
         let mut stack = vec![0u32];
@@ -231,22 +276,26 @@ impl Flight {
             if i % 4096 == 0 {
                 crate::interrupt::poll();
             }
-            let Some(next) = self.successors(&states[i as usize]) else { return Flown::Unknown };
+            let Some(next) = self.successors(&states[i as usize]) else { return (Flown::Unknown, None) };
             if next.is_empty() && !is_target(&states[i as usize]) {
-                return Flown::Stuck;
+                let run = if record { run_to(i, &states, &parent) } else { None };
+                return (Flown::Stuck, run);
             }
             let mut out = Vec::with_capacity(next.len());
-            for s in next {
+            for (s, v, log) in next {
                 let j = match index.entry(s) {
                     MapEntry::Occupied(e) => *e.get(),
                     MapEntry::Vacant(e) => {
                         if states.len() >= max {
-                            return Flown::Unknown;
+                            return (Flown::Unknown, None);
                         }
                         let j = states.len() as u32;
                         states.push(e.key().clone());
                         e.insert(j);
                         done.push(false);
+                        if record {
+                            parent.push((i, v, log));
+                        }
                         j
                     }
                 };
@@ -281,22 +330,24 @@ impl Flight {
                 }
             }
         }
-        if co.iter().all(|&c| c) {
-            Flown::Free
-        } else {
-            Flown::Stuck
+        match co.iter().position(|&c| !c) {
+            None => (Flown::Free, None),
+            Some(s) => (Flown::Stuck, if record { run_to(s as u32, &states, &parent) } else { None }),
         }
     }
 
     /// The successors of `s`: each vehicle's inputs and each link's
     /// delivery. `None`: a stabilization passed [`SETTLE_STEPS`].
-    fn successors(&self, s: &State) -> Option<Vec<State>> {
+    fn successors(&self, s: &State) -> Option<Vec<(State, usize, Vec<TransitionId>)>> {
         let n = self.vehs.len();
         let mut out = Vec::new();
         for v in 0..n {
             let vs = &s.vs[v];
             let runs = match vs.phase {
                 NOT_STARTED => self.start(v, vs.clone())?,
+                _ if vs.pending => {
+                    self.react(v, (VState { pending: false, ..vs.clone() }, Vec::new(), Vec::new()), &[])?
+                }
                 RUNNING => {
                     let veh = &self.vehs[v];
                     let mut runs = Vec::new();
@@ -311,20 +362,20 @@ impl Flight {
                         fire(&veh.net, &mut m, t);
                         for (m2, fired) in self.stabilize(v, m, vec![t])? {
                             let st = self.ended(v, VState { marking: m2, ..vs.clone() });
-                            runs.extend(self.react(v, (st, Vec::new()), &fired)?);
+                            runs.extend(self.react(v, (st, Vec::new(), Vec::new()), &fired)?);
                         }
                     }
                     runs
                 }
                 _ => Vec::new(),
             };
-            for (st, sent) in runs {
+            for (st, sent, log) in runs {
                 let mut x = s.clone();
                 x.vs[v] = st;
                 for m in sent {
                     x.links[v * n + self.msgs[m as usize].to].push(m);
                 }
-                out.push(x);
+                out.push((x, v, log));
             }
         }
         // Deliveries: the oldest message of each link arrives.
@@ -333,19 +384,23 @@ impl Flight {
                 let Some(&m) = s.links[from * n + to].first() else { continue };
                 let mut vs = s.vs[to].clone();
                 vs.inbox.push(m);
-                let runs = if vs.phase == NOT_STARTED {
-                    vec![(vs, Vec::new())]
+                // It reacts at once (a real link), or takes more messages
+                // first (a virtual-time run, `VState::pending`).
+                let runs = if vs.phase == NOT_STARTED || vs.pending {
+                    vec![(vs, Vec::new(), Vec::new())]
                 } else {
-                    self.react(to, (vs, Vec::new()), &[])?
+                    let mut runs = self.react(to, (vs.clone(), Vec::new(), Vec::new()), &[])?;
+                    runs.push((VState { pending: true, ..vs }, Vec::new(), Vec::new()));
+                    runs
                 };
-                for (st, sent) in runs {
+                for (st, sent, log) in runs {
                     let mut x = s.clone();
                     x.links[from * n + to].remove(0);
                     x.vs[to] = st;
                     for m in sent {
                         x.links[to * n + self.msgs[m as usize].to].push(m);
                     }
-                    out.push(x);
+                    out.push((x, to, log));
                 }
             }
         }
@@ -377,7 +432,7 @@ impl Flight {
         let mut runs = Vec::new();
         for (m2, fired) in self.stabilize(v, vs.marking.clone(), Vec::new())? {
             let st = self.ended(v, VState { marking: m2, ..vs.clone() });
-            runs.extend(self.react(v, (st, Vec::new()), &fired)?);
+            runs.extend(self.react(v, (st, Vec::new(), Vec::new()), &fired)?);
         }
         Some(runs)
     }
@@ -459,7 +514,7 @@ impl Flight {
             for run in self.after(v, run, &fired)? {
                 let delivered = self.deliver(v, &run.0)?;
                 for (st, f) in delivered.iter().cloned() {
-                    work.push(((st, run.1.clone()), f));
+                    work.push(((st, run.1.clone(), run.2.clone()), f));
                 }
                 if delivered.is_empty() {
                     out.push(run);
@@ -472,16 +527,18 @@ impl Flight {
     /// `Live::after`: the messages of `fired` (and the mutex requests and
     /// grants counted), then the requests and returns of borrowed tokens
     /// raised as events, each with its own consequences.
-    fn after(&self, v: usize, (mut vs, mut sent): Run, fired: &[TransitionId]) -> Option<Vec<Run>> {
+    fn after(&self, v: usize, (mut vs, mut sent, mut log): Run, fired: &[TransitionId]) -> Option<Vec<Run>> {
         self.messages_for(v, &mut vs, &mut sent, fired);
+        log.extend_from_slice(fired);
         let events = self.arbitrate(v, &mut vs, &mut sent);
-        let mut runs = vec![(vs, sent)];
+        let mut runs = vec![(vs, sent, log)];
         for e in events {
             let mut next = Vec::new();
-            for (vs, sent) in runs {
+            for (vs, sent, log) in runs {
                 for (st, f) in self.event(v, &vs, &e)? {
-                    let mut run = (st, sent.clone());
+                    let mut run = (st, sent.clone(), log.clone());
                     self.messages_for(v, &mut run.0, &mut run.1, &f);
+                    run.2.extend(f);
                     next.push(run);
                 }
             }

@@ -30,11 +30,17 @@
 //!    marking*. The end of the missions must stay reachable from every image
 //!    through *pessimistic* steps (`>K` minus one is `K`), which every real
 //!    marking with that image can follow, so this proves that no vehicle can
-//!    be blocked forever. The verdict is this interleaving product's; when
-//!    it has counterexamples, a *settled* product (a vehicle's ready
-//!    immediate steps and its allowed starts on its own supervisors come
-//!    before any other vehicle's move, as its player does) only picks
-//!    counterexamples that replay as dry runs. (`product.rs`, `group.rs`)
+//!    be blocked forever. A *free* verdict of this interleaving product is
+//!    a proof; when it has counterexamples, a *settled* product (a
+//!    vehicle's ready immediate steps and its allowed starts on its own
+//!    supervisors come before any other vehicle's move, as its player
+//!    does) only picks counterexamples that replay as dry runs.
+//!    (`product.rs`, `group.rs`)
+//! 4. **Messages in flight.** The interleaving product holds runs that no
+//!    player takes, so its deadlocks are decided by the exact product of
+//!    the vehicle nets as the runtime plays them, each message on its way
+//!    in the FIFO of its link until it arrives (`flight.rs`): when every
+//!    state reached there can still reach the end, the group is free.
 //!
 //! The product is explored breadth-first with stubborn sets of vehicles
 //! (`stubborn.rs`): in each state only the moves of a set of vehicles that
@@ -68,7 +74,7 @@
 //! for a dead state first; only a walk whose end replays on the real net is
 //! reported (`group.rs`, `hunt.rs`).
 
-mod flight;
+pub mod flight;
 mod group;
 mod hunt;
 mod lts;
