@@ -24,10 +24,12 @@
 //! included, exact counts) under the per-vehicle firing rule that the
 //! verifier applies (`check_joint`): a start on a mutex that another
 //! vehicle holds may be held while its vehicle takes other steps (its token
-//! comes from the holder, a round trip), as in the settled product (the
-//! interleaving product, which gives the verdict, lets such a vehicle's
-//! events wait while the start is allowed, as before settling); no other
-//! start may.
+//! comes from the holder, a round trip), as in the settled and the
+//! interleaving products (whose events no longer wait while such a start
+//! is allowed); no other start may. And they are a path of the exact
+//! product (`check_exact`, `mcl_coord::verify::flight::follows`: the
+//! vehicle nets as the runtime plays them, messages in flight), with no
+//! exception at all.
 //!
 //! `MCL_DIFFERENTIAL_CASES` (default 40 per kind) and
 //! `MCL_DIFFERENTIAL_SEED` change the run.
@@ -389,7 +391,7 @@ fn constraint(r: &mut Rng) -> String {
 /// net (the take-back of withdrawn sync arrivals written as nodes), or why
 /// there are none (the constraints deadlock, or the analysis was
 /// inconclusive).
-fn vehicle_nets(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Net), String> {
+fn vehicle_nets(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Net, Vec<mcl_coord::Mission>), String> {
     let mut db = Database::new();
     let dir = Path::new("/virtual/differential");
     db.set_text(&dir.join("vehicle.mcl"), mcl_syntax::gen::TEST_VEHICLE);
@@ -404,7 +406,7 @@ fn vehicle_nets(text: &str) -> Result<(Vec<mcl_coord::VehicleNet>, Net), String>
     let central =
         mcl_coord::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?;
     let nets = mcl_coord::decentralize(&missions, &report.supervisors).map_err(|e| e.to_string())?;
-    Ok((nets, central))
+    Ok((nets, central, missions))
 }
 
 /// Fires the take-back nodes that `central` enables (`S.withdraw`, else
@@ -438,8 +440,8 @@ struct Joint {
 /// its vehicle under the per-vehicle firing rule (`select_ready` among its
 /// enabled transitions, as the verifier's transition systems and replay
 /// apply it), where a start on a mutex that another vehicle holds may be
-/// held (its token may be on its way; the settled product holds it too) and no
-/// other start may. The vehicle nets' own coordination transitions
+/// held (its token may be on its way; the interleaving and the settled
+/// products hold it too) and no other start may. The vehicle nets' own coordination transitions
 /// (receptions, `coord.*`) have no counterpart there; a mission fires
 /// nothing of its own after its outcome (its supervisor copies still
 /// receive).
@@ -501,7 +503,7 @@ fn check_joint(
             .filter(|u| central.transitions()[u.index()].id.starts_with(&prefix))
             .collect();
         // A start on a mutex that another vehicle holds may wait for its
-        // token (the settled product holds it too); no other start may.
+        // token (the verifier's products hold it too); no other start may.
         ready.retain(|&u| u == t || !remote_starts.contains(&u));
         mcl_net::semantics::select_ready(central, &mut ready);
         if !ready.contains(&t) {
@@ -570,6 +572,39 @@ struct PairTally {
     /// Firings of both vehicles checked together on the supervised
     /// centralized net ([`check_joint`]).
     joint: Joint,
+    /// Firings of both vehicles followed along the exact product
+    /// ([`check_exact`]).
+    exact: usize,
+}
+
+/// Checks that the firings of both vehicles, in the order of the records,
+/// are a path of the coordination verifier's exact product (the vehicle
+/// nets as the runtime plays them, messages in flight:
+/// `mcl_coord::verify::flight::follows`), with no exception: a start held
+/// for a remote mutex grant is a run of it like any other. Returns the
+/// firings followed.
+fn check_exact(
+    missions: &[mcl_coord::Mission],
+    nets: &[mcl_coord::VehicleNet],
+    records: &[Record],
+    what: &dyn Fn() -> String,
+) -> usize {
+    let fires: Vec<(usize, TransitionId)> = records
+        .iter()
+        .filter_map(|r| {
+            let RecordKind::Fire { transition, .. } = &r.kind else { return None };
+            let k = nets.iter().position(|v| Some(v.mission.as_str()) == r.mission.as_deref())?;
+            Some((k, nets[k].net.transition_by_id(transition)?))
+        })
+        .collect();
+    if let Err(why) = mcl_coord::verify::flight::follows(missions, nets, &fires, 2_000_000) {
+        panic!(
+            "exact product: {why}
+{}",
+            what()
+        );
+    }
+    fires.len()
 }
 
 /// Checks one vehicle's firings in `records` on its net (see the module
@@ -676,7 +711,7 @@ fn coordinated_vehicles_fire_along_their_explored_state_spaces() {
         let text = format!(
             "import \"vehicle.mcl\";\nmission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n    {c}\n}}\n"
         );
-        let (nets, central) = match vehicle_nets(&text) {
+        let (nets, central, missions) = match vehicle_nets(&text) {
             Ok(x) => x,
             Err(why) => {
                 eprintln!("pair {case} skipped: {why}");
@@ -699,16 +734,18 @@ fn coordinated_vehicles_fire_along_their_explored_state_spaces() {
                 check_vehicle(v, space, &records, &mut tally, &what);
             }
             check_joint(&central, &nets, &records, &mut tally.joint, &what);
+            tally.exact += check_exact(&missions, &nets, &records, &what);
             runs += 1;
         }
     }
     eprintln!(
         "coordinated pairs: {runs} runs; {} firings along edges, {} receptions, {} off the explored space, {} joint \
-         firings along the product; {skipped} pairs skipped",
-        tally.edges, tally.received, tally.off_space, tally.joint.firings
+         firings along the product, {} along the exact product; {skipped} pairs skipped",
+        tally.edges, tally.received, tally.off_space, tally.joint.firings, tally.exact
     );
     assert_eq!(pairs, cases, "too many pairs were skipped ({skipped})");
     assert!(tally.received > 0, "no coordination message was received: the pairs do not coordinate");
     assert!(tally.edges > 10 * tally.off_space, "too few firings checked against the explorer");
     assert!(tally.joint.firings > 0, "no joint firing was checked against the product");
+    assert!(tally.exact > 0, "no firing was followed along the exact product");
 }

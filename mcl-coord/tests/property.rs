@@ -500,6 +500,9 @@ fn replays_delayed(seed: u64, text: &str, opts: &AnalyzeOptions) -> Result<(usiz
     // Problems replayed, and of those, the ones with a late start, with a late message.
     let (ms, cs) = compile(text, seed);
     let r = analyze_with(&ms, &cs, opts).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+    if r.stats.flown_free > 0 {
+        eprintln!("seed {seed}: free, a deadlock of the interleaving product that no player reaches");
+    }
     if r.problems.is_empty() {
         return Ok((0, 0, 0));
     }

@@ -131,6 +131,52 @@ pub(super) fn fly(
     }
 }
 
+/// Checks that the firings of a run of the players (`fires`: the vehicle,
+/// an index into `missions` and `nets`, and the transition of its vehicle
+/// net, in the order the run took them) are a path of the exact product
+/// of every vehicle: each step of the product fires, in one vehicle, a
+/// block of consecutive firings of the run (as a multiset: the order
+/// inside one stabilization is the engine's draw). At most `max` pairs of
+/// a state and a position in the run are explored. The error says how far
+/// the run was followed.
+pub fn follows(
+    missions: &[Mission],
+    nets: &[VehicleNet],
+    fires: &[(usize, TransitionId)],
+    max: usize,
+) -> Result<(), String> {
+    let all: Vec<usize> = (0..nets.len().min(missions.len())).collect();
+    let f = Flight::new(missions, nets, &all, false).ok_or("the vehicle nets cannot be read")?;
+    let mut seen: FxHashSet<(State, usize)> = FxHashSet::default();
+    let init = (f.initial(), 0usize);
+    seen.insert(init.clone());
+    let mut queue = std::collections::VecDeque::from([init]);
+    let mut furthest = 0usize;
+    while let Some((s, pos)) = queue.pop_front() {
+        furthest = furthest.max(pos);
+        if pos == fires.len() {
+            return Ok(());
+        }
+        let next = f.successors(&s).ok_or("a stabilization passed its step limit")?;
+        for (x, v, log) in next {
+            let k = log.len();
+            let block = fires.get(pos..pos + k).filter(|b| b.iter().all(|&(w, _)| w == v));
+            let Some(block) = block else { continue };
+            let mut a: Vec<TransitionId> = block.iter().map(|&(_, t)| t).collect();
+            let mut b = log;
+            a.sort_unstable();
+            b.sort_unstable();
+            if a == b && seen.insert((x.clone(), pos + k)) {
+                if seen.len() > max {
+                    return Err(format!("more than {max} states explored; followed {furthest} firings"));
+                }
+                queue.push_back((x, pos + k));
+            }
+        }
+    }
+    Err(format!("no path of the exact product fires the run past its first {furthest} firings"))
+}
+
 /// A run of the players, over links that may delay their messages, to a
 /// stuck state of the exact product.
 pub struct StuckRun {
@@ -448,8 +494,15 @@ impl Flight {
             !veh.sends[t.index()].is_empty()
                 || veh.tokens.iter().any(|k| k.grant == *t || veh.net.transitions()[t.index()].id == k.request)
         };
-        let key = |m: &Vec<u32>, f: &[TransitionId]| (m.clone(), f.iter().copied().filter(matters).collect::<Vec<_>>());
-        let mut seen: FxHashSet<(Vec<u32>, Vec<TransitionId>)> = FxHashSet::default();
+        // The marking, the order of the firings that send or count, and
+        // which transitions fired ([`follows`] matches a step by them).
+        let key = |m: &Vec<u32>, f: &[TransitionId]| {
+            let mut all = f.to_vec();
+            all.sort_unstable();
+            (m.clone(), f.iter().copied().filter(matters).collect::<Vec<_>>(), all)
+        };
+        type Key = (Vec<u32>, Vec<TransitionId>, Vec<TransitionId>);
+        let mut seen: FxHashSet<Key> = FxHashSet::default();
         let mut out = Vec::new();
         seen.insert(key(&m, &fired));
         let mut stack = vec![(m, fired)];

@@ -360,8 +360,14 @@ fn verify_mode(
     }
     let vehicles: Vec<std::ops::Range<u32>> = plant.parts.iter().map(|p| p.transitions.clone()).collect();
     let finals: Vec<Vec<PlaceId>> = plant.parts.iter().map(|p| p.final_places.clone()).collect();
-    let rules =
-        ReplayRules { vehicles: &vehicles, take_back: &take_back, quiet: &quiet_ts, finals: &finals, remote: &[] };
+    let rules = ReplayRules {
+        vehicles: &vehicles,
+        take_back: &take_back,
+        quiet: &quiet_ts,
+        finals: &finals,
+        remote: &[],
+        held: &urgency.remote,
+    };
     let settled_rules = ReplayRules { remote: &urgency.remote, ..rules };
 
     // Vehicles that no supervisor links are independent: each group of

@@ -20,6 +20,9 @@
 //! that allows it may be late), and a start on a mutex between vehicles
 //! that another vehicle holds waits for its grant: it makes the vehicle
 //! owe nothing, nor its events wait (its *blocked* edges stay enabled).
+//! That last rule holds in the interleaving product too: a player takes
+//! events while its request for a remote token is on its way, and the
+//! interleaving product must hold every run of the players.
 
 use rustc_hash::FxHashMap;
 
@@ -112,16 +115,11 @@ impl Product<'_> {
         for v in vehicles.into_iter().filter(|&v| owing.is_none_or(|o| o == v)) {
             let q = st[v];
             let qt = &self.quots[v];
-            // Events wait while a start is allowed (it fires first); when
-            // settling, only an urgent one (a remote start waits for its
-            // grant, and its vehicle's events may come meanwhile).
-            let any_gate_allowed = || {
-                if self.settling {
-                    self.urgent_allowed(st, v, q)
-                } else {
-                    qt.gates[q as usize].iter().any(|&g| self.allowed(st, g))
-                }
-            };
+            // Events wait while an urgent start is allowed (it fires
+            // first); a remote start waits for its grant, and its
+            // vehicle's events may come meanwhile, settling or not (the
+            // interleaving product holds these runs of the players too).
+            let any_gate_allowed = || self.urgent_allowed(st, v, q);
             for &(label, q2) in qt.out(q) {
                 if lab_blocked(label) && any_gate_allowed() {
                     continue;

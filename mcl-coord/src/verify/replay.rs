@@ -45,6 +45,10 @@ pub(super) struct ReplayRules<'a> {
     /// its vehicle takes other steps, and fires only once its vehicle has
     /// no other immediate step ready (empty: none).
     pub(super) remote: &'a [bool],
+    /// Per transition of the plant: a start on a mutex between vehicles of
+    /// a vehicle that is not its holder, which may wait for its token while
+    /// its vehicle takes other steps (empty: none).
+    pub(super) held: &'a [bool],
 }
 
 /// The end of a replay: the marking reached and, per vehicle, whether its
@@ -128,7 +132,7 @@ impl ReplayRules<'_> {
         let Some(range) = self.vehicles.iter().find(|r| r.contains(&t.0)) else { return false };
         // Another vehicle's mutex start may be waiting for its token.
         let flag = |f: &[bool], u: TransitionId| f.get(u.index()).copied().unwrap_or(false);
-        let held = |u: TransitionId| u != t && flag(self.remote, u);
+        let held = |u: TransitionId| u != t && (flag(self.remote, u) || flag(self.held, u));
         let mine = |u: &&TransitionId| range.contains(&u.0) && !self.silent(m, **u) && !held(**u);
         buf.clear();
         buf.extend(tracker.enabled_immediate().iter().filter(mine));
@@ -314,7 +318,8 @@ mod tests {
     fn a_step_replays_only_if_its_vehicle_could_choose_it() {
         let snet = net();
         let vehicles = [0..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[] };
+        let rules =
+            ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[], held: &[] };
         let replays = |path: &[u32]| {
             let path: Vec<TransitionId> = path.iter().map(|&t| TransitionId(t)).collect();
             rules.replay(&snet, 0, &path).is_some()
@@ -336,7 +341,8 @@ mod tests {
         // vehicle 1..4 sees only `e`, `lo` and `hi`; `hi` goes first.
         let snet = net();
         let vehicles = [1..4, 4..5];
-        let rules = ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[] };
+        let rules =
+            ReplayRules { vehicles: &vehicles, take_back: &[], quiet: &[], finals: &[], remote: &[], held: &[] };
         let m = snet.initial_marking();
         let tracker = EnabledTracker::new(&snet, &m).unwrap();
         let mut buf = Vec::new();
