@@ -101,6 +101,38 @@ pub(super) fn without_enabled(
     Ok(r)
 }
 
+/// The tuples of `n` whose value is 0 at every level of `zero` (highest
+/// first): the markings of `n` that leave those places empty.
+pub(super) fn only_zero(
+    store: &mut Store,
+    n: NodeId,
+    zero: &[u32],
+    memo: &mut FxHashMap<NodeId, NodeId>,
+) -> Res<NodeId> {
+    let Some(&lowest) = zero.last() else { return Ok(n) };
+    let level = store.level(n);
+    if n == EMPTY || level < lowest {
+        return Ok(n);
+    }
+    if let Some(&r) = memo.get(&n) {
+        return Ok(r);
+    }
+    let restricted = zero.contains(&level);
+    let mut out = Vec::new();
+    for (v, c) in store.children(n).to_vec() {
+        if restricted && v > 0 {
+            continue;
+        }
+        let r = only_zero(store, c, zero, memo)?;
+        if r != EMPTY {
+            out.push((v, r));
+        }
+    }
+    let r = store.make(level, &out)?;
+    memo.insert(n, r);
+    Ok(r)
+}
+
 /// The largest value at each level over the tuples of `root`
 /// (`bounds[level]`), and the largest sum of values of one tuple.
 pub(super) fn bounds(store: &Store, root: NodeId, levels: u32) -> (Vec<u32>, u64) {

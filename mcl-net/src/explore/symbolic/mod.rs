@@ -46,6 +46,11 @@ pub struct SymbolicOptions {
     pub order: VariableOrder,
     /// Look for a shortest firing sequence to a dead marking.
     pub witness: bool,
+    /// Groups of places (one per component, e.g. a vehicle's final
+    /// places): a dead marking that marks some place of every group is a
+    /// proper end (*terminal*), not a deadlock. Empty (the default): every
+    /// dead marking is a deadlock. Places outside the net are ignored.
+    pub terminal: Vec<Vec<PlaceId>>,
 }
 
 /// Default [`SymbolicOptions::max_nodes`].
@@ -61,6 +66,7 @@ impl Default for SymbolicOptions {
             max_tokens: DEFAULT_MAX_TOKENS,
             order: VariableOrder::default(),
             witness: true,
+            terminal: Vec::new(),
         }
     }
 }
@@ -110,10 +116,13 @@ pub struct SymbolicReport {
     pub states_approx: f64,
     /// (reachable marking, enabled transition) pairs.
     pub edges: Option<u128>,
-    /// Some reachable marking enables no transition.
+    /// Some reachable marking enables no transition and is not terminal
+    /// ([`SymbolicOptions::terminal`]).
     pub deadlock: bool,
-    /// Reachable markings that enable no transition.
+    /// Reachable markings that enable no transition (terminal ones included).
     pub dead_markings: Option<u128>,
+    /// The dead markings that are terminal (0 without [`SymbolicOptions::terminal`]).
+    pub terminal_markings: Option<u128>,
     /// Every place holds at most one token in every reachable marking.
     pub one_safe: bool,
     /// The largest bound of a place.
@@ -122,7 +131,8 @@ pub struct SymbolicReport {
     pub bounds: Vec<u32>,
     /// The most tokens in one reachable marking.
     pub max_tokens_per_marking: u64,
-    /// A dead marking reached by a shortest path (with [`SymbolicOptions::witness`]).
+    /// A dead, not terminal, marking reached by a shortest path (with
+    /// [`SymbolicOptions::witness`]).
     pub dead_example: Option<SymbolicDead>,
     /// The variable order used.
     pub order: VariableOrder,
@@ -170,6 +180,7 @@ fn run(net: &Net, opts: &SymbolicOptions) -> SymbolicReport {
         edges: Some(0),
         deadlock: false,
         dead_markings: Some(0),
+        terminal_markings: Some(0),
         one_safe: false,
         max_tokens: 0,
         bounds: Vec::new(),
@@ -238,6 +249,22 @@ fn fill(
         dead = count::without_enabled(store, dead, &need, &mut FxHashMap::default())?;
     }
     let dead_count = count::count(store, dead, &mut counts);
+    // The dead markings where some group has no marked place.
+    let stuck = if opts.terminal.is_empty() {
+        dead
+    } else {
+        let mut stuck = EMPTY;
+        for group in &opts.terminal {
+            let mut zero: Vec<u32> = group.iter().filter_map(|p| level_of.get(p.index()).copied()).collect();
+            zero.sort_unstable_by_key(|&l| std::cmp::Reverse(l));
+            zero.dedup();
+            let z = count::only_zero(store, dead, &zero, &mut FxHashMap::default())?;
+            stuck = store.union(stuck, z)?;
+        }
+        stuck
+    };
+    let terminal = store.diff(dead, stuck)?;
+    let terminal_count = count::count(store, terminal, &mut counts);
     let (by_level, max_sum) = count::bounds(store, reach, place_at.len() as u32);
     let bounds: Vec<u32> = level_of.iter().map(|&l| by_level[l as usize]).collect();
     let max_tokens = bounds.iter().copied().max().unwrap_or(0);
@@ -247,8 +274,9 @@ fn fill(
         states: states.exact,
         states_approx: states.approx,
         edges: edges.exact,
-        deadlock: dead != EMPTY,
+        deadlock: stuck != EMPTY,
         dead_markings: dead_count.exact,
+        terminal_markings: terminal_count.exact,
         one_safe: max_tokens <= 1,
         max_tokens,
         bounds,
@@ -256,8 +284,8 @@ fn fill(
         mdd_nodes: reachable_nodes.len(),
         ..report.clone()
     };
-    if opts.witness && dead != EMPTY {
-        if let Some((m, path)) = witness::shortest_path(net, store, rel, init, dead, pos_of)? {
+    if opts.witness && stuck != EMPTY {
+        if let Some((m, path)) = witness::shortest_path(net, store, rel, init, stuck, pos_of)? {
             report.dead_example = Some(SymbolicDead {
                 marking: net
                     .place_ids()

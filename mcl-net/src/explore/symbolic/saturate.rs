@@ -39,6 +39,16 @@ impl<'a> Saturation<'a> {
         for (v, c) in self.store.children(n).to_vec() {
             r.push((v, self.saturate(c)?));
         }
+        let s = self.fixpoint(k, r)?;
+        self.sat.insert(n, s);
+        self.sat.insert(s, s);
+        Ok(s)
+    }
+
+    /// Closes the node `r` at level `k`, whose children are saturated,
+    /// under the events of top level `k`. The children stay saturated: a
+    /// union of sets closed under the events below is closed under them.
+    fn fixpoint(&mut self, k: u32, mut r: Vec<(u32, NodeId)>) -> Res<NodeId> {
         let rel = self.rel;
         let events = &rel.by_top[k as usize];
         if !events.is_empty() {
@@ -57,10 +67,7 @@ impl<'a> Saturation<'a> {
                 }
             }
         }
-        let s = self.store.make(k, &r)?;
-        self.sat.insert(n, s);
-        self.sat.insert(s, s);
-        Ok(s)
+        self.store.make(k, &r)
     }
 
     /// Fires event `e` on the saturated node `q` (below the event's top
@@ -88,8 +95,8 @@ impl<'a> Saturation<'a> {
             let f = self.relprod(c, e)?;
             insert_union(self.store, &mut out, j, f)?;
         }
-        let made = self.store.make(k, &out)?;
-        let r = self.saturate(made)?;
+        let r = self.fixpoint(k, out)?;
+        self.sat.insert(r, r);
         self.relprod.insert((q, e), r);
         Ok(r)
     }
