@@ -113,9 +113,14 @@ enum Command {
         /// markings come with shortest paths (slower on many cores).
         #[arg(long)]
         shortest_paths: bool,
-        /// Exploration method: every marking, or stubborn sets (deadlocks only).
+        /// Exploration method: every marking, stubborn sets (deadlocks
+        /// only), or decision diagrams (exact counts; --max-states then
+        /// limits the diagram nodes).
         #[arg(long, value_enum, default_value = "explicit")]
         method: cmd::analyze::Method,
+        /// With --method symbolic: the places' order in the diagram.
+        #[arg(long, value_enum, default_value = "force")]
+        order: cmd::analyze::OrderChoice,
     },
     /// Run a mission: against the in-process mock vehicle (--mock) or a vehicle's AAC over TCP (--aac) or Zenoh (--zenoh).
     ///
@@ -312,8 +317,8 @@ fn main() -> ExitCode {
         Command::ZenohRouter { listen, connect, config } => cmd::zenoh_router::run(listen, connect, config),
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
-        Command::Analyze { net, format, max_states, semantics, threads, shortest_paths, method } => {
-            cmd::analyze::run(&net, format, max_states, semantics, threads, shortest_paths, method)
+        Command::Analyze { net, format, max_states, semantics, threads, shortest_paths, method, order } => {
+            cmd::analyze::run(&net, format, max_states, semantics, threads, shortest_paths, method, order)
         }
         Command::Compile { file, link_report: true, format, frame_bytes, .. } => {
             cmd::link_report::run(&file, format, frame_bytes)

@@ -109,3 +109,69 @@ fn mcc_deadlock_verdicts_with_stubborn_sets() {
         }
     }
 }
+
+/// `mcl analyze --method symbolic`: the decision-diagram exploration gives
+/// the oracle's states, edges, deadlock verdict and 1-safeness on every
+/// net, the large ones included, with the default order (FORCE) and, on
+/// the nets where that order is not slow (see BENCHMARKS.md), the PNML
+/// order; its dead
+/// example replays on the net to a dead marking by a path as short as the
+/// explicit search's shortest one.
+#[test]
+fn mcc_nets_match_oracle_symbolically() {
+    use mcl_net::explore::symbolic::VariableOrder;
+    use mcl_net::explore::{explore_symbolic, SymbolicOptions};
+    let dir = mcc_dir();
+    let oracle: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("oracle.json")).unwrap()).unwrap();
+    let oracle = oracle.as_object().unwrap();
+    assert!(!oracle.is_empty());
+    for (name, expect) in oracle {
+        let text = std::fs::read_to_string(dir.join(format!("{name}.pnml"))).unwrap();
+        let net = read_pnml(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let slow_in_pnml_order = ["Dekker-PT-010", "Philosophers-PT-000010"];
+        let orders: &[VariableOrder] = if LARGE.contains(&name.as_str()) || slow_in_pnml_order.contains(&name.as_str())
+        {
+            &[VariableOrder::Force]
+        } else {
+            &[VariableOrder::Force, VariableOrder::Pnml]
+        };
+        for &order in orders {
+            let start = std::time::Instant::now();
+            let r = explore_symbolic(&net, &SymbolicOptions { order, ..SymbolicOptions::default() });
+            eprintln!(
+                "{name} symbolic {order:?}: {:?} states, {:?} edges, {} MDD nodes ({} created) in {:.2?}",
+                r.states,
+                r.edges,
+                r.mdd_nodes,
+                r.nodes_created,
+                start.elapsed()
+            );
+            assert!(r.complete, "{name}: {:?}", r.stop);
+            assert_eq!(r.states, Some(u128::from(expect["states"].as_u64().unwrap())), "{name} states");
+            assert_eq!(r.edges, Some(u128::from(expect["edges"].as_u64().unwrap())), "{name} edges");
+            assert_eq!(r.deadlock, expect["deadlock"].as_bool().unwrap(), "{name} deadlock");
+            assert_eq!(r.one_safe, expect["one_safe"].as_bool().unwrap(), "{name} one_safe");
+            assert_eq!(r.deadlock, r.dead_example.is_some(), "{name} dead example");
+            if LARGE.contains(&name.as_str()) {
+                continue;
+            }
+            let e = analyze(&net, &Options::plain());
+            assert_eq!(r.dead_markings, Some(u128::from(e.dead_markings)), "{name} dead markings");
+            assert_eq!(r.max_tokens, e.max_tokens, "{name} max tokens");
+            assert_eq!(r.max_tokens_per_marking, e.max_tokens_per_marking, "{name} tokens per marking");
+            if let Some(d) = &r.dead_example {
+                let mut m = net.initial_marking();
+                for &t in &d.path {
+                    mcl_net::semantics::fire(&net, &mut m, t).unwrap();
+                }
+                assert!(mcl_net::semantics::enabled(&net, &m).is_empty(), "{name}: not dead");
+                let shortest = e.dead_examples.iter().map(|x| x.path.len()).min().unwrap();
+                assert_eq!(d.path.len(), shortest, "{name}: not shortest");
+                let marked: Vec<(String, u32)> =
+                    m.support().map(|(p, k)| (net.places()[p.index()].id.to_string(), k)).collect();
+                assert_eq!(marked, d.marking, "{name}: marking");
+            }
+        }
+    }
+}

@@ -23,8 +23,21 @@ pub enum Method {
     /// Stubborn sets (plain rule only): the deadlock verdict and the number
     /// of dead markings are exact, the state count is the reduced graph's.
     Por,
+    /// Decision diagrams by saturation (plain rule only): exact states,
+    /// edges, dead markings and bounds without enumerating the markings.
+    Symbolic,
 }
 
+/// Which place goes to which level of the decision diagram (`--method symbolic`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum OrderChoice {
+    /// FORCE: places moved next to the transitions they share.
+    Force,
+    /// The order of the places in the PNML file.
+    Pnml,
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     path: &Path,
     format: Format,
@@ -33,6 +46,7 @@ pub fn run(
     threads: usize,
     shortest_paths: bool,
     method: Method,
+    order: OrderChoice,
 ) -> u8 {
     let text = match mcl_net::input::read_source(path) {
         Ok(t) => t,
@@ -56,6 +70,9 @@ pub fn run(
     };
     if method == Method::Por {
         return run_por(&net, format, max_states, semantics);
+    }
+    if method == Method::Symbolic {
+        return run_symbolic(&net, format, max_states, semantics, order);
     }
     // Several threads explore without levels (`unordered.rs`) unless
     // shortest paths to the dead markings are asked for.
@@ -107,6 +124,62 @@ fn run_por(net: &mcl_net::Net, format: Format, max_states: usize, semantics: Sem
             println!("edges of the reduced graph: {}", r.edges);
             println!("dead markings: {}", r.dead_markings);
             println!("deadlock: {}", if r.deadlock { "yes" } else { "no" });
+        }
+    }
+    0
+}
+
+/// `--method symbolic`: the decision-diagram exploration of
+/// `mcl_net::explore::explore_symbolic`, with `max_states` as its node limit.
+fn run_symbolic(net: &mcl_net::Net, format: Format, max_nodes: usize, semantics: Semantics, order: OrderChoice) -> u8 {
+    use mcl_net::explore::symbolic::{SymbolicStop, VariableOrder};
+    if semantics != Semantics::Plain {
+        eprintln!("error: --method symbolic explores with the plain rule only (give --semantics plain)");
+        return 2;
+    }
+    let order = match order {
+        OrderChoice::Force => VariableOrder::Force,
+        OrderChoice::Pnml => VariableOrder::Pnml,
+    };
+    let opts = mcl_net::explore::SymbolicOptions { max_nodes, order, ..Default::default() };
+    let r = mcl_net::explore::explore_symbolic(net, &opts);
+    match format {
+        Format::Json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_else(|_| "{}".into())),
+        Format::Human => {
+            println!("net `{}`: {} places, {} transitions", net.name(), net.place_count(), net.transition_count());
+            match &r.stop {
+                Some(SymbolicStop::NodeLimit { max_nodes }) => {
+                    println!("incomplete: the diagrams needed more than {max_nodes} nodes (raise --max-states)");
+                }
+                Some(SymbolicStop::TokenLimit { place, max_tokens }) => {
+                    println!("incomplete: place `{place}` would hold more than {max_tokens} tokens (the net may be unbounded)");
+                }
+                None => {
+                    let n = |c: Option<u128>| c.map_or("more than 2^128".to_string(), |c| c.to_string());
+                    println!(
+                        "reachable markings: {}",
+                        r.states.map_or(format!("about {:e}", r.states_approx), |c| c.to_string())
+                    );
+                    println!("edges: {}", n(r.edges));
+                    println!("dead markings: {}", n(r.dead_markings));
+                    println!("1-safe: {}", if r.one_safe { "yes" } else { "no" });
+                    println!("largest bound of a place (max_tokens): {}", r.max_tokens);
+                    println!("most tokens in one marking: {}", r.max_tokens_per_marking);
+                    println!("decision diagram: {} nodes ({} created)", r.mdd_nodes, r.nodes_created);
+                    if let Some(d) = &r.dead_example {
+                        let m: Vec<String> = d
+                            .marking
+                            .iter()
+                            .map(|(p, k)| if *k == 1 { p.clone() } else { format!("{p}×{k}") })
+                            .collect();
+                        println!(
+                            "  dead: {{{}}} after {}",
+                            m.join(", "),
+                            if d.path_names.is_empty() { "no firing".into() } else { d.path_names.join(" → ") }
+                        );
+                    }
+                }
+            }
         }
     }
     0

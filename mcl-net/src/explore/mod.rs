@@ -26,7 +26,9 @@
 //!
 //! `stubborn.rs`
 //! explores with stubborn sets instead ([`explore_por`]: deadlocks exact,
-//! fewer states).
+//! fewer states); `symbolic/` builds the reachable markings as a decision
+//! diagram by saturation ([`explore_symbolic`]: exact counts without
+//! enumerating markings).
 
 use std::fmt;
 
@@ -38,9 +40,11 @@ mod engine;
 mod fixed;
 mod parallel;
 mod stubborn;
+pub mod symbolic;
 mod unordered;
 
 pub use stubborn::{explore_por, PorReport};
+pub use symbolic::{explore_symbolic, SymbolicOptions, SymbolicReport};
 
 use engine::Layout;
 
