@@ -482,16 +482,8 @@ impl Table {
         self.mask = mask;
     }
 
-    /// Reads the first and the meta word of the home slot of `mixed`, to pull
-    /// them into the cache ahead of [`Table::find`] (a slot may straddle two
-    /// cache lines).
-    #[inline]
-    pub(super) fn touch(&self, mixed: u64) -> u64 {
-        let base = (mixed as usize & self.mask) * self.stride;
-        self.slots[base] ^ self.slots[base + self.words]
-    }
-
-    /// Prefetches the first and the meta word of the home slot of `mixed`.
+    /// Prefetches the first and the meta word of the home slot of `mixed`
+    /// (a slot may straddle two cache lines).
     #[inline]
     pub(super) fn prefetch(&self, mixed: u64) {
         let base = (mixed as usize & self.mask) * self.stride;

@@ -11,7 +11,12 @@
 //! * Unless edges are recorded (which needs the index of a found state), the
 //!   table is a [`KeyTable`]: slots hold nothing but the marking (8 bytes for
 //!   a one-word marking instead of 16), so the table is smaller and a cache
-//!   line holds more slots.
+//!   line holds more slots. The batch is then larger ([`SORTED_BATCH`]) and
+//!   looked up in the order of the table positions (a counting sort by the
+//!   top bits of the home slot, stable so that equal markings meet in BFS
+//!   order), each lookup prefetching the slot [`PREFETCH_AHEAD`] lookups
+//!   later; the new states are numbered afterwards in BFS order, so the
+//!   numbering is that of a one-by-one search.
 
 use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
 use super::hw;
@@ -57,11 +62,6 @@ impl<const W: usize> FixedTable<W> {
         }
         self.slots = slots;
         self.mask = mask;
-    }
-
-    #[inline]
-    pub(super) fn touch(&self, mixed: u64) -> u64 {
-        self.slots[mixed as usize & self.mask].meta
     }
 
     /// Prefetches the home slot of `mixed`.
@@ -123,6 +123,8 @@ trait Visited<const W: usize> {
     fn capacity(&self) -> usize;
     fn grow(&mut self);
     fn prefetch(&self, hash: u64);
+    /// Home slot position of `hash`.
+    fn home(&self, hash: u64) -> usize;
     /// `Ok(state index)` (0 when the table keeps no indices) or `Err(where to insert)`.
     fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize>;
     fn insert_at(&mut self, pos: usize, key: [u64; W], hash: u64, idx: u32);
@@ -146,6 +148,10 @@ impl<const W: usize> Visited<W> for FixedTable<W> {
     #[inline(always)]
     fn prefetch(&self, hash: u64) {
         FixedTable::prefetch(self, hash)
+    }
+    #[inline(always)]
+    fn home(&self, hash: u64) -> usize {
+        hash as usize & self.mask
     }
     #[inline(always)]
     fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize> {
@@ -205,6 +211,10 @@ impl<const W: usize> Visited<W> for KeyTable<W> {
         }
     }
     #[inline(always)]
+    fn home(&self, hash: u64) -> usize {
+        hash as usize & self.mask
+    }
+    #[inline(always)]
     fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize> {
         if *key == [0; W] {
             return if self.has_zero { Ok(0) } else { Err(ZERO_POS) };
@@ -230,6 +240,13 @@ impl<const W: usize> Visited<W> for KeyTable<W> {
         self.len += 1;
     }
 }
+
+/// Successors per batch when the lookups are sorted by table position.
+const SORTED_BATCH: usize = 1 << 14;
+/// The sort keys: the top bits of the home slot.
+const BUCKET_BITS: u32 = 12;
+/// How many lookups ahead the sorted pass prefetches.
+const PREFETCH_AHEAD: usize = 16;
 
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
 ///
@@ -272,8 +289,15 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
 
     let mut enabled: Vec<TransitionId> = Vec::new();
     // The batch: successors, and (hash, source, transition).
-    let mut succs: Vec<[u64; W]> = Vec::with_capacity(2 * BATCH);
-    let mut meta: Vec<(u64, u32, u32)> = Vec::with_capacity(2 * BATCH);
+    // Without extras (no index needed in the table) the lookups are sorted.
+    let sorted = !EXTRAS;
+    let batch = if sorted { SORTED_BATCH } else { BATCH };
+    let mut succs: Vec<[u64; W]> = Vec::with_capacity(batch + c.transitions());
+    let mut meta: Vec<(u64, u32, u32)> = Vec::with_capacity(batch + c.transitions());
+    // Without extras: the batch in table order, and which successors are new.
+    let mut order: Vec<u32> = Vec::new();
+    let mut counts: Vec<u32> = Vec::new();
+    let mut fresh: Vec<bool> = Vec::new();
     let mut next = 0usize;
 
     'bfs: while next < parent.len() {
@@ -281,10 +305,10 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
         succs.clear();
         meta.clear();
         // Room for the whole batch, so that the slots prefetched below stay put.
-        while (table.len() + BATCH + c.transitions()) * 4 > table.capacity() * 3 {
+        while (table.len() + batch + c.transitions()) * 4 > table.capacity() * 3 {
             table.grow();
         }
-        while next < parent.len() && meta.len() < BATCH {
+        while next < parent.len() && meta.len() < batch {
             let s = next;
             next += 1;
             let cur = arena[s];
@@ -316,10 +340,62 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                 let hash = key_hash(&succ);
                 // Prefetched now, looked up after the batch: the misses
                 // overlap with the work of generating the next successors.
-                table.prefetch(hash);
+                if !sorted {
+                    table.prefetch(hash);
+                }
                 succs.push(succ);
                 meta.push((hash, s as u32, t.0));
             }
+        }
+
+        if sorted {
+            // 2. Look the batch up in table order (a stable counting sort
+            //    by the top bits of the home slot): the lookups sweep the
+            //    table once, page by page, instead of jumping at random, and
+            //    equal markings meet in BFS order, so the first one is new.
+            let cap_bits = table.capacity().trailing_zeros();
+            let shift = cap_bits - BUCKET_BITS.min(cap_bits);
+            counts.clear();
+            counts.resize((table.capacity() >> shift) + 1, 0);
+            for m in &meta {
+                counts[(table.home(m.0) >> shift) + 1] += 1;
+            }
+            for i in 1..counts.len() {
+                counts[i] += counts[i - 1];
+            }
+            order.clear();
+            order.resize(meta.len(), 0);
+            for (i, m) in meta.iter().enumerate() {
+                let b = &mut counts[table.home(m.0) >> shift];
+                order[*b as usize] = i as u32;
+                *b += 1;
+            }
+            fresh.clear();
+            fresh.resize(meta.len(), false);
+            for (k, &i) in order.iter().enumerate() {
+                if let Some(&j) = order.get(k + PREFETCH_AHEAD) {
+                    table.prefetch(meta[j as usize].0);
+                }
+                let (key, hash) = (succs[i as usize], meta[i as usize].0);
+                if let Err(pos) = table.find(&key, hash) {
+                    table.insert_at(pos, key, hash, 0);
+                    fresh[i as usize] = true;
+                }
+            }
+            // 3. Number the new states in BFS order.
+            for ((key, &(_, s, t)), &new) in succs.iter().zip(&meta).zip(&fresh) {
+                if !new {
+                    continue;
+                }
+                if parent.len() >= max_states {
+                    stop = Some(StopReason::StateLimit);
+                    break 'bfs;
+                }
+                arena.push(*key);
+                parent.push(s);
+                via.push(t);
+            }
+            continue;
         }
 
         // 2. Look up and insert, in BFS order.
