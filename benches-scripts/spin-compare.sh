@@ -5,7 +5,11 @@
 #   NET defaults to the three large nets of shared/data/mcc. Environment:
 #   MCC_DIR (default tests/data/mcc, a copy of shared/data/mcc), RUNS (runs per
 #   tool and net, best time kept; default 3), THREADS (mcl-net worker
-#   threads; default 1). Needs spin and gcc (apt-get install -y spin gcc).
+#   threads; default 1), ANALYZE and TO_PROMELA (prebuilt `analyze` and
+#   `to_promela` example binaries, e.g. copied to a quiet machine: `cargo build
+#   --release -p mcl-net --example analyze --example to_promela`, then
+#   target/release/examples/; with both given, cargo is not needed).
+#   Needs spin and gcc (apt-get install -y spin gcc).
 #
 # For each net: the PNML is written as Promela by the `to_promela` example
 # (one variable per place, one atomic guarded update per transition), pan is
@@ -23,15 +27,21 @@ NETS=("$@")
 if [ ${#NETS[@]} -eq 0 ]; then
   NETS=(SharedMemory-PT-000010 Kanban-PT-00005 FMS-PT-00005)
 fi
-for tool in spin gcc cargo; do
+for tool in spin gcc; do
   command -v "$tool" >/dev/null || { echo "error: $tool not found (apt-get install -y spin gcc)" >&2; exit 1; }
 done
 
 cd "$ROOT"
-cargo build --release -q -p mcl-net --example analyze --example to_promela
-TARGET="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
-ANALYZE="$TARGET/release/examples/analyze"
-TO_PROMELA="$TARGET/release/examples/to_promela"
+if [ -z "${ANALYZE:-}" ] || [ -z "${TO_PROMELA:-}" ]; then
+  command -v cargo >/dev/null || { echo "error: cargo not found (or give ANALYZE= and TO_PROMELA=)" >&2; exit 1; }
+  cargo build --release -q -p mcl-net --example analyze --example to_promela
+  TARGET="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
+  ANALYZE="${ANALYZE:-$TARGET/release/examples/analyze}"
+  TO_PROMELA="${TO_PROMELA:-$TARGET/release/examples/to_promela}"
+fi
+for bin in "$ANALYZE" "$TO_PROMELA"; do
+  [ -x "$bin" ] || { echo "error: $bin is not an executable" >&2; exit 1; }
+done
 
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT

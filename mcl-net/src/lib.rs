@@ -34,7 +34,8 @@
 //! assert_eq!(mcl_net::read_pnml(&xml).unwrap(), net);
 //! ```
 
-#![forbid(unsafe_code)]
+// Unsafe code only in `explore/hw.rs` (a prefetch hint and `madvise`).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod coord_props;

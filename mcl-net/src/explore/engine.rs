@@ -12,9 +12,11 @@
 //! * **Inline table.** Open addressing, linear probing; a slot holds the
 //!   packed marking and a word with 32 hash bits and the state index, so a
 //!   lookup touches one or two adjacent cache lines.
-//! * **Batches.** Successors of several states are generated first, then the
-//!   table slots they hash to are read in a tight loop of independent loads
-//!   (their cache and TLB misses overlap), and only then looked up in order.
+//! * **Batches.** Successors of several states are generated first, the table
+//!   slot each one hashes to prefetched as soon as its hash is known (the
+//!   misses overlap with generating the next ones), and only then looked up
+//!   in order. The table lies on transparent huge pages (`hw.rs`), so that
+//!   random lookups do not miss the TLB.
 //! * **Trigger places.** A transition is only tested when one designated input
 //!   place is marked; unmarked parts of the net cost nothing.
 
@@ -35,12 +37,18 @@ pub(crate) struct Layout {
     pub words: usize,
     per_word: usize,
     mask: u64,
+    /// log2 of `bits`.
+    shift: u32,
+    /// The highest bit of every field.
+    high: u64,
 }
 
 impl Layout {
     fn new(places: usize, bits: u32) -> Self {
         let per_word = (64 / bits) as usize;
-        Layout { places, bits, words: places.div_ceil(per_word).max(1), per_word, mask: (1u64 << bits) - 1 }
+        let high = (0..per_word).fold(0u64, |h, f| h | 1u64 << (f as u32 * bits + bits - 1));
+        let (words, mask, shift) = (places.div_ceil(per_word).max(1), (1u64 << bits) - 1, bits.trailing_zeros());
+        Layout { places, bits, words, per_word, mask, shift, high }
     }
 
     #[inline]
@@ -69,7 +77,6 @@ impl Layout {
 #[derive(Clone, Copy, Debug, Default)]
 struct TransInfo {
     pre: (u32, u32),
-    pre_mask: (u32, u32),
     grow: (u32, u32),
     wdelta: (u32, u32),
     /// Some input weight exceeds the field maximum: never enabled.
@@ -86,10 +93,9 @@ pub(super) struct Compiled {
     pub(super) layout: Layout,
     /// Where the lists of each transition are, in one record per transition.
     trans: Vec<TransInfo>,
-    /// (word, shift, weight) of each input place.
-    pre: Vec<(u32, u32, u64)>,
-    /// With one bit per place: (word, bits that must all be set).
-    pre_mask: Vec<(u32, u64)>,
+    /// (word, input weights packed like a marking) of each word holding an
+    /// input place: tested on all fields of the word at once ([`covers_packed`]).
+    pre: Vec<(u32, u64)>,
     /// (word, shift, increase, place) of each place a transition adds to, to
     /// detect overflow and track bounds.
     grow: Vec<(u32, u32, u64, u32)>,
@@ -130,6 +136,11 @@ pub(super) fn mix(h: u64) -> u64 {
 }
 
 impl Compiled {
+    /// Number of transitions.
+    pub(super) fn transitions(&self) -> usize {
+        self.trans.len()
+    }
+
     fn new(net: &Net, semantics: Semantics, bits: u32) -> Self {
         let np = net.place_count();
         let layout = Layout::new(np, bits);
@@ -140,8 +151,7 @@ impl Compiled {
             (w as u32, s)
         };
         let mut trans = Vec::with_capacity(net.transition_count());
-        let mut pre = Vec::new();
-        let mut pre_mask: Vec<(u32, u64)> = Vec::new();
+        let mut pre: Vec<(u32, u64)> = Vec::new();
         let mut grow = Vec::new();
         let mut wdelta: Vec<(u32, u64)> = Vec::new();
         let mut dhash = Vec::new();
@@ -151,19 +161,19 @@ impl Compiled {
             let row = net.pre(t);
             let mut info = TransInfo {
                 pre: (pre.len() as u32, 0),
-                pre_mask: (pre_mask.len() as u32, 0),
                 grow: (grow.len() as u32, 0),
                 wdelta: (wdelta.len() as u32, 0),
                 // A weight above the field maximum can never be met.
                 never: row.iter().any(|&(_, w)| u64::from(w) > layout.mask),
             };
-            let start = pre_mask.len();
+            let start = pre.len();
             for &(p, w) in row {
                 let (wi, s) = loc(p.index());
-                pre.push((wi, s, u64::from(w)));
-                match pre_mask[start..].iter_mut().find(|(x, _)| *x == wi) {
-                    Some(e) => e.1 |= 1 << s,
-                    None => pre_mask.push((wi, 1 << s)),
+                // A weight that does not fit is `never`; keep the field in range.
+                let w = u64::from(w).min(layout.mask) << s;
+                match pre[start..].iter_mut().find(|(x, _)| *x == wi) {
+                    Some(e) => e.1 |= w,
+                    None => pre.push((wi, w)),
                 }
             }
             let mut dh = 0u64;
@@ -181,7 +191,6 @@ impl Compiled {
                 dh = dh.wrapping_add((d as u64).wrapping_mul(coef[p.index()]));
             }
             info.pre.1 = pre.len() as u32;
-            info.pre_mask.1 = pre_mask.len() as u32;
             info.grow.1 = grow.len() as u32;
             info.wdelta.1 = wdelta.len() as u32;
             trans.push(info);
@@ -205,7 +214,6 @@ impl Compiled {
             layout,
             trans,
             pre,
-            pre_mask,
             grow,
             wdelta,
             trig_off,
@@ -359,9 +367,9 @@ impl Compiled {
         for (wi, &word) in cur.iter().enumerate() {
             let mut x = word;
             while x != 0 {
-                let field = x.trailing_zeros() / l.bits;
-                x &= !(l.mask << (field * l.bits));
-                let p = wi * l.per_word + field as usize;
+                let start = x.trailing_zeros() & !(l.bits - 1);
+                x &= !(l.mask << start);
+                let p = wi * l.per_word + (start >> l.shift) as usize;
                 let (a, b) = (self.trig_off[p] as usize, self.trig_off[p + 1] as usize);
                 for &t in &self.trig[a..b] {
                     if self.enabled(cur, t as usize) {
@@ -380,7 +388,7 @@ impl Compiled {
 
     /// Turns `state` (a copy of the source state) into the successor by `t`.
     /// Raises `bounds` to the new token counts of the places `t` adds to.
-    #[inline]
+    #[inline(always)]
     pub(super) fn successor(&self, state: &mut [u64], t: usize, bounds: &mut [u32]) -> Result<(), Overflow> {
         let l = &self.layout;
         let Some(info) = self.trans.get(t) else {
@@ -405,24 +413,27 @@ impl Compiled {
     /// Whether transition `t` is enabled in the packed state `cur`.
     #[inline]
     fn enabled(&self, cur: &[u64], t: usize) -> bool {
-        let l = &self.layout;
         let Some(info) = self.trans.get(t) else {
             return false;
         };
-        // The one enabling condition (`semantics::covers`) on packed fields.
-        if l.bits == 1 {
-            // One bit per place, all weights 1: the input places of a word
-            // are all marked when its bits under the mask reach the mask.
-            !info.never
-                && semantics::covers(self.pre_mask[range(info.pre_mask)].iter().map(|&(w, m)| ((w, m), m)), |(w, m)| {
-                    cur[w as usize] & m
-                })
-        } else {
-            semantics::covers(self.pre[range(info.pre)].iter().map(|&(w, sh, wt)| ((w, sh), wt)), |(w, sh)| {
-                (cur[w as usize] >> sh) & l.mask
-            })
-        }
+        !info.never
+            && self.pre[range(info.pre)]
+                .iter()
+                .all(|&(w, p)| cur.get(w as usize).is_some_and(|&m| covers_packed(m, p, self.layout.high)))
     }
+}
+
+/// `semantics::covers` on every field of a packed word at once: whether each
+/// field of `m` holds at least the same field of `p`, where `high` has the
+/// top bit of every field set. The fields below the top bits are subtracted
+/// with the top bits of `m` forced to 1, so no field borrows from its
+/// neighbour; a field of `m` is short exactly when its top bit is 0 where
+/// `p`'s is 1, or both top bits are equal and the lower bits borrowed.
+#[inline(always)]
+fn covers_packed(m: u64, p: u64, high: u64) -> bool {
+    let low = (m | high).wrapping_sub(p & !high);
+    let short = (!m & p) | (!(m ^ p) & !low);
+    short & high == 0
 }
 
 /// Open-addressing hash set of packed markings, stored inline.
@@ -442,7 +453,7 @@ pub(super) struct Table {
 impl Table {
     pub(super) fn new(words: usize) -> Self {
         let cap = 1usize << 12;
-        Table { slots: vec![0; cap * (words + 1)], stride: words + 1, words, mask: cap - 1, len: 0 }
+        Table { slots: super::hw::huge_vec(cap * (words + 1), 0), stride: words + 1, words, mask: cap - 1, len: 0 }
     }
 
     pub(super) fn capacity(&self) -> usize {
@@ -455,7 +466,7 @@ impl Table {
     pub(super) fn grow(&mut self) {
         let cap = self.capacity() * 2;
         let mask = cap - 1;
-        let mut slots = vec![0u64; cap * self.stride];
+        let mut slots = super::hw::huge_vec(cap * self.stride, 0u64);
         for old in self.slots.chunks_exact(self.stride) {
             let meta = old[self.words];
             if meta == 0 {
@@ -471,13 +482,15 @@ impl Table {
         self.mask = mask;
     }
 
-    /// Reads the first and the meta word of the home slot of `mixed`, to pull
-    /// them into the cache ahead of [`Table::find`] (a slot may straddle two
-    /// cache lines).
+    /// Prefetches the first and the meta word of the home slot of `mixed`
+    /// (a slot may straddle two cache lines).
     #[inline]
-    pub(super) fn touch(&self, mixed: u64) -> u64 {
+    pub(super) fn prefetch(&self, mixed: u64) {
         let base = (mixed as usize & self.mask) * self.stride;
-        self.slots[base] ^ self.slots[base + self.words]
+        if let (Some(a), Some(b)) = (self.slots.get(base), self.slots.get(base + self.words)) {
+            super::hw::prefetch(a);
+            super::hw::prefetch(b);
+        }
     }
 
     /// Finds `key`; returns `Ok(state index)` or `Err(free slot position)`.
@@ -613,6 +626,10 @@ fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option
         // 1. Expand queued states until the batch is full.
         succs.clear();
         meta.clear();
+        // Room for the whole batch, so that the slots prefetched below stay put.
+        while (table.len + BATCH + c.transitions()) * 4 > table.capacity() * 3 {
+            table.grow();
+        }
         while next < parent.len() && meta.len() < BATCH {
             let s = next;
             next += 1;
@@ -647,22 +664,13 @@ fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option
                     }
                 }
                 let h2 = h.wrapping_add(c.dhash[t.index()]);
-                meta.push((h2, mix(h2), s as u32, t.0));
+                let mixed = mix(h2);
+                table.prefetch(mixed);
+                meta.push((h2, mixed, s as u32, t.0));
             }
         }
 
-        // 2. Read the home slot of every successor: independent loads whose
-        //    misses overlap, so that step 3 finds them in cache.
-        while (table.len + meta.len()) * 4 > table.capacity() * 3 {
-            table.grow();
-        }
-        let mut sink = 0u64;
-        for m in &meta {
-            sink ^= table.touch(m.1);
-        }
-        std::hint::black_box(sink);
-
-        // 3. Look up and insert, in BFS order.
+        // 2. Look up and insert, in BFS order.
         for (i, &(h2, mixed, s, t)) in meta.iter().enumerate() {
             let key = &succs[i * w..(i + 1) * w];
             let pos = match table.find(key, mixed) {
@@ -703,4 +711,39 @@ fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option
         succ,
         cut,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{covers_packed, splitmix, Layout};
+
+    /// Field by field, as `semantics::covers` reads them.
+    fn covers_by_field(l: &Layout, m: u64, p: u64) -> bool {
+        (0..l.per_word as u32).all(|f| (m >> (f * l.bits)) & l.mask >= (p >> (f * l.bits)) & l.mask)
+    }
+
+    #[test]
+    fn packed_cover_test_agrees_with_field_by_field() {
+        for bits in [1, 2, 4, 8, 16, 32] {
+            let l = Layout::new(64, bits);
+            // Every pair of values in the two lowest fields (up to 8 bits each),
+            // with random fields above.
+            let span = 1u64 << (2 * bits).min(16);
+            let mut seed = u64::from(bits);
+            let step = ((span / 1024) as usize).max(1);
+            for a in (0..span).step_by(step) {
+                for b in (0..span).step_by(step) {
+                    let (ra, rb) = (splitmix(&mut seed), splitmix(&mut seed));
+                    let hi = !(span - 1);
+                    for (m, p) in [(a, b), (a | (ra & hi), b | (rb & hi)), (a | (ra & hi), b)] {
+                        assert_eq!(
+                            covers_packed(m, p, l.high),
+                            covers_by_field(&l, m, p),
+                            "bits {bits}: {m:#x} {p:#x}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

@@ -3,9 +3,23 @@
 //! Same algorithm as `engine::run` (see the notes in `engine.rs`), with
 //! markings as `[u64; W]` values: copies, comparisons and table slots have a
 //! size known at compile time, which removes the bounds checks and `memcpy`
-//! calls of the slice-based version from the inner loop.
+//! calls of the slice-based version from the inner loop. Two differences:
+//!
+//! * The table hash is computed from the packed words ([`key_hash`]: `W`
+//!   multiplications), not kept incrementally, so no per-state hash array is
+//!   stored or read.
+//! * Unless edges are recorded (which needs the index of a found state), the
+//!   table is a [`KeyTable`]: slots hold nothing but the marking (8 bytes for
+//!   a one-word marking instead of 16), so the table is smaller and a cache
+//!   line holds more slots. The batch is then larger ([`SORTED_BATCH`]) and
+//!   looked up in the order of the table positions (a counting sort by the
+//!   top bits of the home slot, stable so that equal markings meet in BFS
+//!   order), each lookup prefetching the slot [`PREFETCH_AHEAD`] lookups
+//!   later; the new states are numbered afterwards in BFS order, so the
+//!   numbering is that of a one-by-one search.
 
 use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
+use super::hw;
 use super::{StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 
@@ -28,7 +42,7 @@ impl<const W: usize> FixedTable<W> {
 
     pub(super) fn new() -> Self {
         let cap = 1 << 12;
-        FixedTable { slots: vec![Self::EMPTY; cap], mask: cap - 1, len: 0 }
+        FixedTable { slots: hw::huge_vec(cap, Self::EMPTY), mask: cap - 1, len: 0 }
     }
 
     pub(super) fn capacity(&self) -> usize {
@@ -38,7 +52,7 @@ impl<const W: usize> FixedTable<W> {
     pub(super) fn grow(&mut self) {
         let cap = self.slots.len() * 2;
         let mask = cap - 1;
-        let mut slots = vec![Self::EMPTY; cap];
+        let mut slots = hw::huge_vec(cap, Self::EMPTY);
         for s in self.slots.iter().filter(|s| s.meta != 0) {
             let mut pos = (s.meta >> 32) as usize & mask;
             while slots[pos].meta != 0 {
@@ -50,9 +64,12 @@ impl<const W: usize> FixedTable<W> {
         self.mask = mask;
     }
 
+    /// Prefetches the home slot of `mixed`.
     #[inline]
-    pub(super) fn touch(&self, mixed: u64) -> u64 {
-        self.slots[mixed as usize & self.mask].meta
+    pub(super) fn prefetch(&self, mixed: u64) {
+        if let Some(s) = self.slots.get(mixed as usize & self.mask) {
+            hw::prefetch(s);
+        }
     }
 
     #[inline]
@@ -78,11 +95,177 @@ impl<const W: usize> FixedTable<W> {
     }
 }
 
+/// Hash of a packed marking for the sequential tables: a multiply per word,
+/// then the MurmurHash3 finalizer.
+#[inline(always)]
+pub(super) fn key_hash<const W: usize>(key: &[u64; W]) -> u64 {
+    const K: [u64; 8] = [
+        0x9E37_79B9_7F4A_7C15,
+        0xC2B2_AE3D_27D4_EB4F,
+        0x1656_67B1_9E37_79F9,
+        0x85EB_CA77_C2B2_AE63,
+        0x27D4_EB2F_1656_67C5,
+        0xD6E8_FEB8_6659_FD93,
+        0xA076_1D64_78BD_642F,
+        0xE703_7ED1_A0B4_28DB,
+    ];
+    let mut h = 0u64;
+    for (i, &k) in key.iter().enumerate() {
+        h = h.wrapping_add(k.wrapping_mul(K[i % 8])).rotate_left(23);
+    }
+    mix(h)
+}
+
+/// The set of visited markings of the sequential search.
+trait Visited<const W: usize> {
+    fn new() -> Self;
+    fn len(&self) -> usize;
+    fn capacity(&self) -> usize;
+    fn grow(&mut self);
+    fn prefetch(&self, hash: u64);
+    /// Home slot position of `hash`.
+    fn home(&self, hash: u64) -> usize;
+    /// `Ok(state index)` (0 when the table keeps no indices) or `Err(where to insert)`.
+    fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize>;
+    fn insert_at(&mut self, pos: usize, key: [u64; W], hash: u64, idx: u32);
+}
+
+impl<const W: usize> Visited<W> for FixedTable<W> {
+    fn new() -> Self {
+        FixedTable::new()
+    }
+    #[inline]
+    fn len(&self) -> usize {
+        self.len
+    }
+    #[inline]
+    fn capacity(&self) -> usize {
+        self.slots.len()
+    }
+    fn grow(&mut self) {
+        FixedTable::grow(self)
+    }
+    #[inline(always)]
+    fn prefetch(&self, hash: u64) {
+        FixedTable::prefetch(self, hash)
+    }
+    #[inline(always)]
+    fn home(&self, hash: u64) -> usize {
+        hash as usize & self.mask
+    }
+    #[inline(always)]
+    fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize> {
+        FixedTable::find(self, key, hash)
+    }
+    #[inline(always)]
+    fn insert_at(&mut self, pos: usize, key: [u64; W], hash: u64, idx: u32) {
+        FixedTable::insert_at(self, pos, key, hash, idx)
+    }
+}
+
+/// Open-addressing hash set of `[u64; W]` markings (linear probing) whose
+/// slots hold only the marking: the all-zero marking marks an empty slot and
+/// is kept aside as a flag. Positions come from [`key_hash`], recomputed when
+/// the table grows.
+pub(super) struct KeyTable<const W: usize> {
+    slots: Vec<[u64; W]>,
+    mask: usize,
+    len: usize,
+    has_zero: bool,
+}
+
+/// The position [`KeyTable::find`] gives for the all-zero marking.
+const ZERO_POS: usize = usize::MAX;
+
+impl<const W: usize> Visited<W> for KeyTable<W> {
+    fn new() -> Self {
+        let cap = 1 << 12;
+        KeyTable { slots: hw::huge_vec(cap, [0; W]), mask: cap - 1, len: 0, has_zero: false }
+    }
+    #[inline]
+    fn len(&self) -> usize {
+        self.len
+    }
+    #[inline]
+    fn capacity(&self) -> usize {
+        self.slots.len()
+    }
+    fn grow(&mut self) {
+        let cap = self.slots.len() * 2;
+        let mask = cap - 1;
+        let mut slots = hw::huge_vec(cap, [0u64; W]);
+        for k in self.slots.iter().filter(|k| **k != [0; W]) {
+            let mut pos = key_hash(k) as usize & mask;
+            while slots[pos] != [0; W] {
+                pos = (pos + 1) & mask;
+            }
+            slots[pos] = *k;
+        }
+        self.slots = slots;
+        self.mask = mask;
+    }
+    #[inline(always)]
+    fn prefetch(&self, hash: u64) {
+        if let Some(s) = self.slots.get(hash as usize & self.mask) {
+            hw::prefetch(s);
+        }
+    }
+    #[inline(always)]
+    fn home(&self, hash: u64) -> usize {
+        hash as usize & self.mask
+    }
+    #[inline(always)]
+    fn find(&self, key: &[u64; W], hash: u64) -> Result<u32, usize> {
+        if *key == [0; W] {
+            return if self.has_zero { Ok(0) } else { Err(ZERO_POS) };
+        }
+        let mut pos = hash as usize & self.mask;
+        loop {
+            let s = &self.slots[pos];
+            if s == key {
+                return Ok(0);
+            }
+            if *s == [0; W] {
+                return Err(pos);
+            }
+            pos = (pos + 1) & self.mask;
+        }
+    }
+    #[inline(always)]
+    fn insert_at(&mut self, pos: usize, key: [u64; W], _hash: u64, _idx: u32) {
+        match self.slots.get_mut(pos) {
+            Some(s) => *s = key,
+            None => self.has_zero = true,
+        }
+        self.len += 1;
+    }
+}
+
+/// Successors per batch when the lookups are sorted by table position.
+const SORTED_BATCH: usize = 1 << 14;
+/// The sort keys: the top bits of the home slot.
+const BUCKET_BITS: u32 = 12;
+/// How many lookups ahead the sorted pass prefetches.
+const PREFETCH_AHEAD: usize = 16;
+
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
 ///
 /// `EXTRAS` compiles in the calls to `extras` (edges, cut); without it the
-/// default search pays nothing for them.
+/// default search pays nothing for them and uses the smaller [`KeyTable`].
 pub(super) fn run<const W: usize, const EXTRAS: bool>(
+    c: &Compiled,
+    net: &Net,
+    max_states: usize,
+    extras: Extras,
+) -> Option<StateSpace> {
+    if EXTRAS {
+        search::<W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
+    } else {
+        search::<W, EXTRAS, KeyTable<W>>(c, net, max_states, extras)
+    }
+}
+
+fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
@@ -91,11 +274,10 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
     let mut init = [0u64; W];
     init.copy_from_slice(&c.initial);
     let mut arena: Vec<[u64; W]> = vec![init];
-    let mut hashes: Vec<u64> = vec![c.initial_hash];
     let mut parent: Vec<u32> = vec![NO_PARENT];
     let mut via: Vec<u32> = vec![0];
-    let mut table = FixedTable::<W>::new();
-    let m0 = mix(c.initial_hash);
+    let mut table = T::new();
+    let m0 = key_hash(&init);
     if let Err(pos) = table.find(&init, m0) {
         table.insert_at(pos, init, m0, 0);
     }
@@ -106,16 +288,27 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
     let mut stop = None;
 
     let mut enabled: Vec<TransitionId> = Vec::new();
-    // The batch: successors, and (linear hash, mixed hash, source, transition).
-    let mut succs: Vec<[u64; W]> = Vec::with_capacity(2 * BATCH);
-    let mut meta: Vec<(u64, u64, u32, u32)> = Vec::with_capacity(2 * BATCH);
+    // The batch: successors, and (hash, source, transition).
+    // Without extras (no index needed in the table) the lookups are sorted.
+    let sorted = !EXTRAS;
+    let batch = if sorted { SORTED_BATCH } else { BATCH };
+    let mut succs: Vec<[u64; W]> = Vec::with_capacity(batch + c.transitions());
+    let mut meta: Vec<(u64, u32, u32)> = Vec::with_capacity(batch + c.transitions());
+    // Without extras: the batch in table order, and which successors are new.
+    let mut order: Vec<u32> = Vec::new();
+    let mut counts: Vec<u32> = Vec::new();
+    let mut fresh: Vec<bool> = Vec::new();
     let mut next = 0usize;
 
     'bfs: while next < parent.len() {
         // 1. Expand queued states until the batch is full.
         succs.clear();
         meta.clear();
-        while next < parent.len() && meta.len() < BATCH {
+        // Room for the whole batch, so that the slots prefetched below stay put.
+        while (table.len() + batch + c.transitions()) * 4 > table.capacity() * 3 {
+            table.grow();
+        }
+        while next < parent.len() && meta.len() < batch {
             let s = next;
             next += 1;
             let cur = arena[s];
@@ -134,7 +327,6 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
                 continue;
             }
             edges += enabled.len() as u64;
-            let h = hashes[s];
             for &t in &enabled {
                 let mut succ = cur;
                 match c.successor(&mut succ, t.index(), &mut stats.bounds) {
@@ -145,24 +337,69 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
                         break 'bfs;
                     }
                 }
-                let h2 = h.wrapping_add(c.dhash[t.index()]);
+                let hash = key_hash(&succ);
+                // Prefetched now, looked up after the batch: the misses
+                // overlap with the work of generating the next successors.
+                if !sorted {
+                    table.prefetch(hash);
+                }
                 succs.push(succ);
-                meta.push((h2, mix(h2), s as u32, t.0));
+                meta.push((hash, s as u32, t.0));
             }
         }
 
-        // 2. Read the home slot of every successor (overlapping misses).
-        while (table.len + meta.len()) * 4 > table.slots.len() * 3 {
-            table.grow();
+        if sorted {
+            // 2. Look the batch up in table order (a stable counting sort
+            //    by the top bits of the home slot): the lookups sweep the
+            //    table once, page by page, instead of jumping at random, and
+            //    equal markings meet in BFS order, so the first one is new.
+            let cap_bits = table.capacity().trailing_zeros();
+            let shift = cap_bits - BUCKET_BITS.min(cap_bits);
+            counts.clear();
+            counts.resize((table.capacity() >> shift) + 1, 0);
+            for m in &meta {
+                counts[(table.home(m.0) >> shift) + 1] += 1;
+            }
+            for i in 1..counts.len() {
+                counts[i] += counts[i - 1];
+            }
+            order.clear();
+            order.resize(meta.len(), 0);
+            for (i, m) in meta.iter().enumerate() {
+                let b = &mut counts[table.home(m.0) >> shift];
+                order[*b as usize] = i as u32;
+                *b += 1;
+            }
+            fresh.clear();
+            fresh.resize(meta.len(), false);
+            for (k, &i) in order.iter().enumerate() {
+                if let Some(&j) = order.get(k + PREFETCH_AHEAD) {
+                    table.prefetch(meta[j as usize].0);
+                }
+                let (key, hash) = (succs[i as usize], meta[i as usize].0);
+                if let Err(pos) = table.find(&key, hash) {
+                    table.insert_at(pos, key, hash, 0);
+                    fresh[i as usize] = true;
+                }
+            }
+            // 3. Number the new states in BFS order.
+            for ((key, &(_, s, t)), &new) in succs.iter().zip(&meta).zip(&fresh) {
+                if !new {
+                    continue;
+                }
+                if parent.len() >= max_states {
+                    stop = Some(StopReason::StateLimit);
+                    break 'bfs;
+                }
+                arena.push(*key);
+                parent.push(s);
+                via.push(t);
+            }
+            continue;
         }
-        let mut sink = 0u64;
-        for m in &meta {
-            sink ^= table.touch(m.1);
-        }
-        std::hint::black_box(sink);
 
-        // 3. Look up and insert, in BFS order.
-        for (&key, &(h2, mixed, s, t)) in succs.iter().zip(&meta) {
+        // 2. Look up and insert, in BFS order.
+        for (&key, &(mixed, s, t)) in succs.iter().zip(&meta) {
             let pos = match table.find(&key, mixed) {
                 Ok(idx) => {
                     if EXTRAS {
@@ -182,7 +419,6 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
                 extras.edge(s, t, idx);
             }
             arena.push(key);
-            hashes.push(h2);
             parent.push(s);
             via.push(t);
         }

@@ -134,14 +134,12 @@ impl Part {
             while (self.table.len + o.meta.len()) * 4 > self.table.capacity() * 3 {
                 self.table.grow();
             }
-            // Windows small enough that touched slots are still cached when
-            // looked up.
+            // Windows small enough that prefetched slots are still cached
+            // when looked up.
             for (win, metas) in o.meta.chunks(WINDOW).enumerate() {
-                let mut sink = 0u64;
                 for m in metas {
-                    sink ^= self.table.touch(m.1);
+                    self.table.prefetch(m.1);
                 }
-                std::hint::black_box(sink);
                 for (j, &(h2, mixed, key, t)) in metas.iter().enumerate() {
                     let i = win * WINDOW + j;
                     let words = &o.words[i * w..(i + 1) * w];

@@ -80,7 +80,7 @@ trait Keys: Send {
     fn len(&self) -> usize;
     fn capacity(&self) -> usize;
     fn grow(&mut self);
-    fn touch(&self, mixed: u64) -> u64;
+    fn prefetch(&self, mixed: u64);
     /// `Ok(local index)` or `Err(free slot)`; `key` has the layout's width.
     fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize>;
     fn insert_at(&mut self, pos: usize, key: &[u64], mixed: u64, idx: u32);
@@ -100,8 +100,8 @@ impl Keys for Table {
         Table::grow(self)
     }
     #[inline]
-    fn touch(&self, mixed: u64) -> u64 {
-        Table::touch(self, mixed)
+    fn prefetch(&self, mixed: u64) {
+        Table::prefetch(self, mixed)
     }
     #[inline]
     fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize> {
@@ -127,8 +127,8 @@ impl<const W: usize> Keys for FixedTable<W> {
         FixedTable::grow(self)
     }
     #[inline]
-    fn touch(&self, mixed: u64) -> u64 {
-        FixedTable::touch(self, mixed)
+    fn prefetch(&self, mixed: u64) {
+        FixedTable::prefetch(self, mixed)
     }
     #[inline]
     fn find(&self, key: &[u64], mixed: u64) -> Result<u32, usize> {
@@ -260,11 +260,9 @@ impl<'a, T: Keys> Worker<'a, T> {
         }
         let from = u64::from(b.from) << 32;
         for (win, metas) in b.meta.chunks(WINDOW).enumerate() {
-            let mut sink = 0u64;
             for m in metas {
-                sink ^= self.table.touch(mix(m.0));
+                self.table.prefetch(mix(m.0));
             }
-            std::hint::black_box(sink);
             for (j, &(h2, parent, t)) in metas.iter().enumerate() {
                 let i = win * WINDOW + j;
                 let key = &b.words[i * w..(i + 1) * w];
