@@ -272,6 +272,26 @@ mod tests {
     }
 
     #[test]
+    fn a_siphon_supervisor_is_marked_and_asked_for_first() {
+        let mut p = sample();
+        let mut siphon = p.tokens[0].clone();
+        siphon.kind = TokenKind::Siphon;
+        siphon.supervisor = "coord.siphon1".into();
+        p.tokens.push(siphon);
+        let n = net(&p);
+        let text = n.properties().iter().find(|(k, _)| k == TOKENS_PROPERTY).map(|(_, v)| v.to_string()).unwrap();
+        // Only the siphon supervisor's record says its kind.
+        assert_eq!(text.matches(r#""kind":"siphon""#).count(), 1, "{text}");
+        assert!(!text.contains(r#""kind":"mutex""#), "{text}");
+        let read = CoordProps::read(&n).unwrap();
+        assert_eq!(read, p);
+        let mut order = read.tokens.clone();
+        order.sort_by(|a, b| a.rank().cmp(&b.rank()));
+        assert_eq!(order[0].supervisor, "coord.siphon1");
+        assert_eq!(order[1].supervisor, "coord.mutex1");
+    }
+
+    #[test]
     fn malformed_or_dangling_properties_are_errors() {
         let mut p = sample();
         p.send[0].transition = "nope".into();
