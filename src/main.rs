@@ -154,6 +154,10 @@ enum Command {
         /// Start from this Zenoh configuration file (JSON5).
         #[arg(long, value_name = "FILE")]
         config: Option<PathBuf>,
+        /// Be the gateway of this region (repeatable): one south region per name, for the peers
+        /// run with `--region NAME`, then one for every other peer and client (docs/zenoh.md).
+        #[arg(long, value_name = "NAME")]
+        region: Vec<String>,
     },
     /// Draw an SVG chronogram (one row per primitive) of a trace written by `mcl run --trace`.
     Chronogram {
@@ -314,7 +318,9 @@ fn main() -> ExitCode {
             })
         }
         Command::Monitor { traces, listen } => cmd::monitor::run(&traces, &listen),
-        Command::ZenohRouter { listen, connect, config } => cmd::zenoh_router::run(listen, connect, config),
+        Command::ZenohRouter { listen, connect, config, region } => {
+            cmd::zenoh_router::run(listen, connect, config, region)
+        }
         Command::Chronogram { trace, output, mission } => cmd::chronogram::run(&trace, &output, mission.as_deref()),
         Command::TraceToMcap { trace, output } => cmd::trace_to_mcap::run(&trace, &output),
         Command::Analyze { net, format, max_states, semantics, threads, shortest_paths, method, order } => {

@@ -325,6 +325,294 @@ fn the_generated_pairs_are_mostly_runnable_and_coordinate() {
 }
 
 // ---------------------------------------------------------------------------
+// Pairs that need a siphon supervisor (seed Figure 6.9b)
+// ---------------------------------------------------------------------------
+
+/// A pair of the shape of the seed's Figure 6.9b (`mcl-coord/tests/
+/// deadlock.rs`): two compact missions `P1 → … → P5`, `P6 → … → P10`
+/// with the mutexes `M([P2 → T2 → P3 → T3 → P4], P8)` and
+/// `M(P3, [P7 → T6 → P8 → T7 → P9])`, which deadlock until deadlock
+/// avoidance adds a siphon supervisor that links both vehicles. Random
+/// mission and place names, order of the missions (the first holds the
+/// supervisors), outcomes (a mission's last place is `mission.ok` or
+/// `mission.fail`), step durations (timed transitions: the player's own
+/// timers, no vehicle needed) and start times.
+struct SiphonCase {
+    missions: Vec<mcl_coord::Mission>,
+    constraints: Vec<mcl_coord::Constraint>,
+    starts: Vec<f64>,
+    link: LinkSpec,
+    seed: u64,
+}
+
+fn siphon_case(seed: u64) -> SiphonCase {
+    use mcl_coord::compact::{place, pw_transform, sequence};
+    use mcl_coord::{Activity, CallRef, Constraint, Mission};
+    let mut r = Rng(seed);
+    let pool = ["auv", "asc", "glider", "rov", "sparus", "girona"];
+    let a = *r.pick(&pool);
+    let b = loop {
+        let b = *r.pick(&pool);
+        if b != a {
+            break b;
+        }
+    };
+    // One mission: five places (the last is its outcome), steps of random
+    // durations, the second and third places PW-transformed.
+    let mission = |r: &mut Rng, name: &str| {
+        let stem = *r.pick(&["survey", "dock", "scan", "dive", "track"]);
+        let last = if r.chance(80) { "mission.ok" } else { "mission.fail" };
+        let ps: Vec<String> = (1..5).map(|k| format!("{stem}{k}")).chain([last.to_string()]).collect();
+        let ts: Vec<String> = (1..5).map(|k| format!("{stem}_step{k}")).collect();
+        let net = sequence(
+            name,
+            &ps.iter().map(String::as_str).collect::<Vec<_>>(),
+            &ts.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        let mut b = net.to_builder();
+        for t in net.transition_ids() {
+            let d = 0.5 + r.below(40) as f64 / 10.0;
+            if let Some(tr) = b.transition_mut(t) {
+                tr.kind = mcl_net::TransitionKind::Timed(mcl_net::Delay::Fixed(d));
+            }
+        }
+        let mut net = b.build().expect("a sequence");
+        for k in [1, 2] {
+            let p = place(&net, &ps[k]);
+            net = pw_transform(&net, p, &format!("{}_wait", ps[k]), &format!("{}_enter", ps[k])).expect("a transform");
+        }
+        let region = |net: &mcl_net::Net, label: &str, ids: &[String]| {
+            let places: Vec<_> = ids.iter().map(|p| place(net, p)).collect();
+            Activity::region(net, label, &places)
+        };
+        let init = vec![place(&net, &ps[0])];
+        let fin = vec![place(&net, &ps[4])];
+        let long = [ps[1].clone(), format!("{}_wait", ps[2]), ps[2].clone(), ps[3].clone()];
+        let short = [ps[2].clone()];
+        (Mission::new(name, net.clone(), init, fin), region(&net, "long", &long), region(&net, "short", &short))
+    };
+    // Both missions have Figure 6.9b's shape: a long region (P2 to P4, wait
+    // place of P3 included) around a short call (P3); the long region of
+    // each excludes the short call of the other.
+    let (m1, long1, short1) = mission(&mut r, a);
+    let (m2, long2, short2) = mission(&mut r, b);
+    let m1 = m1.with_activity(long1).with_activity(short1);
+    let m2 = m2.with_activity(long2).with_activity(short2);
+    let mut constraints = vec![
+        Constraint::mutex([CallRef::new(a, "long"), CallRef::new(b, "short")], 1),
+        Constraint::mutex([CallRef::new(a, "short"), CallRef::new(b, "long")], 1),
+    ];
+    let mut missions = vec![m1, m2];
+    if r.chance(50) {
+        missions.reverse();
+        constraints.reverse();
+    }
+    let starts = vec![r.below(30) as f64 / 10.0, r.below(30) as f64 / 10.0];
+    let link = LinkSpec {
+        bitrate: *r.pick(&[20.0, 80.0, 500.0]),
+        loss: r.below(51) as f64 / 100.0,
+        delay: 0.5 + r.below(55) as f64 / 10.0,
+        range: None,
+    };
+    SiphonCase { missions, constraints, starts, link, seed: r.next_u64() }
+}
+
+/// Every supervisor of `report` (the constraints' and deadlock
+/// avoidance's): per centralized transition id, its effect on each.
+fn all_supervisors(report: &mcl_coord::Report) -> Supervisors {
+    let mut sups = Supervisors { ids: Vec::new(), initial: Vec::new(), effect: HashMap::new() };
+    for (k, s) in report.supervisors.iter().enumerate() {
+        sups.ids.push(s.id.clone());
+        sups.initial.push(s.initial);
+        let arcs = s.produced_by.iter().map(|&(t, w)| (t, i64::from(w)));
+        for (t, w) in arcs.chain(s.consumed_by.iter().map(|&(t, w)| (t, -i64::from(w)))) {
+            let id = report.net.transitions()[t.index()].id.to_string();
+            sups.effect.entry(id).or_default().push((k, w));
+        }
+    }
+    sups
+}
+
+/// The analysis of a Figure 6.9b pair: one siphon supervisor added, which
+/// links both vehicles.
+fn siphon_report(c: &SiphonCase) -> mcl_coord::Report {
+    let report = mcl_coord::analyze(&c.missions, &c.constraints).expect("the analysis runs");
+    assert!(report.deadlock_free, "{:#?}", report.problems);
+    assert_eq!(report.added, 1, "deadlock avoidance adds one supervisor");
+    let s = report.supervisors.last().expect("a siphon supervisor");
+    assert!(s.id.starts_with("coord.siphon"), "{}", s.id);
+    let plant = mcl_coord::centralize(&c.missions).expect("a plant");
+    assert!(mcl_coord::decentral::is_token_supervisor(&plant, s), "the siphon supervisor has a single holder");
+    report
+}
+
+/// The vehicle nets of the pair as they were before siphon supervisors
+/// had a holder: the siphon supervisor kept as copies (the mutexes still
+/// with a holder). For the guard below.
+fn copies_of_siphon(c: &SiphonCase, report: &mcl_coord::Report) -> Vec<mcl_coord::VehicleNet> {
+    use mcl_coord::decentral::{minimize_communication, vehicle_nets_with_tokens, Costs};
+    let plant = mcl_coord::centralize(&c.missions).expect("a plant");
+    let (tokens, copies): (Vec<_>, Vec<_>) =
+        report.supervisors.iter().cloned().partition(|s| matches!(s.origin, mcl_coord::Origin::Mutex { .. }));
+    let comm = minimize_communication(&plant, &copies, &Costs::default()).expect("a policy");
+    vehicle_nets_with_tokens(&c.missions, &plant, &copies, &comm, &tokens).expect("vehicle nets")
+}
+
+/// Runs the pair's vehicle nets `nets` over the case's link.
+fn run_siphon(c: &SiphonCase, nets: &[mcl_coord::VehicleNet], link: LinkSpec) -> (Vec<End>, Vec<Record>) {
+    let names: Vec<String> = nets.iter().map(|v| v.mission.clone()).collect();
+    let sink = Arc::new(std::sync::Mutex::new(Collect::default()));
+    let mut vehicles = Vec::new();
+    for ((v, transport), start) in nets.iter().zip(mcl_runtime::coord::in_process(&names)).zip(&c.starts) {
+        let net = Arc::new(v.net.clone());
+        let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut SourceMap::default());
+        let mock = MockVehicle::from_net(&net, Scenario::from_toml("", "none.toml").expect("a scenario"), c.seed);
+        let opts = PlayerOptions::seeded(c.seed);
+        let vehicle = Vehicle::new(&v.mission, net, opts, tracer, mock, Box::new(transport)).expect("a vehicle");
+        vehicles.push(vehicle.starting_at(*start));
+    }
+    let shared: SharedSink = sink.clone();
+    let link = AcousticLink { spec: link, seed: c.seed, positions: None };
+    let rt = tokio::runtime::Builder::new_current_thread().enable_time().build().expect("a runtime");
+    let end = rt
+        .block_on(run_virtual_with_link(vehicles, shared, Limits::virtual_time(Some(1e5)), Some(link), None))
+        .expect("the run goes through");
+    let records = std::mem::take(&mut sink.lock().expect("the sink").0);
+    (end.ends.into_iter().map(|(_, e, _)| e).collect(), records)
+}
+
+fn ended(ends: &[End]) -> bool {
+    ends.iter().all(|e| matches!(e, End::Outcome(Outcome::Ok | Outcome::Fail)))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 24,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x7369_7068_6f6e_3962),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Figure 6.9b pairs over lossy, slow links: the siphon supervisor's
+    /// single holder keeps the deadlock it prevents away (every mission
+    /// ends), no supervisor of the centralized net (the mutexes' and the
+    /// siphon's) ever goes negative, and no message is sent more often
+    /// than the link report bounds.
+    #[test]
+    fn siphon_supervisors_hold_over_lossy_slow_links(seed in any::<u64>()) {
+        let c = siphon_case(seed);
+        let report = siphon_report(&c);
+        let nets = mcl_coord::decentralize(&c.missions, &report.supervisors).expect("vehicle nets");
+        let links = mcl_coord::link_report::link_report(&c.missions, &c.constraints, &nets);
+        let what = || format!("{:?}\nstarts {:?}, link {:?}, seed {}", c.missions.iter().map(|m| &m.name).collect::<Vec<_>>(), c.starts, c.link, c.seed);
+        let (ends, records) = run_siphon(&c, &nets, c.link.clone());
+        prop_assert!(ended(&ends), "a mission did not end: {ends:?}\n{}", what());
+        prop_assert_eq!(violation(&all_supervisors(&report), &records), None, "{}", what());
+        prop_assert_eq!(over_bound(&links, &records), None, "{}\n{}", what(), links.to_text());
+    }
+}
+
+#[test]
+fn figure_6_9b_repaired_ends_over_the_documented_acoustic_link() {
+    // The link of docs/acoustic.md, on a few pairs; the siphon
+    // supervisor's messages are token requests and returns of the compact
+    // encoding, counted by the link report, in a 32-byte frame.
+    let spec = LinkSpec::parse("acoustic:bitrate=80,loss=0.3,delay=2").expect("a link");
+    let mut asked = 0;
+    for seed in 0..8u64 {
+        let c = siphon_case(seed * 104_729);
+        let report = siphon_report(&c);
+        let nets = mcl_coord::decentralize(&c.missions, &report.supervisors).expect("vehicle nets");
+        let siphon = &report.supervisors.last().expect("a siphon supervisor").id;
+        let links = mcl_coord::link_report::link_report(&c.missions, &c.constraints, &nets);
+        let key = siphon.strip_prefix("coord.").expect("a supervisor id");
+        for kind in ["request", "return"] {
+            let m = links
+                .messages
+                .iter()
+                .find(|m| m.kind == kind && m.transition == format!("coord.{kind}.{key}"))
+                .unwrap_or_else(|| panic!("no {kind} of {siphon} in the link report:\n{}", links.to_text()));
+            assert!(m.count.max().is_some(), "{kind}: {:?}", m.count);
+            assert!(m.compact_bytes <= 32, "{kind} takes {} bytes", m.compact_bytes);
+        }
+        assert!(links.messages.iter().any(|m| m.transition.starts_with(&format!("coord.lend.{key}."))));
+        let (ends, records) = run_siphon(&c, &nets, spec.clone());
+        assert!(ended(&ends), "seed {seed}: {ends:?}");
+        assert_eq!(violation(&all_supervisors(&report), &records), None, "seed {seed}");
+        assert_eq!(over_bound(&links, &records), None, "seed {seed}");
+        let requests = |r: &Record| matches!(&r.kind, RecordKind::CoordSend { transition, .. } if transition == &format!("coord.request.{key}"));
+        asked += usize::from(records.iter().any(requests));
+    }
+    assert!(asked >= 4, "only {asked} of 8 runs asked the holder for the siphon supervisor's token");
+}
+
+#[test]
+fn the_siphon_property_would_catch_copies_that_cross() {
+    // Guards the property above: with the siphon supervisor kept as copies
+    // (before it had a holder), both vehicles take its last token while
+    // their messages cross, and the checks of the property see it (a run
+    // stuck, or the centralized supervisor below zero) on some pairs.
+    let mut caught = 0;
+    let mut runs = 0;
+    for seed in 0..96u64 {
+        let c = siphon_case(seed * 7_919 + 1);
+        let report = siphon_report(&c);
+        let nets = copies_of_siphon(&c, &report);
+        let has_copies =
+            nets.iter().filter(|v| v.net.place_by_id(&report.supervisors.last().unwrap().id).is_some()).count();
+        assert_eq!(has_copies, 2, "both vehicles keep a copy");
+        runs += 1;
+        // A slow link without losses: the grant of a mutex and the firing
+        // that took the siphon supervisor's last token travel in separate
+        // frames, seconds apart.
+        let slow = LinkSpec { bitrate: 500.0, loss: 0.0, delay: 3.0, range: None };
+        let (ends, records) = run_siphon(&c, &nets, slow);
+        if !ended(&ends) || violation(&all_supervisors(&report), &records).is_some() {
+            caught += 1;
+        }
+    }
+    assert!(caught >= 2, "the checks caught only {caught} of {runs} runs with copies");
+}
+
+#[test]
+fn figure_6_9b_repaired_over_tcp_in_real_time() {
+    // A real transport (the authenticated TCP link on loopback), vehicles
+    // in real time (20 times faster than mission time): the siphon
+    // supervisor's holder lends its token over it, every mission ends and
+    // no supervisor of the centralized net goes negative.
+    for seed in 0..3u64 {
+        let c = siphon_case(seed * 31 + 5);
+        let report = siphon_report(&c);
+        let nets = mcl_coord::decentralize(&c.missions, &report.supervisors).expect("vehicle nets");
+        let names: Vec<String> = nets.iter().map(|v| v.mission.clone()).collect();
+        let sink = Arc::new(std::sync::Mutex::new(Collect::default()));
+        let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().expect("a runtime");
+        let end = rt.block_on(async {
+            let ends = mcl_runtime::coord::tcp_mesh(&names, "127.0.0.1").await.expect("a TCP mesh");
+            let mut vehicles = Vec::new();
+            for (v, transport) in nets.iter().zip(ends) {
+                let net = Arc::new(v.net.clone());
+                let tracer = Tracer::new(&net, Some(v.mission.clone()), &mut SourceMap::default());
+                let mock =
+                    MockVehicle::from_net(&net, Scenario::from_toml("", "none.toml").expect("a scenario"), c.seed);
+                let opts = PlayerOptions::seeded(c.seed);
+                vehicles
+                    .push(Vehicle::new(&v.mission, net, opts, tracer, mock, Box::new(transport)).expect("a vehicle"));
+            }
+            let shared: SharedSink = sink.clone();
+            let clock = mcl_runtime::clock::Clock::new(20.0, 0.0);
+            mcl_runtime::multi::run_real_time(vehicles, shared, clock, Limits::real_time(Some(600.0))).await
+        });
+        let end = end.expect("the run goes through");
+        let records = std::mem::take(&mut sink.lock().expect("the sink").0);
+        let ends: Vec<End> = end.ends.into_iter().map(|(_, e, _)| e).collect();
+        assert!(ended(&ends), "seed {seed}: {ends:?}");
+        assert_eq!(violation(&all_supervisors(&report), &records), None, "seed {seed}");
+        assert!(end.mutex.requests > 0, "seed {seed}: no token was asked for");
+    }
+}
+
+// ---------------------------------------------------------------------------
 // Through the binary
 // ---------------------------------------------------------------------------
 

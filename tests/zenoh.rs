@@ -94,6 +94,8 @@ struct Net {
     listen: Vec<String>,
     connect: Vec<String>,
     config: Option<PathBuf>,
+    /// `--region NAME`.
+    region: Option<String>,
 }
 
 impl Net {
@@ -107,6 +109,9 @@ impl Net {
         }
         if let Some(c) = &self.config {
             a.extend(["--zenoh-config".to_string(), c.display().to_string()]);
+        }
+        if let Some(r) = &self.region {
+            a.extend(["--region".to_string(), r.clone()]);
         }
         a
     }
@@ -149,8 +154,8 @@ fn vehicle(me: &str, net: &Net, crash_after: Option<u64>, tag: &str) -> (i32, Ve
 /// to the other's (whichever restarts finds the other).
 fn auv_asc(auv_crash: Option<u64>, asc_crash: Option<u64>, tag: &str) -> [(i32, Vec<Record>, Vec<Value>); 2] {
     let (pa, pc) = (free_port(), free_port());
-    let auv = Net { listen: vec![endpoint(pa)], connect: vec![endpoint(pc)], config: None };
-    let asc = Net { listen: vec![endpoint(pc)], connect: vec![endpoint(pa)], config: None };
+    let auv = Net { listen: vec![endpoint(pa)], connect: vec![endpoint(pc)], config: None, region: None };
+    let asc = Net { listen: vec![endpoint(pc)], connect: vec![endpoint(pa)], config: None, region: None };
     let tag2 = tag.to_string();
     let c = std::thread::spawn(move || vehicle("asc", &asc, asc_crash, &tag2));
     let a = vehicle("auv", &auv, auv_crash, tag);
@@ -208,7 +213,7 @@ fn auv_and_asc_through_a_router() {
     // listens (loopback, a port of the system's choice).
     let pr = free_port();
     let mut r = router(pr);
-    let net = Net { listen: vec!["tcp/127.0.0.1:0".into()], connect: vec![endpoint(pr)], config: None };
+    let net = Net { listen: vec!["tcp/127.0.0.1:0".into()], connect: vec![endpoint(pr)], config: None, region: None };
     let n2 = net.clone();
     let c = std::thread::spawn(move || vehicle("asc", &n2, None, "zrpeer"));
     let a = vehicle("auv", &net, None, "zrpeer");
@@ -263,7 +268,7 @@ fn peers_that_listen_nowhere_through_a_router_with_a_region_each() {
             ),
         )
         .unwrap();
-        Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config) }
+        Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config), region: None }
     });
     let [na, nc] = nets;
     let c = std::thread::spawn(move || vehicle("asc", &nc, None, "zrregion"));
@@ -274,6 +279,69 @@ fn peers_that_listen_nowhere_through_a_router_with_a_region_each() {
     check(&runs, &reference, "zrregion");
 }
 
+/// The same through the options alone: `mcl zenoh-router --region auv
+/// --region asc` is the gateway of both regions, and each vehicle, run with
+/// `--region NAME` and no `--zenoh-listen`, listens nowhere and names its
+/// region: no configuration file written (the router's `gateway.south`
+/// and each vehicle's `region_name` come from the options).
+#[test]
+fn vehicles_in_their_own_regions_through_a_router_given_regions() {
+    let _one = serial();
+    let reference = auv_asc_common::reference(&root(), &tmp("reference.jsonl"));
+    let pr = free_port();
+    let mut r = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["zenoh-router", "--listen", &endpoint(pr), "--region", "auv", "--region", "asc"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run mcl zenoh-router");
+    let mut first = String::new();
+    BufReader::new(r.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert!(first.starts_with("zenoh router listening on"), "{first}");
+    let [na, nc] = ["auv", "asc"].map(|me| Net {
+        listen: vec![],
+        connect: vec![endpoint(pr)],
+        config: None,
+        region: Some(me.to_string()),
+    });
+    let c = std::thread::spawn(move || vehicle("asc", &nc, None, "zrregionopt"));
+    let a = vehicle("auv", &na, None, "zrregionopt");
+    let runs = [a, c.join().unwrap()];
+    let _ = r.kill();
+    let _ = r.wait();
+    check(&runs, &reference, "zrregionopt");
+}
+
+#[test]
+fn bad_regions_are_usage_errors() {
+    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["zenoh-router", "--listen", "tcp/127.0.0.1:0", "--region", "auv", "--region", "auv"])
+        .output()
+        .expect("run mcl zenoh-router");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("region `auv` given twice"));
+    let out = Command::new(env!("CARGO_BIN_EXE_mcl"))
+        .args(["zenoh-router", "--listen", "tcp/127.0.0.1:0", "--region", "a/b"])
+        .output()
+        .expect("run mcl zenoh-router");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("region `a/b`"));
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_mcl"))
+            .args(["run", "--mock", AUV_ASC, "--vehicle", "auv"])
+            .args(args)
+            .current_dir(root())
+            .output()
+            .expect("run mcl")
+    };
+    let out = run(&["--transport", "zenoh", "--zenoh-connect", "tcp/127.0.0.1:9", "--region", "no space"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("region `no space`"));
+    let out = run(&["--region", "auv"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--region go with --zenoh or --transport zenoh"));
+}
+
 #[test]
 fn auv_and_asc_through_a_router_restarted_mid_run() {
     let _one = serial();
@@ -282,7 +350,7 @@ fn auv_and_asc_through_a_router_restarted_mid_run() {
     // Clients: everything goes through the router.
     let config = tmp("client.json5");
     std::fs::write(&config, r#"{ mode: "client", scouting: { multicast: { enabled: false } } }"#).unwrap();
-    let net = Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config) };
+    let net = Net { listen: vec![], connect: vec![endpoint(pr)], config: Some(config), region: None };
     let mut first = router(pr);
     let n2 = net.clone();
     let c = std::thread::spawn(move || vehicle("asc", &n2, None, "zrclient"));

@@ -52,14 +52,15 @@
 //! communicated firing is delivered before the receiver fires anything else
 //! (the synchronous communication of Iordache and Antsaklis). With acoustic
 //! delays an order or a sync only waits longer; a mutex between vehicles
-//! kept by copies needs that assumption, so [`decentralize`] gives it a
-//! single holder with request / grant / return messages instead
-//! ([`vehicle_nets_with_tokens`]). A sync's arrival withdrawn by an abort
+//! kept by copies needs that assumption, and so does a siphon supervisor of
+//! deadlock avoidance that several vehicles take from, so [`decentralize`]
+//! gives each a single holder with request / grant / return messages
+//! instead ([`vehicle_nets_with_tokens`], [`is_token_supervisor`]). A sync's arrival withdrawn by an abort
 //! is taken back by the vehicle that holds its credit when the other call
 //! has not used it yet.
 
 use good_lp::{constraint, variable, Expression, ProblemVariables, Solution, SolverModel, Variable};
-use mcl_net::coord_props::{BorrowedMutex, BorrowedStart, CoordProps, CoordReceive, CoordSend};
+use mcl_net::coord_props::{BorrowedMutex, BorrowedStart, CoordProps, CoordReceive, CoordSend, TokenKind};
 use mcl_net::{Net, NetBuilder, PlaceId, TransitionId, TransitionKind};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
@@ -326,17 +327,76 @@ pub fn vehicle_nets(
 /// holder (none for the holder's own calls).
 pub const TOKENS_PROPERTY: &str = mcl_net::coord_props::TOKENS_PROPERTY;
 
-/// True when `s` is a mutex whose calls belong to several vehicles: it is
-/// implemented by a single holder with request / grant / return messages
-/// rather than by copies ([`decentralize`]).
+/// True when `s` links several vehicles and is implemented by a single
+/// holder with request / grant / return messages rather than by copies
+/// ([`decentralize`]): a mutex, or a supervisor of deadlock avoidance
+/// (`coord.siphonN`) whose every vehicle gives back only tokens it took
+/// ([`gives_back_only_taken`]). Copies of such a supervisor stay equal only
+/// under synchronous delivery; a single holder keeps it whatever the delays.
+pub fn is_token_supervisor(plant: &Plant, s: &Supervisor) -> bool {
+    let vehicles = owners(plant, s.produced_by.iter().chain(&s.consumed_by).map(|&(t, _)| t));
+    if vehicles.len() < 2 {
+        return false;
+    }
+    match s.origin {
+        crate::supervisor::Origin::Mutex { .. } => true,
+        crate::supervisor::Origin::Siphon { .. } => vehicles.iter().all(|&i| gives_back_only_taken(plant, s, i)),
+        _ => false,
+    }
+}
+
+/// The former name of [`is_token_supervisor`] (mutexes were the only
+/// supervisors with a single holder).
 pub fn is_token_mutex(plant: &Plant, s: &Supervisor) -> bool {
-    matches!(s.origin, crate::supervisor::Origin::Mutex { .. })
-        && owners(plant, s.produced_by.iter().chain(&s.consumed_by).map(|&(t, _)| t)).len() > 1
+    is_token_supervisor(plant, s)
+}
+
+/// True when the firings of vehicle `i` never give `s` more tokens than
+/// they took from it, whatever the run: a weighting `y ≥ 0` of the
+/// vehicle's places exists, zero on its initially marked places, with
+/// `y·D(t) = taken(t) − given(t)` for each of its transitions `t`. Then
+/// `y·μ` is the number of tokens the vehicle holds, never negative, so its
+/// gifts can be sent to a holder as the return of tokens it was lent (a
+/// linear program, `microlp`). A mutex's calls have it by construction
+/// (`y` = 1 on the running places).
+pub fn gives_back_only_taken(plant: &Plant, s: &Supervisor, i: usize) -> bool {
+    let part = &plant.parts[i];
+    let mut vars = ProblemVariables::new();
+    let y: Vec<Variable> = part.places.clone().map(|_| vars.add(variable().min(0.0))).collect();
+    let at = |p: PlaceId| (p.0 - part.places.start) as usize;
+    let objective: Expression = y.iter().copied().sum();
+    let mut model = vars.minimise(objective).using(good_lp::microlp);
+    let m0 = plant.net.initial_marking();
+    for p in part.places.clone().map(PlaceId) {
+        if m0.get(p) > 0 {
+            model = model.with(constraint!(y[at(p)] == 0.0));
+        }
+    }
+    let weight = |arcs: &[(TransitionId, u32)], t: TransitionId| -> f64 {
+        arcs.iter().filter(|&&(x, _)| x == t).map(|&(_, w)| f64::from(w)).sum()
+    };
+    for t in part.transitions.clone().map(TransitionId) {
+        let mut effect = Expression::from(0.0);
+        for &(p, w) in plant.net.post(t) {
+            if part.owns_place(p) {
+                effect += f64::from(w) * y[at(p)];
+            }
+        }
+        for &(p, w) in plant.net.pre(t) {
+            if part.owns_place(p) {
+                effect -= f64::from(w) * y[at(p)];
+            }
+        }
+        let held = weight(&s.consumed_by, t) - weight(&s.produced_by, t);
+        model = model.with(constraint!(effect == held));
+    }
+    model.solve().is_ok()
 }
 
 /// Extract 6.4 with a given communication policy for the supervisors of
-/// `sups` (copies, [`vehicle_nets`]), plus the mutexes `tokens` between
-/// vehicles, each with a **single holder** (the first mission, in the order
+/// `sups` (copies, [`vehicle_nets`]), plus the supervisors `tokens` between
+/// vehicles (mutexes and siphon supervisors, [`is_token_supervisor`]), each
+/// with a **single holder** (the first mission, in the order
 /// given, that has one of its calls) so that it holds however long messages
 /// take. For a mutex place `coord.mutexK` and every other vehicle `B` of it:
 ///
@@ -480,7 +540,7 @@ pub fn vehicle_nets_with_tokens(
             });
             b.add_output(tt, p, 1);
         }
-        // Mutexes between vehicles: a single holder.
+        // Mutexes and siphon supervisors between vehicles: a single holder.
         let mut table = Vec::new();
         for s in tokens {
             let all = owners(plant, s.produced_by.iter().chain(&s.consumed_by).map(|&(t, _)| t));
@@ -575,10 +635,15 @@ pub fn vehicle_nets_with_tokens(
                 );
                 b.add_output(tg, c, 1);
                 receive.push((grant.clone(), hname.clone()));
+                let kind = match s.origin {
+                    crate::supervisor::Origin::Siphon { .. } => TokenKind::Siphon,
+                    _ => TokenKind::Mutex,
+                };
                 table.push(BorrowedMutex {
                     ends,
                     grant,
                     holder: hname,
+                    kind,
                     place: s.id.clone(),
                     request,
                     ret,
@@ -612,7 +677,7 @@ pub fn vehicle_nets_with_tokens(
 pub fn decentralize(missions: &[Mission], sups: &[Supervisor]) -> Result<Vec<VehicleNet>, DecentralizeError> {
     let plant = centralize(missions)?;
     let (tokens, copies): (Vec<Supervisor>, Vec<Supervisor>) =
-        sups.iter().cloned().partition(|s| is_token_mutex(&plant, s));
+        sups.iter().cloned().partition(|s| is_token_supervisor(&plant, s));
     let comm = minimize_communication(&plant, &copies, &Costs::default())?;
     vehicle_nets_with_tokens(missions, &plant, &copies, &comm, &tokens)
 }

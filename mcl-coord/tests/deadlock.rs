@@ -191,6 +191,50 @@ fn figure_6_9b_is_repaired_by_one_supervisor() {
     assert!(st.siphons.iter().all(|s| s.control != Control::None), "{:?}", st.siphons);
 }
 
+#[test]
+fn figure_6_9b_siphon_supervisor_has_a_single_holder() {
+    use mcl_coord::decentral::{gives_back_only_taken, is_token_supervisor};
+    use mcl_net::coord_props::{CoordProps, TokenKind};
+    let (ms, cs) = figure_6_9b();
+    let r = analyze(&ms, &cs).unwrap();
+    let plant = centralize(&ms).unwrap();
+    let s = r.supervisors.last().unwrap();
+    // Each vehicle gives back only the tokens it took (T2' then T3; T7'
+    // then T7): a holder can lend them.
+    assert!(gives_back_only_taken(&plant, s, 0) && gives_back_only_taken(&plant, s, 1));
+    assert!(is_token_supervisor(&plant, s));
+    // A supervisor whose tokens v1 takes but v2 gives back has none.
+    let mut forged = s.clone();
+    forged.produced_by.retain(|&(t, _)| plant.owner_of_transition(t) == Some(1));
+    forged.consumed_by.retain(|&(t, _)| plant.owner_of_transition(t) == Some(0));
+    assert!(!gives_back_only_taken(&plant, &forged, 1) && gives_back_only_taken(&plant, &forged, 0));
+    assert!(!is_token_supervisor(&plant, &forged));
+    // v1 (first in the file) holds it; v2 asks for it, before its mutexes.
+    let nets = mcl_coord::decentralize(&ms, &r.supervisors).unwrap();
+    let props = |i: usize| CoordProps::read(&nets[i].net).unwrap();
+    assert!(props(0).tokens.is_empty());
+    let mut borrowed = props(1).tokens;
+    borrowed.sort_by(|a, b| a.rank().cmp(&b.rank()));
+    let order: Vec<(&str, TokenKind)> = borrowed.iter().map(|b| (b.supervisor.as_str(), b.kind)).collect();
+    assert_eq!(
+        order,
+        vec![
+            ("coord.siphon1", TokenKind::Siphon),
+            ("coord.mutex1", TokenKind::Mutex),
+            ("coord.mutex2", TokenKind::Mutex)
+        ]
+    );
+    let siphon = &borrowed[0];
+    assert_eq!(siphon.holder, "v1");
+    assert_eq!(siphon.starts.iter().map(|s| s.transition.as_str()).collect::<Vec<_>>(), vec!["T7'"]);
+    assert_eq!(siphon.ends, vec!["T7".to_string()]);
+    // No copy of it in v1's net's receive transitions: v1 keeps the place,
+    // the lent place and the lend transition.
+    assert!(nets[0].net.place_by_id("coord.siphon1.lent.v2").is_some());
+    assert!(nets[0].net.transition_by_id("coord.lend.siphon1.v2").is_some());
+    assert!(nets[0].send.contains(&("coord.lend.siphon1.v2".to_string(), "v2".to_string())));
+}
+
 /// Every minimal siphon of a small net, by trying every set of places.
 fn brute_force_minimal_siphons(net: &Net) -> usize {
     let n = net.place_count();

@@ -50,10 +50,35 @@ pub struct BorrowedStart {
     pub weight: u32,
 }
 
-/// A mutex between vehicles whose tokens another vehicle (the holder)
-/// lends: this vehicle asks for them (`request`), receives them (`grant`)
-/// and gives them back (its calls' `ends`, or `return` for a token it
-/// cannot use).
+/// What a supervisor with a single holder enforces: the tokens it lends
+/// are a mutex's, or those of a supervisor that deadlock avoidance added
+/// (`coord.siphonN`, docs/coordination.md §3). A borrower asks for the
+/// tokens of the siphon supervisors of a start before those of its
+/// mutexes (the order of [`BorrowedMutex::rank`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TokenKind {
+    /// A siphon supervisor of deadlock avoidance: it admits a vehicle into
+    /// the part of its mission where the deadlock it prevents could start,
+    /// so it is asked for first.
+    Siphon,
+    /// A mutex constraint's supervisor (absent from the property: the text
+    /// written before siphon supervisors had a holder).
+    #[default]
+    Mutex,
+}
+
+impl TokenKind {
+    fn is_mutex(&self) -> bool {
+        *self == TokenKind::Mutex
+    }
+}
+
+/// A supervisor between vehicles (a mutex, or a siphon supervisor of
+/// deadlock avoidance: [`TokenKind`]) whose tokens another vehicle (the
+/// holder) lends: this vehicle asks for them (`request`), receives them
+/// (`grant`) and gives them back (its calls' `ends`, or `return` for a
+/// token it cannot use).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct BorrowedMutex {
     /// This vehicle's ends of the calls (their firings give tokens back).
@@ -63,6 +88,9 @@ pub struct BorrowedMutex {
     pub grant: String,
     /// The mission holding the mutex.
     pub holder: String,
+    /// What the supervisor enforces (absent for a mutex).
+    #[serde(default, skip_serializing_if = "TokenKind::is_mutex")]
+    pub kind: TokenKind,
     /// The place of the tokens granted to this vehicle.
     pub place: String,
     /// Event (and transition) that sends a request to the holder.
@@ -74,6 +102,18 @@ pub struct BorrowedMutex {
     pub starts: Vec<BorrowedStart>,
     /// Supervisor place id (`coord.mutexK`).
     pub supervisor: String,
+}
+
+impl BorrowedMutex {
+    /// The order in which a borrower asks for the tokens of its
+    /// supervisors (smallest first): siphon supervisors before mutexes,
+    /// then by supervisor id. A start that needs several asks for the next
+    /// only once it holds the previous ones, so no two vehicles each keep a
+    /// token the other waits for, and a vehicle is admitted by a siphon
+    /// supervisor before it keeps any mutex token.
+    pub fn rank(&self) -> (TokenKind, &str) {
+        (self.kind, &self.supervisor)
+    }
 }
 
 /// The coordination properties of one vehicle net.
@@ -206,6 +246,7 @@ mod tests {
                 ends: vec!["call1.release".into()],
                 grant: "coord.recv.a.x".into(),
                 holder: "a".into(),
+                kind: TokenKind::Mutex,
                 place: "coord.mutex1".into(),
                 request: "coord.request.mutex1".into(),
                 ret: "coord.return.mutex1".into(),
@@ -228,6 +269,26 @@ mod tests {
         );
         assert_eq!(CoordProps::read(&n).unwrap(), p);
         assert_eq!(CoordProps::read(&net(&CoordProps::default())).unwrap(), CoordProps::default());
+    }
+
+    #[test]
+    fn a_siphon_supervisor_is_marked_and_asked_for_first() {
+        let mut p = sample();
+        let mut siphon = p.tokens[0].clone();
+        siphon.kind = TokenKind::Siphon;
+        siphon.supervisor = "coord.siphon1".into();
+        p.tokens.push(siphon);
+        let n = net(&p);
+        let text = n.properties().iter().find(|(k, _)| k == TOKENS_PROPERTY).map(|(_, v)| v.to_string()).unwrap();
+        // Only the siphon supervisor's record says its kind.
+        assert_eq!(text.matches(r#""kind":"siphon""#).count(), 1, "{text}");
+        assert!(!text.contains(r#""kind":"mutex""#), "{text}");
+        let read = CoordProps::read(&n).unwrap();
+        assert_eq!(read, p);
+        let mut order = read.tokens.clone();
+        order.sort_by(|a, b| a.rank().cmp(&b.rank()));
+        assert_eq!(order[0].supervisor, "coord.siphon1");
+        assert_eq!(order[1].supervisor, "coord.mutex1");
     }
 
     #[test]

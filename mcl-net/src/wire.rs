@@ -400,6 +400,7 @@ mod tests {
                     ends: vec!["call1.release".into()],
                     grant: "g".into(),
                     holder: "a".into(),
+                    kind: Default::default(),
                     place: "coord.mutex1".into(),
                     request: "coord.request.mutex1".into(),
                     ret: "coord.return.mutex1".into(),

@@ -208,7 +208,8 @@ impl CoordTransport for DelayedEnd {
 /// it must ask a holder for ([`mcl_net::coord_props::BorrowedMutex`]).
 pub const TOKENS_PROPERTY: &str = mcl_net::coord_props::TOKENS_PROPERTY;
 
-/// A mutex between vehicles held by another vehicle (the *holder*): this
+/// A supervisor between vehicles (a mutex, or a siphon supervisor of
+/// deadlock avoidance) held by another vehicle (the *holder*): this
 /// vehicle asks for its tokens (request), receives them (grant) and gives
 /// them back (its calls' ends, or `return` for a token it cannot use).
 #[derive(Clone, Debug, PartialEq)]
@@ -231,9 +232,11 @@ pub struct TokenMutex {
     pub ends: Vec<String>,
 }
 
-/// The token mutexes of a vehicle net, sorted by supervisor id, from its
-/// `coord.tokens` property (empty without it). Errors on a malformed
-/// property.
+/// The supervisors a vehicle net borrows tokens of (mutexes and siphon
+/// supervisors between vehicles), in the order it asks for them
+/// ([`mcl_net::coord_props::BorrowedMutex::rank`]: siphon supervisors
+/// first, then by supervisor id), from its `coord.tokens` property (empty
+/// without it). Errors on a malformed property.
 pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
     let props = read_props(net)?;
     // `CoordProps::read` checked that every node named exists.
@@ -241,7 +244,9 @@ pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
         |id: &str| format!("net `{}`: `{TOKENS_PROPERTY}` names `{id}`, which the net does not have", net.name());
     let transition = |id: &str| net.transition_by_id(id).ok_or_else(|| missing(id));
     let mut out = Vec::new();
-    for e in props.tokens {
+    let mut tokens = props.tokens;
+    tokens.sort_by(|a, b| a.rank().cmp(&b.rank()));
+    for e in tokens {
         let place = net.place_by_id(&e.place).ok_or_else(|| missing(&e.place))?;
         let starts =
             e.starts.iter().map(|s| Ok((transition(&s.transition)?, s.weight))).collect::<Result<_, String>>()?;
@@ -257,7 +262,6 @@ pub fn token_table(net: &mcl_net::Net) -> Result<Vec<TokenMutex>, String> {
             ends: e.ends,
         });
     }
-    out.sort_by(|a, b| a.supervisor.cmp(&b.supervisor));
     Ok(out)
 }
 

@@ -47,6 +47,45 @@ pub struct ZenohOptions {
     pub listen: Vec<String>,
     /// A Zenoh configuration file (JSON5) to start from.
     pub config_file: Option<PathBuf>,
+    /// A peer's or client's region (`--region NAME`): Zenoh's
+    /// `region_name`; a peer given no `listen` endpoint then listens
+    /// nowhere (a router of the region's name routes for it).
+    pub region: Option<String>,
+    /// A router's regions (`mcl zenoh-router --region NAME`, repeatable):
+    /// its `gateway.south`, one south region per name, then one more for
+    /// every other peer and client ([`gateway_south`]).
+    pub gateway_regions: Vec<String>,
+}
+
+/// A region name is a non-empty run of ASCII letters, digits, `_`, `-`
+/// and `.`, at most 32 characters (Zenoh's `RegionName::MAX_LEN`).
+pub fn check_region(name: &str) -> Result<(), String> {
+    let ok = !name.is_empty()
+        && name.len() <= 32
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if ok {
+        Ok(())
+    } else {
+        Err(format!("region `{name}`: expected 1 to 32 ASCII letters, digits, `_`, `-` or `.`"))
+    }
+}
+
+/// The router's `gateway.south` for `regions` (JSON): one south region per
+/// name, the peers and clients whose `region_name` it is, in the order
+/// given, then one for every other peer and client. Zenoh routes between
+/// south regions, never inside one (docs/zenoh.md, *Regions*). Errors on a
+/// bad or repeated name.
+pub fn gateway_south(regions: &[String]) -> Result<String, String> {
+    let mut entries = Vec::new();
+    for (i, r) in regions.iter().enumerate() {
+        check_region(r)?;
+        if regions[..i].contains(r) {
+            return Err(format!("region `{r}` given twice"));
+        }
+        entries.push(serde_json::json!({ "filters": [ { "region_names": [r] } ] }));
+    }
+    entries.push(serde_json::json!({ "filters": [ { "modes": ["peer", "client"] } ] }));
+    Ok(serde_json::Value::Array(entries).to_string())
 }
 
 impl ZenohOptions {
@@ -77,6 +116,23 @@ impl ZenohOptions {
         }
         if self.config_file.is_none() && !(self.connect.is_empty() && self.listen.is_empty()) {
             set(&mut c, "scouting/multicast/enabled", "false".into())?;
+        }
+        if let Some(r) = &self.region {
+            if self.mode == Mode::Router {
+                return Err("a router names its regions (gateway), not its own region".into());
+            }
+            check_region(r)?;
+            set(&mut c, "region_name", serde_json::Value::from(r.as_str()).to_string())?;
+            if self.mode == Mode::Peer && self.listen.is_empty() {
+                set(&mut c, "listen/endpoints", "[]".into())?;
+            }
+        }
+        if !self.gateway_regions.is_empty() {
+            if self.mode != Mode::Router {
+                return Err("only a router is the gateway of regions".into());
+            }
+            // `gateway` holds `south` alone (Zenoh 1.10).
+            set(&mut c, "gateway", format!("{{\"south\":{}}}", gateway_south(&self.gateway_regions)?))?;
         }
         Ok(c)
     }
@@ -247,5 +303,60 @@ mod tests {
         assert!(bad.config().unwrap_err().contains("expected `tcp/HOST:PORT`"));
         let missing = ZenohOptions { config_file: Some("/nonexistent/z.json5".into()), ..Default::default() };
         assert!(missing.config().unwrap_err().contains("--zenoh-config"));
+    }
+
+    #[test]
+    fn regions_set_the_region_name_and_the_gateway() {
+        let peer = ZenohOptions {
+            connect: vec!["tcp/127.0.0.1:7447".into()],
+            region: Some("auv".into()),
+            ..Default::default()
+        };
+        let c = peer.config().unwrap();
+        assert_eq!(c.get_json("region_name").unwrap(), r#""auv""#);
+        assert_eq!(
+            c.get_json("listen/endpoints").unwrap(),
+            "[]",
+            "a peer with a region and no endpoint listens nowhere"
+        );
+        let listening = ZenohOptions { listen: vec!["tcp/127.0.0.1:0".into()], ..peer.clone() };
+        assert_eq!(listening.config().unwrap().get_json("listen/endpoints").unwrap(), r#"["tcp/127.0.0.1:0"]"#);
+        let router = ZenohOptions {
+            mode: Mode::Router,
+            listen: vec!["tcp/127.0.0.1:7447".into()],
+            gateway_regions: vec!["auv".into(), "asc".into()],
+            ..Default::default()
+        };
+        let gateway = router.config().unwrap().get_json("gateway").unwrap();
+        assert!(gateway.contains("auv") && gateway.contains("asc"), "{gateway}");
+        let south: serde_json::Value = serde_json::from_str(&gateway_south(&router.gateway_regions).unwrap()).unwrap();
+        assert_eq!(
+            south,
+            serde_json::json!([
+                { "filters": [ { "region_names": ["auv"] } ] },
+                { "filters": [ { "region_names": ["asc"] } ] },
+                { "filters": [ { "modes": ["peer", "client"] } ] }
+            ])
+        );
+        // Bad input is an error, never a panic.
+        for (bad, why) in [
+            (ZenohOptions { region: Some(String::new()), ..Default::default() }, "region ``"),
+            (ZenohOptions { region: Some("a b".into()), ..Default::default() }, "region `a b`"),
+            (ZenohOptions { region: Some("x\"}".into()), ..Default::default() }, "expected 1 to 32"),
+            (ZenohOptions { region: Some("a".repeat(33)), ..Default::default() }, "expected 1 to 32"),
+            (ZenohOptions { gateway_regions: vec!["auv".into()], ..Default::default() }, "only a router"),
+            (ZenohOptions { mode: Mode::Router, region: Some("auv".into()), ..Default::default() }, "a router names"),
+            (
+                ZenohOptions {
+                    mode: Mode::Router,
+                    gateway_regions: vec!["a".into(), "a".into()],
+                    ..Default::default()
+                },
+                "given twice",
+            ),
+        ] {
+            let e = bad.config().unwrap_err();
+            assert!(e.contains(why), "{e}");
+        }
     }
 }

@@ -75,6 +75,11 @@ pub struct Options {
     /// Zenoh: the fleet name in the coordination keys `mcl/<fleet>/...` (default: the file's stem).
     #[arg(long, value_name = "NAME")]
     pub zenoh_fleet: Option<String>,
+    /// Zenoh: this process's region (Zenoh's `region_name`), for a router run with
+    /// `mcl zenoh-router --region NAME`; without --zenoh-listen the peer then listens nowhere
+    /// (docs/zenoh.md).
+    #[arg(long, value_name = "NAME")]
+    pub region: Option<String>,
     /// How the mock vehicle answers (TOML, see docs/scenarios.md). A scenario written by
     /// `mcl check --counterexample-scenario` (its `[counterexample]` table) also runs a program
     /// whose only errors are verification errors (E06xx, deadlocking constraints), and the run
@@ -441,10 +446,11 @@ pub fn run(o: Options) -> u8 {
             "give exactly one of --mock (in-process mock vehicle), --sim (simulated vehicle), --aac HOST:PORT, --ros2 BRIDGE.toml and --zenoh",
         );
     }
-    let zenoh_flags = !o.zenoh_connect.is_empty() || !o.zenoh_listen.is_empty() || o.zenoh_config.is_some();
+    let zenoh_flags =
+        !o.zenoh_connect.is_empty() || !o.zenoh_listen.is_empty() || o.zenoh_config.is_some() || o.region.is_some();
     if (zenoh_flags || o.zenoh_fleet.is_some()) && !o.zenoh && o.transport != Transport::Zenoh {
         return usage(
-            "--zenoh-connect, --zenoh-listen, --zenoh-config and --zenoh-fleet go with --zenoh or --transport zenoh",
+            "--zenoh-connect, --zenoh-listen, --zenoh-config, --zenoh-fleet and --region go with --zenoh or --transport zenoh",
         );
     }
     if o.vehicle_name.is_some() && !o.zenoh {
@@ -1065,6 +1071,8 @@ fn open_zenoh(o: &Options) -> Result<Arc<mcl_zenoh::Node>, u8> {
         connect: o.zenoh_connect.clone(),
         listen: o.zenoh_listen.clone(),
         config_file: o.zenoh_config.clone(),
+        region: o.region.clone(),
+        ..Default::default()
     };
     mcl_zenoh::Node::open(&opts).map(Arc::new).map_err(|e| usage(&e))
 }

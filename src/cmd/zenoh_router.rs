@@ -7,11 +7,19 @@ use std::io::Write;
 use std::path::PathBuf;
 
 /// Runs a router listening on `listen` (and connecting to `connect`) until
-/// killed. Prints `zenoh router listening on ENDPOINT...` once it is up.
-pub fn run(listen: Vec<String>, connect: Vec<String>, config: Option<PathBuf>) -> u8 {
+/// killed, the gateway of one south region per name of `regions` (then of
+/// every other peer and client). Prints `zenoh router listening on
+/// ENDPOINT...` once it is up.
+pub fn run(listen: Vec<String>, connect: Vec<String>, config: Option<PathBuf>, regions: Vec<String>) -> u8 {
     crate::interrupt::install();
-    let opts =
-        mcl_zenoh::ZenohOptions { mode: mcl_zenoh::Mode::Router, connect, listen: listen.clone(), config_file: config };
+    let opts = mcl_zenoh::ZenohOptions {
+        mode: mcl_zenoh::Mode::Router,
+        connect,
+        listen: listen.clone(),
+        config_file: config,
+        gateway_regions: regions,
+        ..Default::default()
+    };
     let _node = match mcl_zenoh::Node::open(&opts) {
         Ok(n) => n,
         Err(e) => {

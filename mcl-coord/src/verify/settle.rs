@@ -34,7 +34,7 @@ pub(super) fn urgency(plant: &Plant, sups: &[Supervisor], effects: &[Effect], nt
     let holder: Vec<Option<usize>> = sups
         .iter()
         .map(|s| {
-            crate::decentral::is_token_mutex(plant, s)
+            crate::decentral::is_token_supervisor(plant, s)
                 .then(|| s.consumed_by.iter().filter_map(|&(t, _)| plant.owner_of_transition(t)).min())
                 .flatten()
         })
