@@ -345,12 +345,6 @@ pub fn is_token_supervisor(plant: &Plant, s: &Supervisor) -> bool {
     }
 }
 
-/// The former name of [`is_token_supervisor`] (mutexes were the only
-/// supervisors with a single holder).
-pub fn is_token_mutex(plant: &Plant, s: &Supervisor) -> bool {
-    is_token_supervisor(plant, s)
-}
-
 /// True when the firings of vehicle `i` never give `s` more tokens than
 /// they took from it, whatever the run: a weighting `y ≥ 0` of the
 /// vehicle's places exists, zero on its initially marked places, with
