@@ -383,16 +383,31 @@ fn a_counterexample_from_the_exact_product_is_the_one_the_diagnostic_names() {
         for w in waiting.trim_matches(|c| c == '[' || c == ']').split(", ").filter(|w| !w.is_empty()) {
             assert!(message.contains(&format!("`{}`", w.trim_matches('"'))), "{message}\n{text}");
         }
-        // The state the diagnostic describes names the same missions as
-        // the scenario's marking, and each call it says runs is marked.
-        let notes = d["notes"].to_string();
-        for (mission, places) in marking(&text) {
-            assert!(notes.contains(&format!("`{mission}`")), "{notes}\n{text}");
-            let _ = places;
-        }
-        let (code, err, _) = run(file, scenario);
+        let notes: Vec<&str> = d["notes"].as_array().unwrap().iter().filter_map(|n| n.as_str()).collect();
+        let path = notes.iter().find_map(|n| n.strip_prefix("counterexample: ")).expect("a counterexample note");
+        let state = notes.iter().find_map(|n| n.strip_prefix("then nothing can fire: ")).expect("a state note");
+        let (code, err, records) = run(file, scenario);
         assert_eq!(code, Some(3), "{err}\n{text}");
         assert!(err.contains(": reproduced"), "{err}\n{text}");
+        for (mission, _) in marking(&text) {
+            // The calls the diagnostic's path starts are those the dry run
+            // starts, in order.
+            let said: Vec<&str> = path
+                .split(", then ")
+                .filter_map(|step| step.strip_prefix(&format!("{mission} `"))?.strip_suffix(" starts"))
+                .filter_map(|call| call.split('(').next())
+                .collect();
+            let done: Vec<&str> = records
+                .iter()
+                .filter(|r| r["kind"] == "action" && r["mission"] == mission.as_str() && r["command"] == "enable")
+                .filter_map(|r| r["task"].as_str())
+                .collect();
+            assert_eq!(said, done, "mission `{mission}`: {path}\n{records:?}");
+            // It ends as the diagnostic's state says.
+            let result = outcomes(&records).into_iter().find(|(m, _)| *m == mission).map(|(_, r)| r);
+            let ended = state.contains(&format!("`{mission}` has ended"));
+            assert_eq!(result.as_deref() != Some("stuck"), ended, "{state}\n{records:?}");
+        }
     }
     assert!(delayed > 0, "no scenario needed a late message: {scenarios:?}\n{err}");
 }
