@@ -335,3 +335,84 @@ fn a_late_message_replays_a_counterexample_that_needs_one() {
     let (_, err, _) = run(src.to_str().unwrap(), &undelayed);
     assert!(!err.contains(": reproduced"), "{err}");
 }
+
+/// Case seed 40 of `mcl-coord/tests/property.rs`: the analysis' path to
+/// the deadlock is one that no dry run follows, so the reported problem is
+/// the exact product's own run (the players with their messages in
+/// flight, `mcl_coord::replay::analyze_replayable`). The diagnostic, the
+/// scenario and the dry run then agree: the scenario's waiting calls and
+/// message are the diagnostic's, each waiting call is one the diagnostic
+/// names, and the dry run ends stuck (exit status 3) in the scenario's
+/// marking, which is the diagnostic's.
+#[test]
+fn a_counterexample_from_the_exact_product_is_the_one_the_diagnostic_names() {
+    let dir = out_dir("exact_run");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/vehicle.mcl"), dir.join("vehicle.mcl")).unwrap();
+    let src = dir.join("m.mcl");
+    std::fs::write(
+        &src,
+        "import \"vehicle.mcl\";\n\
+         mission : a { monitor { parallel { Deploy() : l1 } or { SendData() : l2 } } condition ( Alarm() ) do { Surface() } }\n\
+         mission : b { parallel { Void() : l1 } or { Goto( p ) : l2 } ; parallel { SendData() : l3 } and { Surface() : l4 } }\n\
+         constraints {\n order { b:l1, a:l1 }\n sync { a:l2, b:l1 }\n sync { a:l2, b:l4 }\n}\n",
+    )
+    .unwrap();
+    let file = src.to_str().unwrap();
+    let o = mcl(&["check", file, "--format", "json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let diags: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    let e0406: Vec<&Value> = diags.iter().filter(|d| d["code"] == "E0406").collect();
+    assert!(!e0406.is_empty(), "{diags:?}");
+    let out = dir.join("cex.toml");
+    let o = mcl(&["check", file, "--counterexample-scenario", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let scenarios: Vec<PathBuf> = if e0406.len() == 1 {
+        vec![out.clone()]
+    } else {
+        (1..=e0406.len()).map(|k| dir.join(format!("cex-{k}.toml"))).collect()
+    };
+    let mut delayed = 0;
+    for (d, scenario) in e0406.iter().zip(&scenarios) {
+        let text = std::fs::read_to_string(scenario).unwrap_or_else(|e| panic!("{e}: {err}"));
+        delayed += usize::from(text.contains("[[counterexample.delay]]"));
+        let message = d["message"].as_str().unwrap();
+        assert!(text.contains(&format!("message = {}", toml_string(message))), "{message}\n{text}");
+        // Every call the scenario waits for is one the diagnostic names.
+        let waiting = text.lines().find_map(|l| l.strip_prefix("waiting = ")).unwrap_or("[]");
+        for w in waiting.trim_matches(|c| c == '[' || c == ']').split(", ").filter(|w| !w.is_empty()) {
+            assert!(message.contains(&format!("`{}`", w.trim_matches('"'))), "{message}\n{text}");
+        }
+        let notes: Vec<&str> = d["notes"].as_array().unwrap().iter().filter_map(|n| n.as_str()).collect();
+        let path = notes.iter().find_map(|n| n.strip_prefix("counterexample: ")).expect("a counterexample note");
+        let state = notes.iter().find_map(|n| n.strip_prefix("then nothing can fire: ")).expect("a state note");
+        let (code, err, records) = run(file, scenario);
+        assert_eq!(code, Some(3), "{err}\n{text}");
+        assert!(err.contains(": reproduced"), "{err}\n{text}");
+        for (mission, _) in marking(&text) {
+            // The calls the diagnostic's path starts are those the dry run
+            // starts, in order.
+            let said: Vec<&str> = path
+                .split(", then ")
+                .filter_map(|step| step.strip_prefix(&format!("{mission} `"))?.strip_suffix(" starts"))
+                .filter_map(|call| call.split('(').next())
+                .collect();
+            let done: Vec<&str> = records
+                .iter()
+                .filter(|r| r["kind"] == "action" && r["mission"] == mission.as_str() && r["command"] == "enable")
+                .filter_map(|r| r["task"].as_str())
+                .collect();
+            assert_eq!(said, done, "mission `{mission}`: {path}\n{records:?}");
+            // It ends as the diagnostic's state says.
+            let result = outcomes(&records).into_iter().find(|(m, _)| *m == mission).map(|(_, r)| r);
+            let ended = state.contains(&format!("`{mission}` has ended"));
+            assert_eq!(result.as_deref() != Some("stuck"), ended, "{state}\n{records:?}");
+        }
+    }
+    assert!(delayed > 0, "no scenario needed a late message: {scenarios:?}\n{err}");
+}
+
+/// A TOML basic string.
+fn toml_string(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
+}

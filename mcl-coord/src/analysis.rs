@@ -168,7 +168,7 @@ pub fn analyze_with(
                 Outcome::Unknown(reason, _) => break (Verdict::Unknown { reason }, Vec::new(), st, net),
                 Outcome::Problems(ws, _) => {
                     let problems =
-                        ws.iter().map(|w| problem(&plant, &net, &sups, w, None, None, constraints)).collect();
+                        ws.iter().map(|w| problem(&plant, &net, &sups, w, (None, None), &[], constraints)).collect();
                     break (Verdict::Deadlock, problems, st, net);
                 }
             },
@@ -216,7 +216,7 @@ pub fn analyze_with(
                             }
                         }
                     }
-                    problems.push(problem(&plant, &net, &sups, w, siphon, refusal, constraints));
+                    problems.push(problem(&plant, &net, &sups, w, (siphon, refusal), &[], constraints));
                 }
                 if added {
                     continue;
@@ -245,18 +245,23 @@ fn pid(net: &Net, p: PlaceId) -> String {
     net.place(p).map_or_else(String::new, |x| x.id.to_string())
 }
 
-fn problem(
+/// The [`Problem`] of the witness `w` of `net` (the supervised net of
+/// `plant` and `sups`), with the empty siphon found in its marking and why
+/// no supervisor keeps it marked; `also`: constraints involved besides
+/// those of the supervisors that hold its calls or lie in the siphon.
+pub(crate) fn problem(
     plant: &Plant,
     net: &Net,
     sups: &[Supervisor],
     w: &Witness,
-    siphon: Option<Vec<String>>,
-    refusal: Option<Refusal>,
+    (siphon, refusal): (Option<Vec<String>>, Option<Refusal>),
+    also: &[usize],
     constraints: &[Constraint],
 ) -> Problem {
     let np = plant.net.place_count();
     let mut cs: Vec<usize> =
         w.held.iter().flat_map(|(_, ss)| ss.iter().flat_map(|&s| sups[s].origin.constraints())).collect();
+    cs.extend_from_slice(also);
     if let Some(sp) = &siphon {
         for id in sp {
             if let Some(p) = net.place_by_id(id).filter(|p| p.index() >= np) {

@@ -25,7 +25,7 @@ use mcl_compiler::{Db, FileDiagnostic, SourceFile};
 use mcl_syntax::ast::{self, Item};
 use mcl_syntax::{Diagnostic, Span};
 
-use crate::analysis::{analyze_with, AnalyzeOptions, Problem, Verdict};
+use crate::analysis::{AnalyzeOptions, Problem, Verdict};
 use crate::model::{Constraint, Mission};
 use crate::structure::Refusal;
 use crate::verify::WitnessKind;
@@ -74,7 +74,8 @@ fn diagnostics_inner(db: &dyn Db, file: SourceFile, opts: &AnalyzeOptions, inter
         .flatten()
         .collect();
     let conflicts = crate::conflict::conflicts(&all);
-    let analysis = || analyze_with(&missions, &constraints, opts);
+    // The problems as a dry run replays them (`crate::replay`).
+    let analysis = || crate::replay::analyze_replayable(&missions, &constraints, opts);
     let result = if interruptible {
         crate::interrupt::interruptible(|| db.unwind_if_revision_cancelled(), analysis)
     } else {

@@ -191,7 +191,7 @@ pub type Build = Box<dyn Fn(&Expected) -> Result<String, String>>;
 /// stops the analysis part-way (as it does the diagnostics').
 fn deadlock_scenarios(db: &dyn Db, file: SourceFile) -> Result<Vec<Build>, String> {
     let (missions, constraints) = crate::source::load(db, file).map_err(|e| e.to_string())?;
-    let analysis = || crate::analyze_with(&missions, &constraints, &crate::check::options());
+    let analysis = || analyze_replayable(&missions, &constraints, &crate::check::options());
     let report = crate::interrupt::interruptible(|| db.unwind_if_revision_cancelled(), analysis);
     replays_of(&missions, report.map_err(|e| e.to_string())?)
 }
@@ -202,60 +202,181 @@ fn deadlock_scenarios(db: &dyn Db, file: SourceFile) -> Result<Vec<Build>, Strin
 /// arrivals as nodes), and checks it on the vehicle nets that `mcl run`
 /// plays (built although the constraints deadlock).
 pub fn deadlock_replays(missions: &[Mission], constraints: &[Constraint]) -> Result<Vec<Build>, String> {
-    let report = crate::analyze_with(missions, constraints, &crate::check::options()).map_err(|e| e.to_string())?;
+    let report = analyze_replayable(missions, constraints, &crate::check::options()).map_err(|e| e.to_string())?;
     replays_of(missions, report)
+}
+
+/// The analysis behind E0406 ([`crate::analyze_with`]), with each reported
+/// problem ([`crate::check::reported`]) whose firing sequence no dry run
+/// follows replaced by the run of the exact product to a stuck state
+/// (`verify::flight::stuck_run`: the players with their messages in
+/// flight): its firing sequence, its marking, its waiting calls and its
+/// message, so that the diagnostic, the scenario and the dry run name the
+/// same marking. The analysis' sequence may hold steps that no player
+/// takes; the exact product's never does. Each reported problem costs a
+/// dry run (more when its sequence does not replay).
+pub fn analyze_replayable(
+    missions: &[Mission],
+    constraints: &[Constraint],
+    opts: &crate::AnalyzeOptions,
+) -> Result<crate::Report, crate::CoordError> {
+    let mut report = crate::analyze_with(missions, constraints, opts)?;
+    if report.problems.is_empty() {
+        return Ok(report);
+    }
+    let Ok(r) = Replayer::new(missions, &report) else { return Ok(report) };
+    let (Ok(plant), mut seen) = (crate::centralize(missions), Vec::new()) else { return Ok(report) };
+    let mut runs: [Option<Option<ExactRun>>; 2] = [None, None];
+    let probe = Expected { code: "E0406".into(), ..Expected::default() };
+    for i in 0..report.problems.len() {
+        let p = &report.problems[i];
+        // Only the reported ones (the first of each set of constraints).
+        if seen.contains(&p.constraints) {
+            continue;
+        }
+        seen.push(p.constraints.clone());
+        if r.build(&Case::of(&r.net, p), &probe).is_ok() {
+            continue;
+        }
+        let quiet = p.kind == WitnessKind::Stuck;
+        let run = runs[usize::from(quiet)]
+            .get_or_insert_with(|| exact_run(&r.net, &report, missions, &r.vnets, quiet))
+            .as_ref();
+        let Some(run) = run else { continue };
+        let w = crate::verify::Witness {
+            kind: p.kind,
+            path: run
+                .path
+                .iter()
+                .filter_map(|&t| report.net.transition_by_id(&r.net.transitions()[t.index()].id))
+                .collect(),
+            marking: run.supervised.clone(),
+            held: run.held.clone(),
+        };
+        let p = p.clone();
+        report.problems[i] = crate::analysis::problem(
+            &plant,
+            &report.net,
+            &report.supervisors,
+            &w,
+            (p.siphon, p.refusal),
+            &p.constraints,
+            constraints,
+        );
+        // The set of constraints stays the reported one's.
+        report.problems[i].constraints = p.constraints;
+    }
+    Ok(report)
 }
 
 /// A run of the exact product to a stuck state, on the supervised
 /// centralized net: the firings of the missions' own transitions, in the
-/// order the players took them, and the missions' marking at its end.
+/// order the players took them, the marking at its end and the calls held.
 struct ExactRun {
+    /// On the net with take-back nodes ([`Replayer::net`]).
     path: Vec<TransitionId>,
-    marking: Marking,
+    /// The marking of the supervised net ([`crate::Report::net`]): the
+    /// missions' places, and the supervisor places as the sequence leaves
+    /// them there (none when it does not fire there).
+    supervised: Marking,
+    /// The calls held in the stuck state: the start transitions (of the
+    /// supervised net) of the vehicles that have not ended, enabled in
+    /// their vehicle net but for supervisor copies, with the indices of
+    /// those supervisors.
+    held: Vec<(TransitionId, Vec<usize>)>,
 }
 
-/// The [`ExactRun`] of `missions` (their vehicle nets `vnets`) on `net`.
-fn exact_run(net: &Net, missions: &[Mission], vnets: &[crate::VehicleNet], quiet: bool) -> Option<ExactRun> {
+/// The [`ExactRun`] of `missions` (their vehicle nets `vnets`) on `net`
+/// (the supervised net of `report` with take-back nodes).
+fn exact_run(
+    net: &Net,
+    report: &crate::Report,
+    missions: &[Mission],
+    vnets: &[crate::VehicleNet],
+    quiet: bool,
+) -> Option<ExactRun> {
     let run = crate::verify::flight::stuck_run(missions, vnets, quiet, MAX_STATES)?;
+    let central = |vn: &crate::VehicleNet, id: &str| format!("{}{}{id}", vn.mission, crate::central::SEP);
     let mut path = Vec::new();
     for (v, fired) in &run.steps {
         let vn = vnets.get(*v)?;
         for &t in fired {
             let id = &vn.net.transitions().get(t.index())?.id;
             // The vehicle net's own coordination nodes have no counterpart.
-            if let Some(c) = net.transition_by_id(&format!("{}{}{id}", vn.mission, crate::central::SEP)) {
+            if let Some(c) = net.transition_by_id(&central(vn, id)) {
                 path.push(c);
             }
         }
     }
-    let mut marking = Marking(vec![0; net.place_count()]);
+    let snet = &report.net;
+    let mut supervised = Marking(vec![0; snet.place_count()]);
+    let mut held = Vec::new();
     for (vn, m) in vnets.iter().zip(&run.markings) {
         for (p, &k) in vn.net.places().iter().zip(m) {
             if k > 0 && !p.id.starts_with("coord.") {
-                if let Some(c) = net.place_by_id(&format!("{}{}{}", vn.mission, crate::central::SEP, p.id)) {
-                    marking.0[c.index()] = k;
+                if let Some(c) = snet.place_by_id(&central(vn, &p.id)) {
+                    supervised.0[c.index()] = k;
                 }
             }
         }
+        let ended = vn.net.places().iter().zip(m).any(|(p, &k)| {
+            k > 0
+                && (p.id.as_str() == mcl_runtime::player::MISSION_OK
+                    || p.id.as_str() == mcl_runtime::player::MISSION_FAIL)
+        });
+        if ended {
+            continue;
+        }
+        let coord = |p: mcl_net::PlaceId| vn.net.place(p).is_some_and(|x| x.id.starts_with("coord."));
+        for t in vn.net.transition_ids() {
+            let Some(c) = vn.net.transition(t).and_then(|x| snet.transition_by_id(&central(vn, &x.id))) else {
+                continue;
+            };
+            let plant_ok =
+                mcl_net::semantics::is_enabled_with(&vn.net, t, |p| if coord(p) { u32::MAX } else { m[p.index()] });
+            let missing: Vec<usize> = vn
+                .net
+                .pre(t)
+                .iter()
+                .filter(|&&(p, w)| coord(p) && m[p.index()] < w)
+                .filter_map(|&(p, _)| {
+                    let id = &vn.net.place(p)?.id;
+                    report.supervisors.iter().position(|s| s.id == id.as_str())
+                })
+                .collect();
+            if plant_ok && !missing.is_empty() {
+                held.push((c, missing));
+            }
+        }
     }
-    Some(ExactRun { path, marking })
+    // The supervisor places, as the centralized net counts them.
+    let np = snet.place_count() - report.supervisors.len();
+    let mut m = snet.initial_marking();
+    let fired = path.iter().all(|&t| {
+        let id = &net.transitions()[t.index()].id;
+        snet.transition_by_id(id).is_some_and(|t| mcl_net::semantics::fire(snet, &mut m, t).is_ok())
+    });
+    if fired {
+        supervised.0[np..].copy_from_slice(&m.0[np..]);
+    }
+    Some(ExactRun { path, supervised, held })
 }
 
-fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>, String> {
-    let net =
-        Arc::new(crate::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?);
-    let vnets = crate::decentralize(missions, &report.supervisors)
-        .map_err(|e| format!("the vehicle nets cannot be built ({e})"))?;
-    let vehicles: Vec<(String, Arc<Net>)> =
-        vnets.iter().map(|v| (v.mission.clone(), Arc::new(v.net.clone()))).collect();
-    // The runs of the exact product to a stuck state (`verify::flight`),
-    // found on first use: all runs, and nominal ones.
-    let runs: Arc<[std::sync::OnceLock<Option<ExactRun>>; 2]> = Arc::new(Default::default());
-    let (missions_all, vnets) = (Arc::new(missions.to_vec()), Arc::new(vnets));
-    let vehicles = Arc::new(vehicles);
-    let tasks = ProgramNames::of(vehicles.iter().map(|(_, n)| n.as_ref())).tasks;
-    let mut out: Vec<Build> = Vec::new();
-    for p in crate::check::reported(&report.problems) {
+/// What the scenario of one reported problem is built from.
+struct Case {
+    /// Its firing sequence on [`Replayer::net`] (`None`: it names a
+    /// transition that the net does not have).
+    path: Option<Vec<TransitionId>>,
+    /// Its marking on that net.
+    marking: Marking,
+    kind: &'static str,
+    waiting: Vec<String>,
+    /// The missions of the held calls.
+    held: Vec<String>,
+}
+
+impl Case {
+    fn of(net: &Net, p: &crate::Problem) -> Case {
         let path: Option<Vec<TransitionId>> = p.counterexample.iter().map(|id| net.transition_by_id(id)).collect();
         let mut m = Marking(vec![0; net.place_count()]);
         for s in &p.marking {
@@ -272,35 +393,61 @@ fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>,
             WitnessKind::Blocked => "blocked",
             WitnessKind::Stuck => "stuck",
         };
-        let waiting = p.waiting.clone();
-        let held: Vec<String> = p
+        let held = p
             .held_by
             .iter()
             .filter_map(|(t, _)| t.split_once(crate::central::SEP))
             .map(|(m, _)| m.to_string())
             .collect();
-        let (net, vehicles, tasks) = (net.clone(), vehicles.clone(), tasks.clone());
-        let (runs, missions_all, vnets) = (runs.clone(), missions_all.clone(), vnets.clone());
-        let quiet = p.kind == WitnessKind::Stuck;
-        out.push(Box::new(move |e: &Expected| {
-            let path = path.as_ref().ok_or("the counterexample names a transition the net does not have")?;
-            let cx = Counterexample { net: &net, path, centralized: true, mission: "", waiting: &held };
-            let want =
-                Expected { kind: kind.to_string(), waiting: waiting.clone(), marking: cx.marking(&m), ..e.clone() };
-            let why = match cex::build(&cx, &tasks, &want, true, |t| cex::check_vehicles(&vehicles, t)) {
-                Ok(text) => return Ok(text),
-                Err(why) => why,
-            };
-            // The analysis' path may hold steps that no player takes: the
-            // exact product's own run to a stuck state (the players with
-            // their messages in flight) is tried instead.
-            let run = runs[usize::from(quiet)].get_or_init(|| exact_run(&net, &missions_all, &vnets, quiet));
-            let Some(run) = run else { return Err(why) };
-            let cx = Counterexample { path: &run.path, ..cx };
-            let want = Expected { marking: cx.marking(&run.marking), ..want };
-            cex::build(&cx, &tasks, &want, true, |t| cex::check_vehicles(&vehicles, t))
-                .map_err(|e| format!("{why}; along the run of the players with messages in flight: {e}"))
-        }));
+        Case { path, marking: m, kind, waiting: p.waiting.clone(), held }
+    }
+}
+
+/// What the scenarios of a report's problems are built and checked with.
+struct Replayer {
+    /// The supervised net with the take-back nodes.
+    net: Arc<Net>,
+    vnets: Vec<crate::VehicleNet>,
+    /// The vehicle nets that `mcl run` plays, by mission.
+    vehicles: Vec<(String, Arc<Net>)>,
+    tasks: Vec<String>,
+}
+
+impl Replayer {
+    fn new(missions: &[Mission], report: &crate::Report) -> Result<Replayer, String> {
+        let net =
+            Arc::new(crate::supervisor::with_take_backs(&report.net, &report.supervisors).map_err(|e| e.to_string())?);
+        let vnets = crate::decentralize(missions, &report.supervisors)
+            .map_err(|e| format!("the vehicle nets cannot be built ({e})"))?;
+        let vehicles: Vec<(String, Arc<Net>)> =
+            vnets.iter().map(|v| (v.mission.clone(), Arc::new(v.net.clone()))).collect();
+        let tasks = ProgramNames::of(vehicles.iter().map(|(_, n)| n.as_ref())).tasks;
+        Ok(Replayer { net, vnets, vehicles, tasks })
+    }
+
+    /// The scenario of `case`, checked by a dry run, with the
+    /// `[counterexample]` table `e` (its marking, kind and waiting calls
+    /// filled in from the case).
+    fn build(&self, case: &Case, e: &Expected) -> Result<String, String> {
+        let path = case.path.as_ref().ok_or("the counterexample names a transition the net does not have")?;
+        let cx = Counterexample { net: &self.net, path, centralized: true, mission: "", waiting: &case.held };
+        let want = Expected {
+            kind: case.kind.to_string(),
+            waiting: case.waiting.clone(),
+            marking: cx.marking(&case.marking),
+            ..e.clone()
+        };
+        cex::build(&cx, &self.tasks, &want, true, |t| cex::check_vehicles(&self.vehicles, t))
+    }
+}
+
+fn replays_of(missions: &[Mission], report: crate::Report) -> Result<Vec<Build>, String> {
+    let r = Arc::new(Replayer::new(missions, &report)?);
+    let mut out: Vec<Build> = Vec::new();
+    for p in crate::check::reported(&report.problems) {
+        let case = Case::of(&r.net, p);
+        let r = r.clone();
+        out.push(Box::new(move |e: &Expected| r.build(&case, e)));
     }
     Ok(out)
 }

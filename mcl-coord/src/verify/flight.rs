@@ -777,3 +777,76 @@ fn fire(net: &Net, m: &mut [u32], t: TransitionId) {
         *x = (i64::from(*x) + d).max(0) as u32;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::verify::{verify, Outcome, VerifyOptions};
+    use mcl_compiler::{Database, Db};
+
+    /// The missions, constraints and vehicle nets of `text` (with
+    /// `examples/vehicle.mcl` imported), and the interleaving product's
+    /// verdict alone (the exact product never consulted).
+    fn setup(name: &str, text: &str) -> (Vec<Mission>, Vec<VehicleNet>, bool) {
+        let dir = std::env::temp_dir().join(format!("mcl-coord-flight-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let vehicle = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/vehicle.mcl");
+        std::fs::copy(vehicle, dir.join("vehicle.mcl")).unwrap();
+        let path = dir.join("m.mcl");
+        std::fs::write(&path, format!("import \"vehicle.mcl\";\n{text}")).unwrap();
+        let db = Database::new();
+        let (missions, constraints) = crate::source::load(&db, db.file(&path)).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let plant = crate::centralize(&missions).unwrap();
+        let sups = crate::supervisor::synthesize(&plant, &constraints).unwrap();
+        let net = crate::analysis::supervised_net(&plant, &sups).unwrap();
+        let opts = VerifyOptions { max_flight_states: 0, ..VerifyOptions::default() };
+        let interleaving_dead = matches!(verify(&missions, &plant, &sups, &net, &opts), Outcome::Problems(..));
+        let nets = crate::decentralize(&missions, &sups).unwrap();
+        (missions, nets, interleaving_dead)
+    }
+
+    fn flown(missions: &[Mission], nets: &[VehicleNet]) -> Flown {
+        fly(missions, nets, &[0, 1], &[true, true], false, 200_000)
+    }
+
+    /// `mcl-coord/tests/property.rs` READY_START: the interleaving product
+    /// lets `b` leave an allowed start unfired while `a` withdraws what
+    /// allowed it; a player fires it at once, and the exact product is free.
+    #[test]
+    fn a_deadlock_of_the_interleaving_product_that_no_player_reaches() {
+        let text = "mission : a { parallel { parallel { Void() : l1 } and { Deploy() : l2 } } or { Deploy() : l3 } }\n\
+                    mission : b { try { parallel { Surface() : l1 } and { Surface() : l2 } } catch { \
+                    parallel { GotoTarget() : l3 } and { Surface() : l4 } } }\n\
+                    constraints {\n sync { a:l2, b:l2 }\n sync { a:l2, b:l1 }\n order { b:l1, a:l3 }\n}\n";
+        let (missions, nets, interleaving_dead) = setup("free", text);
+        assert!(interleaving_dead, "the interleaving product finds no deadlock");
+        assert_eq!(flown(&missions, &nets), Flown::Free);
+        assert!(stuck_run(&missions, &nets, false, 200_000).is_none());
+    }
+
+    /// Figure 6.9a of the seed (`tests/ui/e0406_order_cycle.mcl`): each
+    /// call waits for the other's end; both products find the deadlock,
+    /// and the exact product's run ends with neither mission ended.
+    #[test]
+    fn an_order_cycle_is_stuck_in_both_products() {
+        let text = "mission : v1 { GotoTarget() : p2 ; Surface() }\nmission : v2 { Deploy() : p5 ; Surface() }\n\
+                    constraints {\n order { v1:p2, v2:p5 }\n order { v2:p5, v1:p2 }\n}\n";
+        let (missions, nets, interleaving_dead) = setup("cycle", text);
+        assert!(interleaving_dead);
+        assert_eq!(flown(&missions, &nets), Flown::Stuck);
+        let run = stuck_run(&missions, &nets, false, 200_000).expect("a stuck run");
+        assert_eq!(run.markings.len(), 2);
+        for (vn, m) in nets.iter().zip(&run.markings) {
+            let marked = |prefix: &str| vn.net.places().iter().zip(m).any(|(p, &k)| k > 0 && p.id.starts_with(prefix));
+            assert!(!marked("mission."), "`{}` ended", vn.mission);
+        }
+        // The run is a path of the exact product.
+        assert!(follows(&missions, &nets, &run_firings(&run), 200_000).is_ok());
+    }
+
+    /// The firings of a stuck run, in order, as [`follows`] takes them.
+    fn run_firings(run: &StuckRun) -> Vec<(usize, TransitionId)> {
+        run.steps.iter().flat_map(|(v, f)| f.iter().map(move |&t| (*v, t))).collect()
+    }
+}
