@@ -164,7 +164,12 @@ pub fn analyze_with(
             Outcome::Verified(st) if !has_off_nominal(missions) => break (Verdict::Free, Vec::new(), st, net),
             // Free of deadlock; and in nominal runs? (verify.rs, `verify_quiet`)
             Outcome::Verified(st) => match verify_quiet(missions, &plant, &sups, &net, &opts.verify) {
-                Outcome::Verified(_) => break (Verdict::Free, Vec::new(), st, net),
+                // The nominal pass may be freed by the exact product too:
+                // its count goes with the verdict.
+                Outcome::Verified(q) => {
+                    let st = VerifyStats { flown_free: st.flown_free + q.flown_free, ..st };
+                    break (Verdict::Free, Vec::new(), st, net);
+                }
                 Outcome::Unknown(reason, _) => break (Verdict::Unknown { reason }, Vec::new(), st, net),
                 Outcome::Problems(ws, _) => {
                     let problems =

@@ -620,8 +620,28 @@ fn the_verdict_is_the_exact_products() {
     let (ms, cs) = compile(READY_START, 5);
     let r = analyze_with(&ms, &cs, &AnalyzeOptions::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Free, "{:?}", r.problems);
-    assert_eq!(r.stats.flown_free, 1, "{:?}", r.stats);
+    // Freed twice: in all runs and in the nominal ones.
+    assert_eq!(r.stats.flown_free, 2, "{:?}", r.stats);
     check_text(READY_START.to_string(), 5, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Found by random seeds: only the nominal pass (no failure, no alarm)
+/// has a problem in the interleaving product (`a:l1` waiting for ever for
+/// `b:l2` after `b`'s `parallel ... or` ended by `l3`), and the exact
+/// product frees it: no dry run reproduces it either. Its count goes with
+/// the verdict (it was dropped, so the oracle's nominal check of the
+/// centralized net, blind to the players' order, failed).
+#[test]
+fn a_nominal_pass_freed_by_the_exact_product_is_counted() {
+    let text = "mission : a { monitor { Surface() : l1 } condition ( Alarm() ) do { Surface() } }\n\
+                mission : b { parallel { Goto( p ) : l1 ; Surface() : l2 } or { monitor { Goto( p ) : l3 } \
+                condition ( Alarm() ) do { Surface() } } }\n\
+                constraints {\n sync { a:l1, b:l2 }\n mutex { a:l1, b:l3 } = 1\n mutex { a:l1, b:l3 } = 1\n}\n";
+    let (ms, cs) = compile(text, 7);
+    let r = analyze_with(&ms, &cs, &AnalyzeOptions::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Free, "{:?}", r.problems);
+    assert!(r.stats.flown_free > 0, "{:?}", r.stats);
+    check_text(text.to_string(), 7, &AnalyzeOptions::default()).unwrap_or_else(|e| panic!("{e}"));
 }
 
 const READY_START: &str =
