@@ -44,7 +44,7 @@ mod stubborn;
 pub mod symbolic;
 mod unordered;
 
-pub use stubborn::{explore_por, PorReport};
+pub use stubborn::{explore_por, explore_por_examples, DeadExample, PorReport};
 pub use symbolic::{explore_symbolic, SymbolicOptions, SymbolicReport};
 
 use engine::Layout;
