@@ -159,6 +159,7 @@ fn the_centralised_net_confirms_every_verdict() {
                     dead.len()
                 );
                 assert!(por.deadlock, "{what}: the end is a dead marking");
+                assert_eq!(dead.is_empty(), !deadlock, "{what}: the generator's verdict");
                 if r.verdict == Verdict::Free {
                     assert!(dead.is_empty(), "{what}: {:?}", dead[0].path);
                     assert_eq!(por.dead_markings, 1, "{what}");
