@@ -3,11 +3,11 @@
 //! in another order.
 //!
 //! * **One shared table.** Every visited marking is in one lock-free
-//!   open-addressing table ([`Table`]): a slot is a meta word and the packed
-//!   marking. A thread adds a marking by claiming an empty slot
-//!   (compare-and-swap of the meta word from empty to busy), writing the
-//!   marking, then publishing the hash tag in the meta word (release); a
-//!   reader that meets a busy slot waits for the tag (a few stores away).
+//!   open-addressing table ([`Table`]) whose slots hold nothing but the
+//!   packed marking, as the sequential search's key-only table. A thread
+//!   adds a marking by a compare-and-swap: of the whole slot for one-word
+//!   markings; of the first word from free to claimed for wider ones, which
+//!   then write the other words and publish the first (release ordering).
 //!   Looking up a present marking is plain loads.
 //! * **Work stealing.** New states go, with their markings, into chunks of
 //!   [`CHUNK`] states on the discovering thread's deque
@@ -26,7 +26,9 @@
 //!   reading during one batch of lookups. A thread whose batch could push
 //!   the load above 3/4 takes it for writing and rehashes into a table
 //!   twice as large, on all threads at once (the others are waiting on the
-//!   lock); this happens about log2(states) times.
+//!   lock); this happens about log2(states) times. The new table comes
+//!   zeroed from the allocator, so its pages are cleared by the threads
+//!   that first touch them.
 //!
 //! **Termination.** A chunk is counted in `pending` before it is pushed and
 //! uncounted only after the batch that expanded it has pushed all the new
@@ -46,10 +48,11 @@
 
 use std::hint::spin_loop;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicU8, AtomicUsize, Ordering};
-use std::sync::{PoisonError, RwLock, RwLockReadGuard};
+use std::sync::{Mutex, PoisonError, RwLock, RwLockReadGuard};
 use std::time::Duration;
 
 use crossbeam_deque::{Steal, Stealer, Worker as Deque};
+use rustc_hash::FxHashSet;
 
 use super::engine::{mix, Compiled, Overflow, Stats, NO_PARENT};
 use super::hw;
@@ -69,18 +72,14 @@ const INITIAL_CAP: usize = 1 << 15;
 /// Below this many slots a table is rehashed by one thread.
 const PARALLEL_REHASH: usize = 1 << 16;
 
-/// Meta word of a free slot.
+/// First word of a free slot.
 const EMPTY: u64 = 0;
-/// Meta word of a slot claimed by a thread that is writing its marking.
+/// First word of a slot claimed by a thread that is writing its marking.
 const BUSY: u64 = 1;
-
-/// Meta word of a published slot: the hash with bit 1 set (never
-/// [`EMPTY`] or [`BUSY`]); the home slot comes from bits 2 and up, so the
-/// meta word alone places an entry when the table grows.
-#[inline(always)]
-fn tag(hash: u64) -> u64 {
-    hash | 2
-}
+/// Markings wider than a word keep their first word as `word ^ SALT`, so
+/// that a stored marking never looks free or claimed; the (unlikely)
+/// markings whose first word is `SALT` or `SALT ^ 1` go to a side set.
+const SALT: u64 = 0xA5C3_96E1_4D2B_7F08;
 
 /// Hash of a packed marking: a multiply per word, then the MurmurHash3
 /// finalizer.
@@ -114,28 +113,34 @@ enum Added {
     Refused,
 }
 
-/// The shared set of visited markings: open addressing, linear probing.
+/// The shared set of visited markings: open addressing, linear probing,
+/// slot `i` is `slots[i * words..]` and holds nothing but a marking, as in
+/// the sequential search's key-only table.
 ///
-/// Markings of one word are the slots themselves (0 is a free slot; the
-/// all-zero marking is a flag aside): a compare-and-swap adds one. Wider
-/// slots are `slots[i * stride..]`: a meta word ([`EMPTY`], [`BUSY`] or a
-/// [`tag`]), then the marking's words.
+/// A one-word marking is added by a compare-and-swap of its slot from 0 (the
+/// all-zero marking is a flag aside). A wider one claims its slot by a
+/// compare-and-swap of the first word from [`EMPTY`] to [`BUSY`], writes the
+/// other words, then publishes the first one (xor [`SALT`]) with release
+/// ordering; a reader that meets a claimed slot waits for it (a few stores
+/// away).
 struct Table {
     slots: Vec<AtomicU64>,
-    stride: usize,
+    words: usize,
     mask: usize,
     /// One-word markings: whether the all-zero marking is in the table.
     zero: AtomicBool,
+    /// Wider markings whose salted first word would read as free or claimed.
+    side: Mutex<FxHashSet<Vec<u64>>>,
 }
 
 impl Table {
     fn new(cap: usize, words: usize) -> Self {
-        let stride = if words == 1 { 1 } else { words + 1 };
-        let n = cap * stride;
-        let mut slots = Vec::with_capacity(n);
+        // Zeroed by the allocator (fresh pages for a large table), so that
+        // the pages are first touched, and cleared, by the threads that
+        // rehash and fill it, not all by the one that grows it.
+        let mut slots: Vec<AtomicU64> = bytemuck::zeroed_vec(cap * words);
         hw::advise_huge(&mut slots);
-        slots.resize_with(n, || AtomicU64::new(EMPTY));
-        Table { slots, stride, mask: cap - 1, zero: AtomicBool::new(false) }
+        Table { slots, words, mask: cap - 1, zero: AtomicBool::new(false), side: Mutex::default() }
     }
 
     fn capacity(&self) -> usize {
@@ -152,41 +157,52 @@ impl Table {
         (hash >> 2) as usize & self.mask
     }
 
-    /// Prefetches the first and the last word of the home slot of `hash`.
+    /// Prefetches the home slot of `hash`: its first word, and its last
+    /// one when the slot may straddle two cache lines (3 words or more).
     #[inline(always)]
     fn prefetch(&self, hash: u64) {
-        let base = self.home(hash) * self.stride;
-        if let (Some(a), Some(b)) = (self.slots.get(base), self.slots.get(base + self.stride - 1)) {
+        let base = self.home(hash) * self.words;
+        if let Some(a) = self.slots.get(base) {
             hw::prefetch(a);
-            hw::prefetch(b);
+        }
+        if self.words > 2 {
+            if let Some(b) = self.slots.get(base + self.words - 1) {
+                hw::prefetch(b);
+            }
         }
     }
 
-    /// Adds `key` (of the table's width) unless it is present; with `room`
-    /// false a new key is not added but [`Added::Refused`]. The table must
-    /// have a free slot.
+    /// Adds `key` (of the table's width, hashed by [`hash_words`]) unless it
+    /// is present; with `room` false a new key is not added but
+    /// [`Added::Refused`]. The table must have a free slot.
     #[inline(always)]
     fn insert(&self, key: &[u64], hash: u64, room: bool) -> Added {
-        if self.stride == 1 {
-            return self.insert_word(key[0], hash, room);
+        let Some((&k0, rest)) = key.split_first() else {
+            return Added::Found;
+        };
+        if rest.is_empty() {
+            return self.insert_word(k0, hash, room);
         }
-        let t = tag(hash);
+        let first = k0 ^ SALT;
+        if first <= BUSY {
+            return self.insert_side(key, room);
+        }
         let mut pos = self.home(hash);
         loop {
-            let base = pos * self.stride;
-            let meta = &self.slots[base];
-            let words = &self.slots[base + 1..base + 1 + key.len()];
-            let mut m = meta.load(Ordering::Acquire);
+            let base = pos * self.words;
+            let head = &self.slots[base];
+            let tail = &self.slots[base + 1..base + key.len()];
+            let mut m = head.load(Ordering::Acquire);
             if m == EMPTY {
                 if !room {
                     return Added::Refused;
                 }
-                match meta.compare_exchange(EMPTY, BUSY, Ordering::Acquire, Ordering::Acquire) {
+                match head.compare_exchange(EMPTY, BUSY, Ordering::Acquire, Ordering::Acquire) {
                     Ok(_) => {
-                        for (s, &k) in words.iter().zip(key) {
+                        for (s, &k) in tail.iter().zip(rest) {
                             s.store(k, Ordering::Relaxed);
                         }
-                        meta.store(t, Ordering::Release);
+                        head.store(first, Ordering::Release);
                         return Added::New;
                     }
                     Err(now) => m = now,
@@ -202,9 +218,9 @@ impl Table {
                 } else {
                     std::thread::yield_now();
                 }
-                m = meta.load(Ordering::Acquire);
+                m = head.load(Ordering::Acquire);
             }
-            if m == t && words.iter().zip(key).all(|(s, &k)| s.load(Ordering::Relaxed) == k) {
+            if m == first && tail.iter().zip(rest).all(|(s, &k)| s.load(Ordering::Relaxed) == k) {
                 return Added::Found;
             }
             pos = (pos + 1) & self.mask;
@@ -242,32 +258,56 @@ impl Table {
         }
     }
 
-    /// Adds the entries of slots `range` to `to` (no thread is inserting
-    /// into `self`).
-    fn rehash_into(&self, range: std::ops::Range<usize>, to: &Table) {
-        if self.stride == 1 {
-            for s in &self.slots[range] {
-                let key = s.load(Ordering::Relaxed);
-                if key != EMPTY {
-                    to.insert_word(key, hash_words(&[key]), true);
-                }
-            }
-            to.zero.store(self.zero.load(Ordering::Relaxed), Ordering::Relaxed);
-            return;
+    /// [`Table::insert`] for the markings kept in the side set.
+    #[cold]
+    fn insert_side(&self, key: &[u64], room: bool) -> Added {
+        let mut side = self.side.lock().unwrap_or_else(PoisonError::into_inner);
+        if side.contains(key) {
+            Added::Found
+        } else if !room {
+            Added::Refused
+        } else {
+            side.insert(key.to_vec());
+            Added::New
         }
-        let w = self.stride - 1;
+    }
+
+    /// A table twice as large with the same markings, rehashed on
+    /// `threads` threads when it is large.
+    fn grown(&mut self, threads: usize) -> Table {
+        let cap = self.capacity();
+        let mut new = Table::new(cap * 2, self.words);
+        if cap < PARALLEL_REHASH || threads == 1 {
+            self.rehash_into(0..cap, &new);
+        } else {
+            let (old, to) = (&*self, &new);
+            std::thread::scope(|s| {
+                for i in 0..threads {
+                    s.spawn(move || old.rehash_into(cap * i / threads..cap * (i + 1) / threads, to));
+                }
+            });
+        }
+        new.zero = AtomicBool::new(self.zero.load(Ordering::Relaxed));
+        new.side = std::mem::take(&mut self.side);
+        new
+    }
+
+    /// Adds the entries of slots `range` to `to` (no thread is inserting
+    /// into `self`; the zero flag and the side set are moved by the caller).
+    fn rehash_into(&self, range: std::ops::Range<usize>, to: &Table) {
+        let w = self.words;
         let mut key = vec![0u64; w];
         for pos in range {
-            let base = pos * self.stride;
+            let base = pos * w;
             let m = self.slots[base].load(Ordering::Relaxed);
             if m == EMPTY {
                 continue;
             }
-            for (k, s) in key.iter_mut().zip(&self.slots[base + 1..base + 1 + w]) {
+            key[0] = if w == 1 { m } else { m ^ SALT };
+            for (k, s) in key[1..].iter_mut().zip(&self.slots[base + 1..base + w]) {
                 *k = s.load(Ordering::Relaxed);
             }
-            // `m` is a tag: it gives the same tag and home slot as the hash.
-            to.insert(&key, m, true);
+            to.insert(&key, hash_words(&key), true);
         }
     }
 }
@@ -345,19 +385,7 @@ impl Shared<'_> {
         if g.capacity() != seen {
             return;
         }
-        let new = Table::new(seen * 2, self.c.layout.words);
-        let old: &Table = &g;
-        let k = self.threads;
-        if seen < PARALLEL_REHASH || k == 1 {
-            old.rehash_into(0..seen, &new);
-        } else {
-            let new = &new;
-            std::thread::scope(|s| {
-                for i in 0..k {
-                    s.spawn(move || old.rehash_into(seen * i / k..seen * (i + 1) / k, new));
-                }
-            });
-        }
+        let new = g.grown(self.threads);
         *g = new;
     }
 }
@@ -668,8 +696,10 @@ fn run_with<const W: usize>(c: &Compiled, net: &Net, max_states: usize, threads:
 }
 
 /// Concatenates the threads' states (thread 0 first, so that the initial
-/// marking is state 0) and renumbers the ids.
+/// marking is state 0) and renumbers the ids; each thread's part is copied
+/// by a thread of its own.
 fn assemble(c: &Compiled, net: &Net, parts: Vec<Part>, stop: Option<StopReason>) -> StateSpace {
+    let w = c.layout.words;
     let mut offset = Vec::with_capacity(parts.len());
     let mut total = 0;
     for p in &parts {
@@ -677,17 +707,32 @@ fn assemble(c: &Compiled, net: &Net, parts: Vec<Part>, stop: Option<StopReason>)
         total += p.via.len();
     }
     let global = |id: u64| (offset[(id >> 32) as usize] + (id & 0xFFFF_FFFF) as usize) as u32;
-    let mut arena = Vec::with_capacity(total * c.layout.words);
-    let mut parent = Vec::with_capacity(total);
-    let mut via = Vec::with_capacity(total);
+    let mut arena = vec![0u64; total * w];
+    let mut parent = vec![0u32; total];
+    let mut via = vec![0u32; total];
+    std::thread::scope(|s| {
+        let (mut a, mut pa, mut v) = (&mut arena[..], &mut parent[..], &mut via[..]);
+        for p in &parts {
+            let n = p.via.len();
+            let (a1, a2) = std::mem::take(&mut a).split_at_mut(n * w);
+            let (p1, p2) = std::mem::take(&mut pa).split_at_mut(n);
+            let (v1, v2) = std::mem::take(&mut v).split_at_mut(n);
+            (a, pa, v) = (a2, p2, v2);
+            let global = &global;
+            s.spawn(move || {
+                a1.copy_from_slice(&p.arena);
+                for (d, &x) in p1.iter_mut().zip(&p.parent) {
+                    *d = if x == u64::MAX { NO_PARENT } else { global(x) };
+                }
+                v1.copy_from_slice(&p.via);
+            });
+        }
+    });
     let mut dead = Vec::new();
     let mut vanishing = vec![0u64; total.div_ceil(64)];
     let mut edges = 0;
     let mut stats = Stats::new(net);
     for p in &parts {
-        arena.extend_from_slice(&p.arena);
-        parent.extend(p.parent.iter().map(|&x| if x == u64::MAX { NO_PARENT } else { global(x) }));
-        via.extend_from_slice(&p.via);
         dead.extend(p.dead.iter().map(|&x| global(x)));
         for &x in &p.vanishing {
             let g = global(x) as usize;
@@ -712,5 +757,42 @@ fn assemble(c: &Compiled, net: &Net, parts: Vec<Part>, stop: Option<StopReason>)
         succ_off: Vec::new(),
         succ: Vec::new(),
         cut: Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{hash_words, Added, Table, SALT};
+
+    fn add(t: &Table, key: &[u64], room: bool) -> Added {
+        t.insert(key, hash_words(key), room)
+    }
+
+    #[test]
+    fn the_table_keeps_every_marking_across_growth() {
+        for words in [1, 2, 3] {
+            let mut t = Table::new(16, words);
+            // Ordinary keys, the zero key, and (wider keys) the first words
+            // that go to the side set.
+            let mut keys: Vec<Vec<u64>> = (1..=10u64).map(|i| vec![i * 0x1234_5678_9ABC; words]).collect();
+            keys.push(vec![0; words]);
+            if words > 1 {
+                keys.push([vec![SALT], vec![7; words - 1]].concat());
+                keys.push([vec![SALT ^ 1], vec![9; words - 1]].concat());
+            }
+            for k in &keys {
+                assert!(add(&t, k, false) == Added::Refused, "{words} words: {k:?} refused without room");
+                assert!(add(&t, k, true) == Added::New, "{words} words: {k:?} new");
+                assert!(add(&t, k, false) == Added::Found, "{words} words: {k:?} found");
+            }
+            for threads in [1, 2] {
+                t = t.grown(threads);
+                assert_eq!(t.capacity(), 32 << (threads - 1));
+                for k in &keys {
+                    assert!(add(&t, k, false) == Added::Found, "{words} words: {k:?} kept");
+                }
+                assert!(add(&t, &vec![5; words], false) == Added::Refused);
+            }
+        }
     }
 }
