@@ -317,6 +317,20 @@ const HALT_NONE: u8 = 0;
 const HALT_LIMIT: u8 = 1;
 const HALT_TOKENS: u8 = 2;
 const HALT_WIDEN: u8 = 3;
+/// A thread panicked: the others stop, and the panic reaches the caller.
+const HALT_PANIC: u8 = 4;
+
+/// Stops every thread if the thread holding it unwinds, so that none waits
+/// for work the panicking one will never finish.
+struct HaltOnPanic<'a>(&'a Shared<'a>);
+
+impl Drop for HaltOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.stop(HALT_PANIC);
+        }
+    }
+}
 
 /// States to expand: their markings and ids (`thread << 32 | local index`).
 struct Chunk {
@@ -459,6 +473,7 @@ impl<'a, const W: usize> Worker<'a, W> {
     }
 
     fn run(mut self) -> Part {
+        let _guard = HaltOnPanic(self.sh);
         if let Err(why) = self.work() {
             self.sh.stop(why);
         }
