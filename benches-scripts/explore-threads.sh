@@ -7,13 +7,28 @@
 #   RUNS     runs per net and thread count, best wall time kept (default 3);
 #   MCC_DIR  the nets (default tests/data/mcc, a copy of shared/data/mcc);
 #   EXACT=1  also measure the level-synchronous engine (exact BFS order);
-#   ANALYZE  a prebuilt `analyze` example binary (e.g. a static musl build
-#            copied to another machine: `cargo build --release -p mcl-net
-#            --example analyze --target x86_64-unknown-linux-musl`); by
-#            default it is built here with cargo.
+#   ANALYZE  a prebuilt `analyze` example binary; by default it is built
+#            here with cargo.
+#
+# For a machine without Rust (e.g. 16 cores), build a static binary here
+# and copy it there with this script and tests/data/mcc (or set MCC_DIR):
+#   RUSTFLAGS="-C target-feature=+crt-static" cargo build --release \
+#     -p mcl-net --example analyze --target x86_64-unknown-linux-gnu
+#   # -> target/x86_64-unknown-linux-gnu/release/examples/analyze (static
+#   #    glibc, glibc's allocator: the one the numbers here were taken with)
+# or, with musl (`rustup target add x86_64-unknown-linux-musl` and
+# `apt-get install musl-tools`: criterion, a dev-dependency, builds C code):
+#   cargo build --release -p mcl-net --example analyze \
+#     --target x86_64-unknown-linux-musl
+# then on the other machine:
+#   ANALYZE=./analyze MCC_DIR=./mcc THREADS="1 2 4 8 16" EXACT=1 \
+#     ./explore-threads.sh
 #
 # One thread runs the sequential BFS; more threads run the unordered engine
-# (`Options::exact_order = false`, `mcl-net/src/explore/unordered.rs`).
+# (`Options::exact_order = false`, `mcl-net/src/explore/unordered.rs`: one
+# shared lock-free table, work stealing); EXACT=1 adds the level-synchronous
+# `parallel.rs`. On a machine shared with other work, compare the "cpu"
+# column (total work) rather than the wall times.
 # Rates are states / the example's own wall-clock timer of the exploration
 # (PNML parsing excluded); "cpu" is the process's user + system time. Every
 # run must find the same state and edge counts, or the script says so. The

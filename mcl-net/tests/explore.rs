@@ -263,6 +263,17 @@ fn unordered_threads_find_the_same_state_space() {
     assert_unordered_agrees(&net, &opts(Semantics::Plain), &seq, 3);
 }
 
+/// More threads than cores on a two-word net whose 104976 states outgrow
+/// the shared table several times (rehashed on all threads): threads are
+/// descheduled in the middle of inserts and stealing.
+#[test]
+fn unordered_threads_share_a_growing_table() {
+    let net = rings(18);
+    let seq = explore(&net, &opts(Semantics::Plain));
+    assert_eq!(seq.len(), 18usize.pow(4));
+    assert_unordered_agrees(&net, &opts(Semantics::Plain), &seq, 8);
+}
+
 #[test]
 fn unordered_engine_stops_at_the_state_limit() {
     for threads in [2, 4] {

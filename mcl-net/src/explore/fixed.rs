@@ -45,10 +45,6 @@ impl<const W: usize> FixedTable<W> {
         FixedTable { slots: hw::huge_vec(cap, Self::EMPTY), mask: cap - 1, len: 0 }
     }
 
-    pub(super) fn capacity(&self) -> usize {
-        self.slots.len()
-    }
-
     pub(super) fn grow(&mut self) {
         let cap = self.slots.len() * 2;
         let mask = cap - 1;

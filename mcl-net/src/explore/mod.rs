@@ -11,18 +11,19 @@
 //! a flat arena that doubles as the BFS queue and looks successors up in an
 //! open-addressing table with the packed marking stored inline (`fixed.rs`
 //! specialises it for markings of up to 8 words). With [`Options::threads`]
-//! above 1, the states are partitioned by hash over worker threads, in one
-//! of two ways ([`Options::exact_order`]):
+//! above 1, the work is shared by worker threads in one of two ways
+//! ([`Options::exact_order`]):
 //!
-//! * `parallel.rs` (exact order, the default) goes level by level and numbers
-//!   the states exactly as the sequential search does, so dead markings come
-//!   with shortest paths; the barrier at every level limits its speed-up.
-//!   Used wherever a shortest counterexample or the BFS numbering matters.
-//! * `unordered.rs` lets every worker expand its own states continuously and
-//!   send successors to their owners in batches, with no barrier; it gives
-//!   the same counts, deadlock verdict, bounds and vanishing markings, and
-//!   real (not always shortest) paths. `mcl analyze --threads N` uses it
-//!   unless `--shortest-paths` is given.
+//! * `parallel.rs` (exact order, the default) partitions the states by hash
+//!   and goes level by level, numbering the states exactly as the
+//!   sequential search does, so dead markings come with shortest paths; the
+//!   barrier at every level limits its speed-up. Used wherever a shortest
+//!   counterexample or the BFS numbering matters.
+//! * `unordered.rs` keeps one lock-free table shared by all threads, which
+//!   expand chunks of states continuously and steal chunks from each other,
+//!   with no barrier; it gives the same counts, deadlock verdict, bounds and
+//!   vanishing markings, and real (not always shortest) paths. `mcl analyze
+//!   --threads N` uses it unless `--shortest-paths` is given.
 //!
 //! `stubborn.rs`
 //! explores with stubborn sets instead ([`explore_por`]: deadlocks exact,
@@ -81,7 +82,8 @@ pub struct Options {
     /// the same states, edges, dead markings, vanishing markings and bounds,
     /// but other ids, and paths that are real but not always shortest. One
     /// thread always runs the sequential BFS. The unordered engine may stop
-    /// a few states short of `max_states` (see `unordered.rs`).
+    /// short of `max_states` (by at most the ids other threads' batches
+    /// have reserved; see `unordered.rs`).
     pub exact_order: bool,
     /// Keep the edges (state, ready transition, successor) for
     /// [`StateSpace::successors`] and [`StateSpace::coreachable`].
