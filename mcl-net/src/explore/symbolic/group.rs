@@ -10,12 +10,14 @@
 //! that move a token inside a group into changes of one level (a processor's
 //! states, a bus and the accesses it serves in SharedMemory).
 
+use rustc_hash::{FxHashMap, FxHashSet};
+
 use crate::model::{Net, PlaceId};
-use crate::structural::{p_invariants, Limits};
 
 /// Cap on the rows of the semiflow computation: grouping is an
-/// optimisation, a net whose semiflows are expensive is not grouped.
-const MAX_ROWS: usize = 2_000;
+/// optimisation, a net whose semiflows are expensive is grouped only by
+/// those found before the cap.
+const MAX_ROWS: usize = 20_000;
 
 /// The places of one level.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -44,17 +46,9 @@ impl Unit {
 pub(super) fn units(net: &Net, group: bool) -> Vec<Unit> {
     let mut in_group = vec![false; net.place_count()];
     let mut groups: Vec<Vec<PlaceId>> = Vec::new();
-    if group && net.place_count() > 1 {
-        let m0 = net.initial_marking();
-        let limits = Limits { max_rows: MAX_ROWS, ..Limits::default() };
-        let mut flows: Vec<Vec<PlaceId>> = p_invariants(net, &limits)
-            .invariants
-            .into_iter()
-            .filter(|inv| inv.iter().all(|&(_, w)| w == 1))
-            .filter(|inv| inv.iter().map(|&(p, _)| u64::from(m0.get(p))).sum::<u64>() == 1)
-            .map(|inv| inv.into_iter().map(|(p, _)| p).collect())
-            .collect();
-        flows.sort_by_key(|f: &Vec<PlaceId>| std::cmp::Reverse(f.len()));
+    if group {
+        let mut flows = unit_semiflows(net);
+        flows.sort_by_key(|f| std::cmp::Reverse(f.len()));
         for flow in flows {
             let rest: Vec<PlaceId> = flow.into_iter().filter(|p| !in_group[p.index()]).collect();
             if rest.len() >= 2 {
@@ -74,6 +68,138 @@ pub(super) fn units(net: &Net, group: bool) -> Vec<Unit> {
     }
     units.sort_by_key(|u| u.places()[0]);
     units
+}
+
+/// One row of the Farkas tableau restricted to 0/1 weights: the places `y`
+/// (sorted), their initial tokens, and `c = y·C` (sparse, by transition).
+#[derive(Clone)]
+struct Row {
+    c: Vec<(u32, i64)>,
+    y: Vec<u32>,
+    tokens: u32,
+}
+
+/// Unit-weight P-semiflows of `net` holding one initial token: the Farkas
+/// algorithm (columns eliminated fewest-pairs first) keeping only rows with
+/// 0/1 weights and at most one token, i.e. combining two rows only when
+/// their coefficients cancel one for one, their places are disjoint and
+/// they hold one token between them. It may miss some such semiflows (a
+/// weighted intermediate row); every one it returns is a semiflow.
+fn unit_semiflows(net: &Net) -> Vec<Vec<PlaceId>> {
+    let m0 = net.initial_marking();
+    let mut c: Vec<FxHashMap<u32, i64>> = vec![FxHashMap::default(); net.place_count()];
+    for t in net.transition_ids() {
+        for &(p, w) in net.pre(t) {
+            *c[p.index()].entry(t.index() as u32).or_default() -= i64::from(w);
+        }
+        for &(p, w) in net.post(t) {
+            *c[p.index()].entry(t.index() as u32).or_default() += i64::from(w);
+        }
+    }
+    let mut rows: Vec<Row> = net
+        .place_ids()
+        .filter(|&p| m0.get(p) <= 1)
+        .map(|p| {
+            let mut c: Vec<(u32, i64)> = c[p.index()].iter().filter(|e| *e.1 != 0).map(|(&t, &v)| (t, v)).collect();
+            c.sort_unstable();
+            Row { c, y: vec![p.index() as u32], tokens: m0.get(p) }
+        })
+        .collect();
+    loop {
+        // The column with the fewest (positive, negative) pairs.
+        let mut sign: FxHashMap<u32, (usize, usize)> = FxHashMap::default();
+        for r in &rows {
+            for &(t, v) in &r.c {
+                let e = sign.entry(t).or_default();
+                if v > 0 {
+                    e.0 += 1;
+                } else {
+                    e.1 += 1;
+                }
+            }
+        }
+        let Some((&col, _)) = sign.iter().min_by_key(|(&t, &(pos, neg))| (pos * neg, t)) else { break };
+        let at = |r: &Row| r.c.binary_search_by_key(&col, |&(t, _)| t).map_or(0, |i| r.c[i].1);
+        let (mut next, mut pos, mut neg) = (Vec::new(), Vec::new(), Vec::new());
+        for r in rows {
+            match at(&r) {
+                0 => next.push(r),
+                v if v > 0 => pos.push(r),
+                _ => neg.push(r),
+            }
+        }
+        let mut seen: FxHashSet<Vec<u32>> = next.iter().map(|r| r.y.clone()).collect();
+        'pairs: for p in &pos {
+            for n in &neg {
+                if at(p) != -at(n) || p.tokens + n.tokens > 1 || !disjoint(&p.y, &n.y) {
+                    continue;
+                }
+                let mut y: Vec<u32> = p.y.iter().chain(&n.y).copied().collect();
+                y.sort_unstable();
+                if !seen.insert(y.clone()) {
+                    continue;
+                }
+                next.push(Row { c: add(&p.c, &n.c), y, tokens: p.tokens + n.tokens });
+                if next.len() > MAX_ROWS {
+                    break 'pairs;
+                }
+            }
+        }
+        rows = next;
+        if rows.len() > MAX_ROWS {
+            rows.retain(|r| r.c.is_empty());
+            break;
+        }
+    }
+    rows.into_iter()
+        .filter(|r| r.c.is_empty() && r.tokens == 1)
+        .map(|r| r.y.into_iter().map(PlaceId).collect())
+        .collect()
+}
+
+/// Whether two sorted lists share no element.
+fn disjoint(a: &[u32], b: &[u32]) -> bool {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => return false,
+        }
+    }
+    true
+}
+
+/// `a + b` for sparse sorted vectors (zeros dropped).
+fn add(a: &[(u32, i64)], b: &[(u32, i64)]) -> Vec<(u32, i64)> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let e = match (a.get(i), b.get(j)) {
+            (Some(&x), Some(&y)) if x.0 == y.0 => {
+                i += 1;
+                j += 1;
+                (x.0, x.1 + y.1)
+            }
+            (Some(&x), Some(&y)) if x.0 < y.0 => {
+                i += 1;
+                x
+            }
+            (Some(&x), None) => {
+                i += 1;
+                x
+            }
+            (_, Some(&y)) => {
+                j += 1;
+                y
+            }
+            (None, None) => break,
+        };
+        if e.1 != 0 {
+            out.push(e);
+        }
+    }
+    out
 }
 
 /// The units in level order and where each place sits.
@@ -194,5 +320,54 @@ mod tests {
         assert_eq!(layout.decode(&[2, 7]), vec![0, 1, 0, 7]);
         assert_eq!(layout.encode(&[1, 1, 0, 0]), None);
         assert_eq!((layout.level_of[d.index()], layout.slot_of[ps[2].index()]), (1, 2));
+    }
+
+    /// On SharedMemory-5 every flow found keeps its token sum under every
+    /// transition and holds one token; the bus with its 20 accesses and
+    /// each processor's three other states become groups.
+    #[test]
+    fn shared_memory_groups_are_one_token_semiflows() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/mcc/SharedMemory-PT-000005.pnml");
+        let net = crate::read_pnml(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let m0 = net.initial_marking();
+        let flows = unit_semiflows(&net);
+        assert!(!flows.is_empty());
+        for f in &flows {
+            assert_eq!(f.iter().map(|&p| m0.get(p)).sum::<u32>(), 1);
+            for t in net.transition_ids() {
+                let d: i64 = net.delta(t).iter().filter(|(p, _)| f.contains(p)).map(|&(_, d)| d).sum();
+                assert_eq!(d, 0, "{t:?} changes {f:?}");
+            }
+        }
+        let sizes: Vec<usize> = units(&net, true)
+            .iter()
+            .filter_map(|u| match u {
+                Unit::Group(g) => Some(g.len()),
+                Unit::Place(_) => None,
+            })
+            .collect();
+        assert_eq!(sizes.iter().filter(|&&n| n == 21).count(), 1, "{sizes:?}");
+        assert_eq!(sizes.iter().filter(|&&n| n == 3).count(), 5, "{sizes:?}");
+    }
+
+    /// A cycle holding two tokens, or one whose token a transition can
+    /// destroy, is not a group.
+    #[test]
+    fn no_group_without_a_one_token_semiflow() {
+        for (tokens, leak) in [(2, false), (1, true)] {
+            let mut b = NetBuilder::new("cycle");
+            let x = b.add_place(Place::new("x").with_tokens(tokens));
+            let y = b.add_place(Place::new("y"));
+            let t = b.add_transition(Transition::new("t"));
+            b.add_input(x, t, 1).add_output(t, y, 1);
+            let u = b.add_transition(Transition::new("u"));
+            b.add_input(y, u, 1).add_output(u, x, 1);
+            if leak {
+                let l = b.add_transition(Transition::new("leak"));
+                b.add_input(y, l, 1);
+            }
+            let net = b.build().unwrap();
+            assert_eq!(units(&net, true), vec![Unit::Place(x), Unit::Place(y)]);
+        }
     }
 }
