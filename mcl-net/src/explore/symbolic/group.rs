@@ -19,6 +19,9 @@ use crate::model::{Net, PlaceId};
 /// those found before the cap.
 const MAX_ROWS: usize = 20_000;
 
+/// Cap on the pairs of rows examined, for the same reason.
+const MAX_PAIRS: usize = 20_000_000;
+
 /// The places of one level.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(super) enum Unit {
@@ -84,7 +87,9 @@ struct Row {
 /// 0/1 weights and at most one token, i.e. combining two rows only when
 /// their coefficients cancel one for one, their places are disjoint and
 /// they hold one token between them. It may miss some such semiflows (a
-/// weighted intermediate row); every one it returns is a semiflow.
+/// weighted intermediate row, or the caps [`MAX_ROWS`] and [`MAX_PAIRS`]
+/// hit: then only the rows already solved count); every one it returns is
+/// a semiflow.
 fn unit_semiflows(net: &Net) -> Vec<Vec<PlaceId>> {
     let m0 = net.initial_marking();
     let mut c: Vec<FxHashMap<u32, i64>> = vec![FxHashMap::default(); net.place_count()];
@@ -105,6 +110,7 @@ fn unit_semiflows(net: &Net) -> Vec<Vec<PlaceId>> {
             Row { c, y: vec![p.index() as u32], tokens: m0.get(p) }
         })
         .collect();
+    let mut pairs = 0usize;
     loop {
         // The column with the fewest (positive, negative) pairs.
         let mut sign: FxHashMap<u32, (usize, usize)> = FxHashMap::default();
@@ -131,6 +137,10 @@ fn unit_semiflows(net: &Net) -> Vec<Vec<PlaceId>> {
         let mut seen: FxHashSet<Vec<u32>> = next.iter().map(|r| r.y.clone()).collect();
         'pairs: for p in &pos {
             for n in &neg {
+                pairs += 1;
+                if pairs > MAX_PAIRS {
+                    break 'pairs;
+                }
                 if at(p) != -at(n) || p.tokens + n.tokens > 1 || !disjoint(&p.y, &n.y) {
                     continue;
                 }
@@ -146,7 +156,7 @@ fn unit_semiflows(net: &Net) -> Vec<Vec<PlaceId>> {
             }
         }
         rows = next;
-        if rows.len() > MAX_ROWS {
+        if rows.len() > MAX_ROWS || pairs > MAX_PAIRS {
             rows.retain(|r| r.c.is_empty());
             break;
         }
