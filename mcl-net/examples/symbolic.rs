@@ -72,7 +72,7 @@ fn main() -> ExitCode {
         let show = |c: Option<u128>| c.map_or("-".into(), |c| c.to_string());
         let name = std::path::Path::new(&path).file_stem().map_or(path.clone(), |s| s.to_string_lossy().into_owned());
         if let Some(stop) = &r.stop {
-            println!("{name:<28} incomplete: {stop:?}");
+            println!("{name:<28} incomplete: {stop:?} ({} levels)", r.levels);
             continue;
         }
         println!(
