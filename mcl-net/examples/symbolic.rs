@@ -2,10 +2,11 @@
 //! states, edges, dead markings, diagram size and the wall time.
 //!
 //! ```text
-//! cargo run --release -p mcl-net --example symbolic -- [--order force|pnml] [--runs N] NET.pnml...
+//! cargo run --release -p mcl-net --example symbolic -- [--order force|pnml] [--no-group] [--runs N] NET.pnml...
 //! ```
 //!
-//! With `--runs N` each net is explored N times and the best time is kept.
+//! With `--runs N` each net is explored N times and the best time is kept;
+//! `--no-group` puts every place on its own level.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -29,6 +30,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             },
+            "--no-group" => opts.group = false,
             "--runs" => match args.next().and_then(|v| v.parse().ok()) {
                 Some(n) => runs = n,
                 None => {
@@ -40,12 +42,12 @@ fn main() -> ExitCode {
         }
     }
     if paths.is_empty() {
-        eprintln!("usage: symbolic [--order force|pnml] [--runs N] NET.pnml...");
+        eprintln!("usage: symbolic [--order force|pnml] [--no-group] [--runs N] NET.pnml...");
         return ExitCode::from(2);
     }
     println!(
-        "{:<28} {:>12} {:>12} {:>6} {:>9} {:>9} {:>10}",
-        "net", "states", "edges", "dead", "mdd", "created", "seconds"
+        "{:<28} {:>12} {:>12} {:>6} {:>6} {:>9} {:>9} {:>10}",
+        "net", "states", "edges", "dead", "levels", "mdd", "created", "seconds"
     );
     for path in paths {
         let net = match std::fs::read_to_string(&path)
@@ -70,14 +72,15 @@ fn main() -> ExitCode {
         let show = |c: Option<u128>| c.map_or("-".into(), |c| c.to_string());
         let name = std::path::Path::new(&path).file_stem().map_or(path.clone(), |s| s.to_string_lossy().into_owned());
         if let Some(stop) = &r.stop {
-            println!("{name:<28} incomplete: {stop:?}");
+            println!("{name:<28} incomplete: {stop:?} ({} levels)", r.levels);
             continue;
         }
         println!(
-            "{name:<28} {:>12} {:>12} {:>6} {:>9} {:>9} {:>10.4}",
+            "{name:<28} {:>12} {:>12} {:>6} {:>6} {:>9} {:>9} {:>10.4}",
             show(r.states),
             show(r.edges),
             show(r.dead_markings),
+            r.levels,
             r.mdd_nodes,
             r.nodes_created,
             best

@@ -3,8 +3,10 @@
 //! which of them enable none (the dead markings), and the largest value of
 //! each level (the place bounds).
 
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
+use super::group::Layout;
+use super::relation::Guard;
 use super::store::{NodeId, Res, Store, EMPTY, ONE};
 
 /// A number of markings: exact while it fits in a `u128`, always as an
@@ -42,12 +44,12 @@ pub(super) fn count(store: &Store, n: NodeId, memo: &mut FxHashMap<NodeId, Count
 }
 
 /// Number of tuples in `n` whose value at each level of `need` (`(level,
-/// least value)`, highest level first) is at least the one given: the
-/// markings of `n` that enable a transition with those input arcs.
+/// guard)`, highest level first) satisfies the guard: the markings of `n`
+/// that enable a transition with those guards.
 pub(super) fn count_enabled(
     store: &Store,
     n: NodeId,
-    need: &[(u32, u32)],
+    need: &[(u32, Guard)],
     counts: &mut FxHashMap<NodeId, Count>,
     memo: &mut FxHashMap<NodeId, Count>,
 ) -> Count {
@@ -59,10 +61,10 @@ pub(super) fn count_enabled(
     if let Some(&c) = memo.get(&n) {
         return c;
     }
-    let least = need.iter().find(|&&(l, _)| l == level).map_or(0, |&(_, w)| w);
+    let guard = need.iter().find(|&&(l, _)| l == level).map(|&(_, g)| g);
     let mut sum = Count::ZERO;
     for &(v, c) in store.children(n) {
-        if v >= least {
+        if guard.is_none_or(|g| g.holds(v)) {
             sum = sum.add(count_enabled(store, c, need, counts, memo));
         }
     }
@@ -76,7 +78,7 @@ pub(super) fn count_enabled(
 pub(super) fn without_enabled(
     store: &mut Store,
     n: NodeId,
-    need: &[(u32, u32)],
+    need: &[(u32, Guard)],
     memo: &mut FxHashMap<NodeId, NodeId>,
 ) -> Res<NodeId> {
     let Some(&(lowest, _)) = need.last() else { return Ok(EMPTY) };
@@ -88,10 +90,10 @@ pub(super) fn without_enabled(
     if let Some(&r) = memo.get(&n) {
         return Ok(r);
     }
-    let least = need.iter().find(|&&(l, _)| l == level).map_or(0, |&(_, w)| w);
+    let guard = need.iter().find(|&&(l, _)| l == level).map(|&(_, g)| g);
     let mut out = Vec::new();
     for (v, c) in store.children(n).to_vec() {
-        let r = if v < least { c } else { without_enabled(store, c, need, memo)? };
+        let r = if guard.is_some_and(|g| !g.holds(v)) { c } else { without_enabled(store, c, need, memo)? };
         if r != EMPTY {
             out.push((v, r));
         }
@@ -101,15 +103,17 @@ pub(super) fn without_enabled(
     Ok(r)
 }
 
-/// The tuples of `n` whose value is 0 at every level of `zero` (highest
-/// first): the markings of `n` that leave those places empty.
+/// The tuples of `n` that put no token on the places `zero` (`(level,
+/// slots)`, highest level first): the markings of `n` that leave those
+/// places empty.
 pub(super) fn only_zero(
     store: &mut Store,
+    layout: &Layout,
     n: NodeId,
-    zero: &[u32],
+    zero: &[(u32, Vec<u32>)],
     memo: &mut FxHashMap<NodeId, NodeId>,
 ) -> Res<NodeId> {
-    let Some(&lowest) = zero.last() else { return Ok(n) };
+    let Some(&(lowest, _)) = zero.last() else { return Ok(n) };
     let level = store.level(n);
     if n == EMPTY || level < lowest {
         return Ok(n);
@@ -117,13 +121,13 @@ pub(super) fn only_zero(
     if let Some(&r) = memo.get(&n) {
         return Ok(r);
     }
-    let restricted = zero.contains(&level);
+    let slots: &[u32] = zero.iter().find(|(l, _)| *l == level).map_or(&[], |(_, s)| s);
     let mut out = Vec::new();
     for (v, c) in store.children(n).to_vec() {
-        if restricted && v > 0 {
+        if slots.iter().any(|&s| layout.tokens(level, v, s) > 0) {
             continue;
         }
-        let r = only_zero(store, c, zero, memo)?;
+        let r = only_zero(store, layout, c, zero, memo)?;
         if r != EMPTY {
             out.push((v, r));
         }
@@ -133,27 +137,39 @@ pub(super) fn only_zero(
     Ok(r)
 }
 
-/// The largest value at each level over the tuples of `root`
-/// (`bounds[level]`), and the largest sum of values of one tuple.
-pub(super) fn bounds(store: &Store, root: NodeId, levels: u32) -> (Vec<u32>, u64) {
-    let mut bound = vec![0u32; levels as usize + 1];
+/// The bound of every place (net order) over the tuples of `root`, and
+/// the largest number of tokens in one tuple.
+pub(super) fn bounds(store: &Store, layout: &Layout, root: NodeId) -> (Vec<u32>, u64) {
+    let mut values: Vec<FxHashSet<u32>> = vec![FxHashSet::default(); layout.levels() as usize + 1];
     let mut max_sum: FxHashMap<NodeId, u64> = FxHashMap::default();
-    fn walk(store: &Store, n: NodeId, bound: &mut [u32], max_sum: &mut FxHashMap<NodeId, u64>) -> u64 {
-        if store.level(n) == 0 {
+    fn walk(
+        store: &Store,
+        layout: &Layout,
+        n: NodeId,
+        values: &mut [FxHashSet<u32>],
+        max_sum: &mut FxHashMap<NodeId, u64>,
+    ) -> u64 {
+        let level = store.level(n);
+        if level == 0 {
             return 0;
         }
         if let Some(&s) = max_sum.get(&n) {
             return s;
         }
-        let level = store.level(n) as usize;
         let mut best = 0;
         for &(v, c) in store.children(n) {
-            bound[level] = bound[level].max(v);
-            best = best.max(u64::from(v) + walk(store, c, bound, max_sum));
+            values[level as usize].insert(v);
+            best = best.max(u64::from(layout.total(level, v)) + walk(store, layout, c, values, max_sum));
         }
         max_sum.insert(n, best);
         best
     }
-    let total = if root == EMPTY { 0 } else { walk(store, root, &mut bound, &mut max_sum) };
-    (bound, total)
+    let total = if root == EMPTY { 0 } else { walk(store, layout, root, &mut values, &mut max_sum) };
+    let bounds = (0..layout.level_of.len())
+        .map(|p| {
+            let (level, slot) = (layout.level_of[p], layout.slot_of[p]);
+            values[level as usize].iter().map(|&v| layout.tokens(level, v, slot)).max().unwrap_or(0)
+        })
+        .collect();
+    (bounds, total)
 }

@@ -1,8 +1,10 @@
 //! Symbolic reachability with multi-valued decision diagrams (MDDs):
 //! `mcl analyze --method symbolic`, plain P/T rule.
 //!
-//! One level per place (the order of `order.rs`), the token count as the
-//! value. The reachable markings are built by saturation (`saturate.rs`)
+//! One level per place, the token count as the value, except that
+//! mutually exclusive places (found from P-semiflows, `group.rs`) share a
+//! level whose value says which of them is marked; levels in the order of
+//! `order.rs`. The reachable markings are built by saturation (`saturate.rs`)
 //! over the per-transition local relations of `relation.rs` in the node
 //! store of `store.rs`; `count.rs` counts them exactly (a memoised path
 //! count), counts the edges (for every transition, the reachable markings
@@ -21,8 +23,10 @@ use rustc_hash::FxHashMap;
 use serde::Serialize;
 
 use crate::model::{Net, PlaceId, TransitionId};
+use group::Layout;
 
 mod count;
+mod group;
 mod order;
 mod relation;
 mod saturate;
@@ -46,6 +50,9 @@ pub struct SymbolicOptions {
     pub order: VariableOrder,
     /// Look for a shortest firing sequence to a dead marking.
     pub witness: bool,
+    /// Put mutually exclusive places (covered by a unit-weight P-semiflow
+    /// with one token) on one level; false: one level per place.
+    pub group: bool,
     /// Groups of places (one per component, e.g. a vehicle's final
     /// places): a dead marking that marks some place of every group is a
     /// proper end (*terminal*), not a deadlock. Empty (the default): every
@@ -66,6 +73,7 @@ impl Default for SymbolicOptions {
             max_tokens: DEFAULT_MAX_TOKENS,
             order: VariableOrder::default(),
             witness: true,
+            group: true,
             terminal: Vec::new(),
         }
     }
@@ -136,6 +144,8 @@ pub struct SymbolicReport {
     pub dead_example: Option<SymbolicDead>,
     /// The variable order used.
     pub order: VariableOrder,
+    /// Levels of the diagram (places, less those merged into groups).
+    pub levels: usize,
     /// Nodes of the diagram of the reachable markings.
     pub mdd_nodes: usize,
     /// Nodes created in all (the peak of the store).
@@ -161,16 +171,8 @@ pub fn explore_symbolic(net: &Net, opts: &SymbolicOptions) -> SymbolicReport {
 }
 
 fn run(net: &Net, opts: &SymbolicOptions) -> SymbolicReport {
-    let place_at = order::order(net, opts.order);
-    let levels = place_at.len() as u32;
-    // Top level first: place_at[i] sits at level `levels - i`.
-    let mut pos_of = vec![0usize; place_at.len()];
-    let mut level_of = vec![0u32; place_at.len()];
-    for (i, p) in place_at.iter().enumerate() {
-        pos_of[p.index()] = i;
-        level_of[p.index()] = levels - i as u32;
-    }
-    let rel = Relation::new(net, &level_of, levels, opts.max_tokens);
+    let layout = order::order(net, opts.order, group::units(net, opts.group));
+    let rel = Relation::new(net, &layout, opts.max_tokens);
     let mut store = Store::new(opts.max_nodes);
     let mut report = SymbolicReport {
         complete: false,
@@ -187,16 +189,17 @@ fn run(net: &Net, opts: &SymbolicOptions) -> SymbolicReport {
         max_tokens_per_marking: 0,
         dead_example: None,
         order: opts.order,
+        levels: layout.units.len(),
         mdd_nodes: 0,
         nodes_created: 0,
     };
-    match fill(net, opts, &rel, &mut store, &place_at, &pos_of, &level_of, &mut report) {
+    match fill(net, opts, &rel, &mut store, &layout, &mut report) {
         Ok(()) => report.complete = true,
         Err(limit) => {
             let stop = match limit {
                 Limit::Nodes => SymbolicStop::NodeLimit { max_nodes: opts.max_nodes },
                 Limit::Tokens(level) => SymbolicStop::TokenLimit {
-                    place: net.places()[place_at[(levels - level) as usize].index()].id.to_string(),
+                    place: net.places()[layout.unit(level).places()[0].index()].id.to_string(),
                     max_tokens: opts.max_tokens,
                 },
             };
@@ -210,27 +213,27 @@ fn run(net: &Net, opts: &SymbolicOptions) -> SymbolicReport {
 }
 
 /// The initial marking as a diagram.
-fn initial(net: &Net, store: &mut Store, place_at: &[PlaceId]) -> Res<NodeId> {
+fn initial(net: &Net, store: &mut Store, layout: &Layout) -> Res<NodeId> {
     let m0 = net.initial_marking();
+    let m: Vec<u32> = net.place_ids().map(|p| m0.get(p)).collect();
+    // A group is a semiflow's places with one initial token in all.
+    let tuple = layout.encode(&m).expect("a group holds at most one initial token");
     let mut n = ONE;
-    for (i, p) in place_at.iter().rev().enumerate() {
-        n = store.make(i as u32 + 1, &[(m0.get(*p), n)])?;
+    for (i, &v) in tuple.iter().rev().enumerate() {
+        n = store.make(i as u32 + 1, &[(v, n)])?;
     }
     Ok(n)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn fill(
     net: &Net,
     opts: &SymbolicOptions,
     rel: &Relation,
     store: &mut Store,
-    place_at: &[PlaceId],
-    pos_of: &[usize],
-    level_of: &[u32],
+    layout: &Layout,
     report: &mut SymbolicReport,
 ) -> Res<()> {
-    let init = initial(net, store, place_at)?;
+    let init = initial(net, store, layout)?;
     let reach = saturate::Saturation::new(store, rel).saturate(init)?;
     let mut counts: FxHashMap<NodeId, Count> = FxHashMap::default();
     let states = count::count(store, reach, &mut counts);
@@ -239,8 +242,7 @@ fn fill(
     let mut edges = Count { exact: Some(0), approx: 0.0 };
     let mut dead = reach;
     for t in net.transition_ids() {
-        let mut need: Vec<(u32, u32)> = net.pre(t).iter().map(|&(p, w)| (level_of[p.index()], w)).collect();
-        need.sort_by_key(|e| std::cmp::Reverse(e.0));
+        let need = relation::guards(net, layout, t);
         let e = count::count_enabled(store, reach, &need, &mut counts, &mut FxHashMap::default());
         edges = Count {
             exact: edges.exact.zip(e.exact).and_then(|(a, b)| a.checked_add(b)),
@@ -255,18 +257,23 @@ fn fill(
     } else {
         let mut stuck = EMPTY;
         for group in &opts.terminal {
-            let mut zero: Vec<u32> = group.iter().filter_map(|p| level_of.get(p.index()).copied()).collect();
-            zero.sort_unstable_by_key(|&l| std::cmp::Reverse(l));
-            zero.dedup();
-            let z = count::only_zero(store, dead, &zero, &mut FxHashMap::default())?;
+            let mut zero: Vec<(u32, Vec<u32>)> = Vec::new();
+            for p in group.iter().filter(|p| p.index() < layout.level_of.len()) {
+                let (level, slot) = (layout.level_of[p.index()], layout.slot_of[p.index()]);
+                match zero.iter_mut().find(|(l, _)| *l == level) {
+                    Some((_, slots)) => slots.push(slot),
+                    None => zero.push((level, vec![slot])),
+                }
+            }
+            zero.sort_unstable_by_key(|&(l, _)| std::cmp::Reverse(l));
+            let z = count::only_zero(store, layout, dead, &zero, &mut FxHashMap::default())?;
             stuck = store.union(stuck, z)?;
         }
         stuck
     };
     let terminal = store.diff(dead, stuck)?;
     let terminal_count = count::count(store, terminal, &mut counts);
-    let (by_level, max_sum) = count::bounds(store, reach, place_at.len() as u32);
-    let bounds: Vec<u32> = level_of.iter().map(|&l| by_level[l as usize]).collect();
+    let (bounds, max_sum) = count::bounds(store, layout, reach);
     let max_tokens = bounds.iter().copied().max().unwrap_or(0);
     let mut reachable_nodes = FxHashMap::default();
     mark(store, reach, &mut reachable_nodes);
@@ -285,12 +292,12 @@ fn fill(
         ..report.clone()
     };
     if opts.witness && stuck != EMPTY {
-        if let Some((m, path)) = witness::shortest_path(net, store, rel, init, stuck, pos_of)? {
+        if let Some((m, path)) = witness::shortest_path(net, store, rel, layout, init, stuck)? {
             report.dead_example = Some(SymbolicDead {
                 marking: net
                     .place_ids()
                     .filter_map(|p| {
-                        let k = m[pos_of[p.index()]];
+                        let k = m[p.index()];
                         (k > 0).then(|| (net.places()[p.index()].id.to_string(), k))
                     })
                     .collect(),

@@ -58,8 +58,7 @@ impl<'a> Saturation<'a> {
                 queued.remove(&i);
                 for &e in events {
                     let ev = &rel.events[e as usize];
-                    let (_, pre, post) = ev.local[0];
-                    let Some(j) = ev.next(k, pre, post, i, rel.max_tokens)? else { continue };
+                    let Some(j) = ev.local[0].1.next(k, i, rel.max_tokens)? else { continue };
                     let f = self.relprod(get(&r, i), e)?;
                     if insert_union(self.store, &mut r, j, f)? && queued.insert(j) {
                         queue.push(j);
@@ -86,7 +85,7 @@ impl<'a> Saturation<'a> {
         let mut out: Vec<(u32, NodeId)> = Vec::new();
         for (i, c) in self.store.children(q).to_vec() {
             let j = match local {
-                Some((pre, post)) => match ev.next(k, pre, post, i, rel.max_tokens)? {
+                Some(effect) => match effect.next(k, i, rel.max_tokens)? {
                     Some(j) => j,
                     None => continue,
                 },

@@ -5,21 +5,21 @@
 
 use rustc_hash::FxHashMap;
 
+use super::group::Layout;
 use super::relation::Relation;
 use super::store::{NodeId, Res, Store, EMPTY};
 use crate::model::{Net, TransitionId};
 
 /// A shortest path from the marking `init` to a marking of `target`, as the
-/// dead marking (top level first) and the transitions fired; `None` when
-/// `target` is not reachable from `init`. `pos_of[p]` is the index of place
-/// `p` in a tuple.
+/// dead marking (tokens per place, net order) and the transitions fired;
+/// `None` when `target` is not reachable from `init`.
 pub(super) fn shortest_path(
     net: &Net,
     store: &mut Store,
     rel: &Relation,
+    layout: &Layout,
     init: NodeId,
     target: NodeId,
-    pos_of: &[usize],
 ) -> Res<Option<(Vec<u32>, Vec<TransitionId>)>> {
     let mut cache: FxHashMap<(NodeId, u32), NodeId> = FxHashMap::default();
     let mut layers = vec![init];
@@ -42,21 +42,22 @@ pub(super) fn shortest_path(
         seen = store.union(seen, new)?;
         layers.push(new);
     };
-    let dead = store.pick(hit);
+    let dead = layout.decode(&store.pick(hit));
     let mut m = dead.clone();
     let mut path = Vec::with_capacity(layers.len() - 1);
     for layer in layers[..layers.len() - 1].iter().rev() {
         let step = net.transition_ids().find_map(|t| {
             let mut prev = m.clone();
             for &(p, w) in net.post(t) {
-                let x = &mut prev[pos_of[p.index()]];
+                let x = &mut prev[p.index()];
                 *x = x.checked_sub(w)?;
             }
             for &(p, w) in net.pre(t) {
-                let x = &mut prev[pos_of[p.index()]];
+                let x = &mut prev[p.index()];
                 *x = x.checked_add(w)?;
             }
-            store.contains(*layer, prev.iter().copied()).then_some((t, prev))
+            let tuple = layout.encode(&prev)?;
+            store.contains(*layer, tuple).then_some((t, prev))
         });
         // Every marking of a layer has a predecessor in the one before.
         let Some((t, prev)) = step else { return Ok(None) };
