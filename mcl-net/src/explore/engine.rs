@@ -20,6 +20,7 @@
 //! * **Trigger places.** A transition is only tested when one designated input
 //!   place is marked; unmarked parts of the net cost nothing.
 
+use super::fold::KeyFold;
 use super::{Options, Semantics, StateId, StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 use crate::semantics::{self, MarkingClass};
@@ -51,8 +52,19 @@ impl Layout {
         Layout { places, bits, words, per_word, mask, shift, high }
     }
 
+    /// Fields per word.
+    pub(super) fn per_word(&self) -> usize {
+        self.per_word
+    }
+
+    /// The largest value of a field.
+    pub(super) fn mask(&self) -> u64 {
+        self.mask
+    }
+
+    /// (word, shift) of place `p`'s field.
     #[inline]
-    fn locate(&self, p: usize) -> (usize, u32) {
+    pub(super) fn locate(&self, p: usize) -> (usize, u32) {
         (p / self.per_word, (p % self.per_word) as u32 * self.bits)
     }
 
@@ -111,6 +123,8 @@ pub(super) struct Compiled {
     pub(super) dhash: Vec<u64>,
     pub(super) initial_hash: u64,
     pub(super) initial: Vec<u64>,
+    /// Hash-table keys of the sequential search ([`KeyFold`]).
+    pub(super) fold: KeyFold,
     /// Whether the MCL rule can remove enabled transitions.
     mcl_rule: bool,
     pub(super) semantics: Semantics,
@@ -141,7 +155,9 @@ impl Compiled {
         self.trans.len()
     }
 
-    fn new(net: &Net, semantics: Semantics, bits: u32) -> Self {
+    /// `keep`: the places whose tokens determine the marking
+    /// ([`super::fold::independent_places`]), for shorter keys.
+    fn new(net: &Net, semantics: Semantics, bits: u32, keep: Option<&[bool]>) -> Self {
         let np = net.place_count();
         let layout = Layout::new(np, bits);
         let mut seed = 0x6D63_6C2D_6E65_7421u64;
@@ -222,6 +238,7 @@ impl Compiled {
             dhash,
             initial_hash,
             initial: layout.pack(&initial_marking),
+            fold: KeyFold::new(&layout, keep),
             // With only immediate, unprioritized transitions the MCL rule keeps
             // every enabled transition: skip it.
             mcl_rule: semantics == Semantics::Mcl
@@ -529,22 +546,16 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
     let max = opts.max_states.clamp(1, (u32::MAX - 1) as usize);
     let initial_max = net.places().iter().map(|p| p.initial).max().unwrap_or(0);
     let mut bits = bits_for(initial_max);
+    let keep = super::fold::independent_places(net);
     loop {
-        let c = Compiled::new(net, opts.semantics, bits);
+        let c = Compiled::new(net, opts.semantics, bits, keep.as_deref());
         // Recording edges and cutting markings are done by the sequential engines.
         let sequential = opts.threads == 1 || opts.record_edges || opts.cut_above.is_some();
         let result = if sequential {
             let x = Extras::new(opts);
             let extras = opts.record_edges || opts.cut_above.is_some();
             match (c.layout.words, extras) {
-                (1, false) => super::fixed::run::<1, false>(&c, net, max, x),
-                (2, false) => super::fixed::run::<2, false>(&c, net, max, x),
-                (3, false) => super::fixed::run::<3, false>(&c, net, max, x),
-                (4, false) => super::fixed::run::<4, false>(&c, net, max, x),
-                (5, false) => super::fixed::run::<5, false>(&c, net, max, x),
-                (6, false) => super::fixed::run::<6, false>(&c, net, max, x),
-                (7, false) => super::fixed::run::<7, false>(&c, net, max, x),
-                (8, false) => super::fixed::run::<8, false>(&c, net, max, x),
+                (1..=8, false) => super::fixed::run_keyed(&c, net, max, x),
                 (1, true) => super::fixed::run::<1, true>(&c, net, max, x),
                 (2, true) => super::fixed::run::<2, true>(&c, net, max, x),
                 (3, true) => super::fixed::run::<3, true>(&c, net, max, x),
@@ -597,7 +608,7 @@ fn default_threads() -> usize {
 }
 
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option<StateSpace> {
+pub(super) fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option<StateSpace> {
     let l = c.layout;
     let w = l.words;
     let mut arena: Vec<u64> = c.initial.clone();

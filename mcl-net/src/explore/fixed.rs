@@ -17,6 +17,8 @@
 //!   order), each lookup prefetching the slot [`PREFETCH_AHEAD`] lookups
 //!   later; the new states are numbered afterwards in BFS order, so the
 //!   numbering is that of a one-by-one search.
+//! * The table keys are the markings folded to `K` ≤ `W` words by the net's
+//!   place invariants ([`super::fold`]); the arena keeps whole markings.
 
 use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
 use super::hw;
@@ -248,10 +250,8 @@ const BUCKET_BITS: u32 = 12;
 /// How many lookups ahead the sorted pass prefetches.
 const PREFETCH_AHEAD: usize = 16;
 
-/// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-///
-/// `EXTRAS` compiles in the calls to `extras` (edges, cut); without it the
-/// default search pays nothing for them and uses the smaller [`KeyTable`].
+/// Runs BFS with edges recorded or markings cut (`EXTRAS`), keyed by whole
+/// markings; `None` means a place overflowed its bit field (retry wider).
 pub(super) fn run<const W: usize, const EXTRAS: bool>(
     c: &Compiled,
     net: &Net,
@@ -259,13 +259,41 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
     extras: Extras,
 ) -> Option<StateSpace> {
     if EXTRAS {
-        search::<W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
+        search::<W, W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
     } else {
-        search::<W, EXTRAS, KeyTable<W>>(c, net, max_states, extras)
+        search::<W, W, EXTRAS, KeyTable<W>>(c, net, max_states, extras)
     }
 }
 
-fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
+/// Runs the default BFS (no extras) with a [`KeyTable`] of the folded keys
+/// ([`Compiled::fold`]: `K` ≤ `W` words); `None` as for [`run`].
+pub(super) fn run_keyed(c: &Compiled, net: &Net, max_states: usize, extras: Extras) -> Option<StateSpace> {
+    macro_rules! keyed {
+        ($w:literal, $k:literal) => {
+            search::<$w, $k, false, KeyTable<$k>>(c, net, max_states, extras)
+        };
+    }
+    match (c.layout.words, c.fold.words) {
+        (1, _) => keyed!(1, 1),
+        (2, 1) => keyed!(2, 1),
+        (2, _) => keyed!(2, 2),
+        (3, 1) => keyed!(3, 1),
+        (3, 2) => keyed!(3, 2),
+        (3, _) => keyed!(3, 3),
+        (4, 1) => keyed!(4, 1),
+        (4, 2) => keyed!(4, 2),
+        (4, 3) => keyed!(4, 3),
+        (4, _) => keyed!(4, 4),
+        (5, _) => keyed!(5, 5),
+        (6, _) => keyed!(6, 6),
+        (7, _) => keyed!(7, 7),
+        (8, _) => keyed!(8, 8),
+        _ => super::engine::run(c, net, max_states, extras),
+    }
+}
+
+/// The search: markings of `W` words, table keys of `K` words.
+fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
@@ -277,9 +305,10 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     let mut parent: Vec<u32> = vec![NO_PARENT];
     let mut via: Vec<u32> = vec![0];
     let mut table = T::new();
-    let m0 = key_hash(&init);
-    if let Err(pos) = table.find(&init, m0) {
-        table.insert_at(pos, init, m0, 0);
+    let k0: [u64; K] = c.fold.apply(&init);
+    let m0 = key_hash(&k0);
+    if let Err(pos) = table.find(&k0, m0) {
+        table.insert_at(pos, k0, m0, 0);
     }
     let mut stats = Stats::new(net);
     let mut dead = Vec::new();
@@ -337,7 +366,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                         break 'bfs;
                     }
                 }
-                let hash = key_hash(&succ);
+                let hash = key_hash(&c.fold.apply::<W, K>(&succ));
                 // Prefetched now, looked up after the batch: the misses
                 // overlap with the work of generating the next successors.
                 if !sorted {
@@ -376,7 +405,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                 if let Some(&j) = order.get(k + PREFETCH_AHEAD) {
                     table.prefetch(meta[j as usize].0);
                 }
-                let (key, hash) = (succs[i as usize], meta[i as usize].0);
+                let (key, hash) = (c.fold.apply(&succs[i as usize]), meta[i as usize].0);
                 if let Err(pos) = table.find(&key, hash) {
                     table.insert_at(pos, key, hash, 0);
                     fresh[i as usize] = true;
@@ -399,7 +428,8 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
         }
 
         // 2. Look up and insert, in BFS order.
-        for (&key, &(mixed, s, t)) in succs.iter().zip(&meta) {
+        for (succ, &(mixed, s, t)) in succs.iter().zip(&meta) {
+            let key = c.fold.apply(succ);
             let pos = match table.find(&key, mixed) {
                 Ok(idx) => {
                     if EXTRAS {
@@ -418,7 +448,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
             if EXTRAS {
                 extras.edge(s, t, idx);
             }
-            arena.push(key);
+            arena.push(*succ);
             parent.push(s);
             via.push(t);
         }
@@ -428,7 +458,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     Some(StateSpace {
         semantics: c.semantics,
         layout: c.layout,
-        arena: arena.as_flattened().to_vec(),
+        arena: arena.into_flattened(),
         parent,
         via,
         dead,

@@ -38,6 +38,7 @@ use crate::model::{Marking, Net, PlaceId, TransitionId};
 
 mod engine;
 mod fixed;
+mod fold;
 mod hw;
 mod parallel;
 mod stubborn;
