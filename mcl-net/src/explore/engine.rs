@@ -100,6 +100,21 @@ fn range(r: (u32, u32)) -> std::ops::Range<usize> {
     r.0 as usize..r.1 as usize
 }
 
+/// A transition to test when its trigger place is marked.
+#[derive(Clone, Copy, Debug)]
+struct Trigger {
+    t: u32,
+    /// The word holding all input places, [`Trigger::SPREAD`] when they
+    /// lie in several words (then tested by [`Compiled::enabled`]).
+    word: u32,
+    /// The input weights packed like a marking (with `word`).
+    pre: u64,
+}
+
+impl Trigger {
+    const SPREAD: u32 = u32::MAX;
+}
+
 /// Net data for one layout, arranged for the inner loop.
 pub(super) struct Compiled {
     pub(super) layout: Layout,
@@ -116,7 +131,7 @@ pub(super) struct Compiled {
     wdelta: Vec<(u32, u64)>,
     /// Transitions to test when place p is marked: `trig[trig_off[p]..]`.
     trig_off: Vec<u32>,
-    trig: Vec<u32>,
+    trig: Vec<Trigger>,
     /// Transitions without input places (always enabled).
     sources: Vec<u32>,
     /// Hash change of each transition.
@@ -171,7 +186,7 @@ impl Compiled {
         let mut grow = Vec::new();
         let mut wdelta: Vec<(u32, u64)> = Vec::new();
         let mut dhash = Vec::new();
-        let mut trig_rows: Vec<Vec<u32>> = vec![Vec::new(); np];
+        let mut trig_rows: Vec<Vec<Trigger>> = vec![Vec::new(); np];
         let mut sources = Vec::new();
         for t in net.transition_ids() {
             let row = net.pre(t);
@@ -213,7 +228,12 @@ impl Compiled {
             dhash.push(dh);
             // Trigger: the input place with the largest weight (least often sufficient).
             match row.iter().max_by_key(|&&(p, w)| (w, std::cmp::Reverse(p))) {
-                Some(&(p, _)) => trig_rows[p.index()].push(t.0),
+                // A transition that is never enabled needs no test.
+                Some(_) if info.never => {}
+                Some(&(p, _)) => trig_rows[p.index()].push(match &pre[range(info.pre)] {
+                    &[(word, pre)] => Trigger { t: t.0, word, pre },
+                    _ => Trigger { t: t.0, word: Trigger::SPREAD, pre: 0 },
+                }),
                 None => sources.push(t.0),
             }
         }
@@ -388,9 +408,13 @@ impl Compiled {
                 x &= !(l.mask << start);
                 let p = wi * l.per_word + (start >> l.shift) as usize;
                 let (a, b) = (self.trig_off[p] as usize, self.trig_off[p + 1] as usize);
-                for &t in &self.trig[a..b] {
-                    if self.enabled(cur, t as usize) {
-                        ready.push(TransitionId(t));
+                for tr in &self.trig[a..b] {
+                    let on = match cur.get(tr.word as usize) {
+                        Some(&m) => covers_packed(m, tr.pre, l.high),
+                        None => self.enabled(cur, tr.t as usize),
+                    };
+                    if on {
+                        ready.push(TransitionId(tr.t));
                     }
                 }
             }
@@ -425,6 +449,19 @@ impl Compiled {
             *word = word.wrapping_add(add);
         }
         Ok(())
+    }
+
+    /// Turns `state` into the successor by `t`, known not to overflow (an
+    /// earlier [`Compiled::successor`] of the same state and transition).
+    #[inline]
+    pub(super) fn fire(&self, state: &mut [u64], t: usize) {
+        if let Some(info) = self.trans.get(t) {
+            for &(dw, add) in &self.wdelta[range(info.wdelta)] {
+                if let Some(word) = state.get_mut(dw as usize) {
+                    *word = word.wrapping_add(add);
+                }
+            }
+        }
     }
 
     /// Whether transition `t` is enabled in the packed state `cur`.

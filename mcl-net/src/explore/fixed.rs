@@ -321,7 +321,10 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
     // Without extras (no index needed in the table) the lookups are sorted.
     let sorted = !EXTRAS;
     let batch = if sorted { SORTED_BATCH } else { BATCH };
-    let mut succs: Vec<[u64; W]> = Vec::with_capacity(batch + c.transitions());
+    // Sorted, the batch holds keys only: a new state is fired again from
+    // its source when it is numbered.
+    let mut succs: Vec<[u64; W]> = Vec::with_capacity(if sorted { 0 } else { batch + c.transitions() });
+    let mut keys: Vec<[u64; K]> = Vec::with_capacity(if sorted { batch + c.transitions() } else { 0 });
     let mut meta: Vec<(u64, u32, u32)> = Vec::with_capacity(batch + c.transitions());
     // Without extras: the batch in table order, and which successors are new.
     let mut order: Vec<u32> = Vec::new();
@@ -332,6 +335,7 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
     'bfs: while next < parent.len() {
         // 1. Expand queued states until the batch is full.
         succs.clear();
+        keys.clear();
         meta.clear();
         // Room for the whole batch, so that the slots prefetched below stay put.
         while (table.len() + batch + c.transitions()) * 4 > table.capacity() * 3 {
@@ -366,13 +370,16 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                         break 'bfs;
                     }
                 }
-                let hash = key_hash(&c.fold.apply::<W, K>(&succ));
-                // Prefetched now, looked up after the batch: the misses
-                // overlap with the work of generating the next successors.
-                if !sorted {
+                let key = c.fold.apply::<W, K>(&succ);
+                let hash = key_hash(&key);
+                if sorted {
+                    keys.push(key);
+                } else {
+                    // Prefetched now, looked up after the batch: the misses
+                    // overlap with the work of generating the next successors.
                     table.prefetch(hash);
+                    succs.push(succ);
                 }
-                succs.push(succ);
                 meta.push((hash, s as u32, t.0));
             }
         }
@@ -405,14 +412,14 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                 if let Some(&j) = order.get(k + PREFETCH_AHEAD) {
                     table.prefetch(meta[j as usize].0);
                 }
-                let (key, hash) = (c.fold.apply(&succs[i as usize]), meta[i as usize].0);
+                let (key, hash) = (keys[i as usize], meta[i as usize].0);
                 if let Err(pos) = table.find(&key, hash) {
                     table.insert_at(pos, key, hash, 0);
                     fresh[i as usize] = true;
                 }
             }
             // 3. Number the new states in BFS order.
-            for ((key, &(_, s, t)), &new) in succs.iter().zip(&meta).zip(&fresh) {
+            for (&(_, s, t), &new) in meta.iter().zip(&fresh) {
                 if !new {
                     continue;
                 }
@@ -420,7 +427,9 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                     stop = Some(StopReason::StateLimit);
                     break 'bfs;
                 }
-                arena.push(*key);
+                let mut succ = arena[s as usize];
+                c.fire(&mut succ, t as usize);
+                arena.push(succ);
                 parent.push(s);
                 via.push(t);
             }
