@@ -3,7 +3,7 @@
 //! Same algorithm as `engine::run` (see the notes in `engine.rs`), with
 //! markings as `[u64; W]` values: copies, comparisons and table slots have a
 //! size known at compile time, which removes the bounds checks and `memcpy`
-//! calls of the slice-based version from the inner loop. Two differences:
+//! calls of the slice-based version from the inner loop. Differences:
 //!
 //! * The table hash is computed from the packed words ([`key_hash`]: `W`
 //!   multiplications), not kept incrementally, so no per-state hash array is
@@ -17,6 +17,8 @@
 //!   order), each lookup prefetching the slot [`PREFETCH_AHEAD`] lookups
 //!   later; the new states are numbered afterwards in BFS order, so the
 //!   numbering is that of a one-by-one search.
+//!   The batch holds keys only: a new state is fired again from its source
+//!   (in the arena) when it is numbered.
 //! * The table keys are the markings folded to `K` ≤ `W` words by the net's
 //!   place invariants ([`super::fold`]); the arena keeps whole markings.
 
