@@ -427,6 +427,53 @@ impl Compiled {
         }
     }
 
+    /// [`Compiled::ready_in`] for markings of `W` words, with the loop
+    /// bounds and field sizes known to the compiler.
+    #[inline]
+    pub(super) fn ready_fixed<const W: usize>(&self, net: &Net, cur: &[u64; W], ready: &mut Vec<TransitionId>) -> bool {
+        match (self.mcl_rule, self.layout.bits) {
+            (false, 1) => self.scan::<W, 1>(cur, ready),
+            (false, 2) => self.scan::<W, 2>(cur, ready),
+            (false, 4) => self.scan::<W, 4>(cur, ready),
+            (false, 8) => self.scan::<W, 8>(cur, ready),
+            _ => return self.ready_in(net, cur, ready),
+        }
+        self.semantics == Semantics::Mcl && !ready.is_empty()
+    }
+
+    /// The enabled transitions of `cur` (fields of `BITS` bits) into `ready`.
+    #[inline(always)]
+    fn scan<const W: usize, const BITS: u32>(&self, cur: &[u64; W], ready: &mut Vec<TransitionId>) {
+        let field = (1u64 << BITS) - 1;
+        let per_word = (64 / BITS) as usize;
+        let high = self.layout.high;
+        ready.clear();
+        ready.extend(self.sources.iter().map(|&t| TransitionId(t)));
+        let (off, trig) = (&self.trig_off[..], &self.trig[..]);
+        for (wi, &word) in cur.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                let start = x.trailing_zeros() & !(BITS - 1);
+                x &= !(field << start);
+                let p = wi * per_word + (start / BITS) as usize;
+                let (Some(&a), Some(&b)) = (off.get(p), off.get(p + 1)) else {
+                    continue;
+                };
+                for tr in trig.get(a as usize..b as usize).unwrap_or(&[]) {
+                    let on = match cur.get(tr.word as usize) {
+                        // 1-bit fields: covered when every input bit is set.
+                        Some(&m) if BITS == 1 => m & tr.pre == tr.pre,
+                        Some(&m) => covers_packed(m, tr.pre, high),
+                        None => self.enabled(cur, tr.t as usize),
+                    };
+                    if on {
+                        ready.push(TransitionId(tr.t));
+                    }
+                }
+            }
+        }
+    }
+
     /// Turns `state` (a copy of the source state) into the successor by `t`.
     /// Raises `bounds` to the new token counts of the places `t` adds to.
     #[inline(always)]

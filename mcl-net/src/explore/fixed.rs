@@ -351,7 +351,7 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
             if EXTRAS && extras.cut(&c.layout, s, &cur) {
                 continue;
             }
-            if c.ready_in(net, &cur, &mut enabled) {
+            if c.ready_fixed(net, &cur, &mut enabled) {
                 if vanishing.len() <= s / 64 {
                     vanishing.resize(s / 64 + 1, 0);
                 }
