@@ -21,7 +21,7 @@ use crate::model::Net;
 /// `places² · transitions`, and the fold is only used for markings of at
 /// most four words.
 const MAX_PLACES: usize = 256;
-const MAX_WORK: usize = 1 << 26;
+const MAX_WORK: usize = 1 << 24;
 /// Markings of more words keep whole keys (fewer specialised searches).
 pub(super) const MAX_WORDS: usize = 4;
 
