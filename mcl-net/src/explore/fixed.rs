@@ -252,19 +252,17 @@ const BUCKET_BITS: u32 = 12;
 /// How many lookups ahead the sorted pass prefetches.
 const PREFETCH_AHEAD: usize = 16;
 
-/// Runs BFS with edges recorded or markings cut (`EXTRAS`), keyed by whole
-/// markings; `None` means a place overflowed its bit field (retry wider).
+/// Runs BFS with edges recorded or markings cut (`EXTRAS`, engine.rs calls
+/// it with `true`; the default search is [`run_keyed`]), with a
+/// [`FixedTable`] of whole markings and their indices; `None` means a place
+/// overflowed its bit field (retry wider).
 pub(super) fn run<const W: usize, const EXTRAS: bool>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
     extras: Extras,
 ) -> Option<StateSpace> {
-    if EXTRAS {
-        search::<W, W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
-    } else {
-        search::<W, W, EXTRAS, KeyTable<W>>(c, net, max_states, extras)
-    }
+    search::<W, W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
 }
 
 /// Runs the default BFS (no extras) with a [`KeyTable`] of the folded keys
