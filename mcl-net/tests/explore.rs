@@ -438,44 +438,100 @@ fn random_net() -> impl Strategy<Value = Net> {
         prop::collection::vec((0usize..9, 0u32..4), 1..10),
         prop::collection::vec((any::<bool>(), 0usize..9, 0usize..16, 1u32..3), 0..4),
     )
-        .prop_map(|(np, trans, marks, extra)| {
-            let mut b = NetBuilder::new("random");
-            let places: Vec<PlaceId> = (0..np).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
-            for (p, m) in marks {
-                let pl = b.place_mut(places[p % np]).unwrap();
-                pl.initial = (pl.initial + m).min(4);
-            }
-            let mut ts: Vec<TransitionId> = Vec::new();
-            for (i, &(from, to, kind, prio)) in trans.iter().enumerate() {
-                let kind = match kind {
-                    0 | 1 => TransitionKind::Immediate,
-                    2 => TransitionKind::Event("e".into()),
-                    _ => TransitionKind::Timed(Delay::Fixed(1.0)),
-                };
-                let mut t = Transition::new(format!("t{i}")).with_kind(kind);
-                if prio > 0 {
-                    t.priority = Some(prio);
-                }
-                let t = b.add_transition(t);
-                b.add_input(places[from % np], t, 1).add_output(t, places[to % np], 1);
-                ts.push(t);
-            }
-            for (input, p, t, w) in extra {
-                let (p, t) = (places[p % np], ts[t % ts.len()]);
-                if input {
-                    b.add_input(p, t, w);
-                } else {
-                    // Producing arcs only on transitions that also consume
-                    // more, to keep most nets bounded.
-                    b.add_output(t, p, 1).add_input(p, t, w);
-                }
-            }
-            b.build().unwrap()
+        .prop_map(|(np, trans, marks, extra)| build_random(np, &trans, marks, extra, &[]))
+}
+
+/// Random nets as [`random_net`] after isolated places holding `pads`
+/// tokens: markings of two or three words whose places with independent
+/// incidence rows fit in fewer, so the sequential search folds its keys
+/// (the kept places of the later words moved into the first one).
+fn padded_net() -> impl Strategy<Value = Net> {
+    (
+        2usize..9,
+        prop::collection::vec((0usize..9, 0usize..9, 0u8..4, 0u32..3), 1..16),
+        prop::collection::vec((0usize..9, 0u32..4), 1..10),
+        prop::collection::vec((any::<bool>(), 0usize..9, 0usize..16, 1u32..3), 0..4),
+        prop::collection::vec(0u32..5, 12..40),
+    )
+        .prop_map(|(np, trans, marks, extra, mut pads)| {
+            // 4-bit fields at least: 16 places per word.
+            pads[0] = 4;
+            build_random(np, &trans, marks, extra, &pads)
         })
+}
+
+/// The net of [`random_net`] from its drawn parts, after isolated places
+/// holding `pads` tokens.
+fn build_random(
+    np: usize,
+    trans: &[(usize, usize, u8, u32)],
+    marks: Vec<(usize, u32)>,
+    extra: Vec<(bool, usize, usize, u32)>,
+    pads: &[u32],
+) -> Net {
+    let mut b = NetBuilder::new("random");
+    for (i, &x) in pads.iter().enumerate() {
+        b.add_place(Place::new(format!("pad{i}")).with_tokens(x));
+    }
+    let places: Vec<PlaceId> = (0..np).map(|i| b.add_place(Place::new(format!("p{i}")))).collect();
+    for (p, m) in marks {
+        let pl = b.place_mut(places[p % np]).unwrap();
+        pl.initial = (pl.initial + m).min(4);
+    }
+    let mut ts: Vec<TransitionId> = Vec::new();
+    for (i, &(from, to, kind, prio)) in trans.iter().enumerate() {
+        let kind = match kind {
+            0 | 1 => TransitionKind::Immediate,
+            2 => TransitionKind::Event("e".into()),
+            _ => TransitionKind::Timed(Delay::Fixed(1.0)),
+        };
+        let mut t = Transition::new(format!("t{i}")).with_kind(kind);
+        if prio > 0 {
+            t.priority = Some(prio);
+        }
+        let t = b.add_transition(t);
+        b.add_input(places[from % np], t, 1).add_output(t, places[to % np], 1);
+        ts.push(t);
+    }
+    for (input, p, t, w) in extra {
+        let (p, t) = (places[p % np], ts[t % ts.len()]);
+        if input {
+            b.add_input(p, t, w);
+        } else {
+            // Producing arcs only on transitions that also consume
+            // more, to keep most nets bounded.
+            b.add_output(t, p, 1).add_input(p, t, w);
+        }
+    }
+    b.build().unwrap()
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn folded_keys_find_the_reference_state_space(net in padded_net(), mcl in any::<bool>()) {
+        let s = if mcl { Semantics::Mcl } else { Semantics::Plain };
+        let o = Options { semantics: s, max_states: 20_000, max_dead_examples: usize::MAX, ..Options::default() };
+        let ss = explore(&net, &o);
+        prop_assume!(ss.complete());
+        let r = reference(&net, s);
+        let rep = mcl_net::explore::report(&net, &ss, usize::MAX);
+        prop_assert_eq!((rep.states, rep.edges, rep.dead_markings), (r.states, r.edges, r.dead));
+        prop_assert_eq!(rep.vanishing_states, r.vanishing);
+        prop_assert_eq!(ss.bounds(), &r.bounds[..]);
+        prop_assert_eq!(ss.max_tokens(), r.max_total);
+        for st in ss.states() {
+            let m = ss.marking(st);
+            let path = ss.path_to(st);
+            prop_assert_eq!(path.len(), r.depth[&m]);
+            let mut x = net.initial_marking();
+            for t in path {
+                semantics::fire(&net, &mut x, t).unwrap();
+            }
+            prop_assert_eq!(x, m);
+        }
+    }
 
     #[test]
     fn explorer_agrees_with_naive_reference(net in random_net(), mcl in any::<bool>()) {

@@ -20,6 +20,7 @@
 //! * **Trigger places.** A transition is only tested when one designated input
 //!   place is marked; unmarked parts of the net cost nothing.
 
+use super::fold::KeyFold;
 use super::{Options, Semantics, StateId, StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 use crate::semantics::{self, MarkingClass};
@@ -51,8 +52,19 @@ impl Layout {
         Layout { places, bits, words, per_word, mask, shift, high }
     }
 
+    /// Fields per word.
+    pub(super) fn per_word(&self) -> usize {
+        self.per_word
+    }
+
+    /// The largest value of a field.
+    pub(super) fn mask(&self) -> u64 {
+        self.mask
+    }
+
+    /// (word, shift) of place `p`'s field.
     #[inline]
-    fn locate(&self, p: usize) -> (usize, u32) {
+    pub(super) fn locate(&self, p: usize) -> (usize, u32) {
         (p / self.per_word, (p % self.per_word) as u32 * self.bits)
     }
 
@@ -88,6 +100,21 @@ fn range(r: (u32, u32)) -> std::ops::Range<usize> {
     r.0 as usize..r.1 as usize
 }
 
+/// A transition to test when its trigger place is marked.
+#[derive(Clone, Copy, Debug)]
+struct Trigger {
+    t: u32,
+    /// The word holding all input places, [`Trigger::SPREAD`] when they
+    /// lie in several words (then tested by [`Compiled::enabled`]).
+    word: u32,
+    /// The input weights packed like a marking (with `word`).
+    pre: u64,
+}
+
+impl Trigger {
+    const SPREAD: u32 = u32::MAX;
+}
+
 /// Net data for one layout, arranged for the inner loop.
 pub(super) struct Compiled {
     pub(super) layout: Layout,
@@ -104,13 +131,15 @@ pub(super) struct Compiled {
     wdelta: Vec<(u32, u64)>,
     /// Transitions to test when place p is marked: `trig[trig_off[p]..]`.
     trig_off: Vec<u32>,
-    trig: Vec<u32>,
+    trig: Vec<Trigger>,
     /// Transitions without input places (always enabled).
     sources: Vec<u32>,
     /// Hash change of each transition.
     pub(super) dhash: Vec<u64>,
     pub(super) initial_hash: u64,
     pub(super) initial: Vec<u64>,
+    /// Hash-table keys of the sequential search ([`KeyFold`]).
+    pub(super) fold: KeyFold,
     /// Whether the MCL rule can remove enabled transitions.
     mcl_rule: bool,
     pub(super) semantics: Semantics,
@@ -141,7 +170,9 @@ impl Compiled {
         self.trans.len()
     }
 
-    fn new(net: &Net, semantics: Semantics, bits: u32) -> Self {
+    /// `keep`: the places whose tokens determine the marking
+    /// ([`super::fold::independent_places`]), for shorter keys.
+    fn new(net: &Net, semantics: Semantics, bits: u32, keep: Option<&[bool]>) -> Self {
         let np = net.place_count();
         let layout = Layout::new(np, bits);
         let mut seed = 0x6D63_6C2D_6E65_7421u64;
@@ -155,7 +186,7 @@ impl Compiled {
         let mut grow = Vec::new();
         let mut wdelta: Vec<(u32, u64)> = Vec::new();
         let mut dhash = Vec::new();
-        let mut trig_rows: Vec<Vec<u32>> = vec![Vec::new(); np];
+        let mut trig_rows: Vec<Vec<Trigger>> = vec![Vec::new(); np];
         let mut sources = Vec::new();
         for t in net.transition_ids() {
             let row = net.pre(t);
@@ -197,7 +228,12 @@ impl Compiled {
             dhash.push(dh);
             // Trigger: the input place with the largest weight (least often sufficient).
             match row.iter().max_by_key(|&&(p, w)| (w, std::cmp::Reverse(p))) {
-                Some(&(p, _)) => trig_rows[p.index()].push(t.0),
+                // A transition that is never enabled needs no test.
+                Some(_) if info.never => {}
+                Some(&(p, _)) => trig_rows[p.index()].push(match &pre[range(info.pre)] {
+                    &[(word, pre)] => Trigger { t: t.0, word, pre },
+                    _ => Trigger { t: t.0, word: Trigger::SPREAD, pre: 0 },
+                }),
                 None => sources.push(t.0),
             }
         }
@@ -222,6 +258,7 @@ impl Compiled {
             dhash,
             initial_hash,
             initial: layout.pack(&initial_marking),
+            fold: KeyFold::new(&layout, keep),
             // With only immediate, unprioritized transitions the MCL rule keeps
             // every enabled transition: skip it.
             mcl_rule: semantics == Semantics::Mcl
@@ -371,9 +408,13 @@ impl Compiled {
                 x &= !(l.mask << start);
                 let p = wi * l.per_word + (start >> l.shift) as usize;
                 let (a, b) = (self.trig_off[p] as usize, self.trig_off[p + 1] as usize);
-                for &t in &self.trig[a..b] {
-                    if self.enabled(cur, t as usize) {
-                        ready.push(TransitionId(t));
+                for tr in &self.trig[a..b] {
+                    let on = match cur.get(tr.word as usize) {
+                        Some(&m) => covers_packed(m, tr.pre, l.high),
+                        None => self.enabled(cur, tr.t as usize),
+                    };
+                    if on {
+                        ready.push(TransitionId(tr.t));
                     }
                 }
             }
@@ -383,6 +424,53 @@ impl Compiled {
         } else {
             // Only immediate transitions: every live marking is vanishing.
             self.semantics == Semantics::Mcl && !ready.is_empty()
+        }
+    }
+
+    /// [`Compiled::ready_in`] for markings of `W` words, with the loop
+    /// bounds and field sizes known to the compiler.
+    #[inline]
+    pub(super) fn ready_fixed<const W: usize>(&self, net: &Net, cur: &[u64; W], ready: &mut Vec<TransitionId>) -> bool {
+        match (self.mcl_rule, self.layout.bits) {
+            (false, 1) => self.scan::<W, 1>(cur, ready),
+            (false, 2) => self.scan::<W, 2>(cur, ready),
+            (false, 4) => self.scan::<W, 4>(cur, ready),
+            (false, 8) => self.scan::<W, 8>(cur, ready),
+            _ => return self.ready_in(net, cur, ready),
+        }
+        self.semantics == Semantics::Mcl && !ready.is_empty()
+    }
+
+    /// The enabled transitions of `cur` (fields of `BITS` bits) into `ready`.
+    #[inline(always)]
+    fn scan<const W: usize, const BITS: u32>(&self, cur: &[u64; W], ready: &mut Vec<TransitionId>) {
+        let field = (1u64 << BITS) - 1;
+        let per_word = (64 / BITS) as usize;
+        let high = self.layout.high;
+        ready.clear();
+        ready.extend(self.sources.iter().map(|&t| TransitionId(t)));
+        let (off, trig) = (&self.trig_off[..], &self.trig[..]);
+        for (wi, &word) in cur.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                let start = x.trailing_zeros() & !(BITS - 1);
+                x &= !(field << start);
+                let p = wi * per_word + (start / BITS) as usize;
+                let (Some(&a), Some(&b)) = (off.get(p), off.get(p + 1)) else {
+                    continue;
+                };
+                for tr in trig.get(a as usize..b as usize).unwrap_or(&[]) {
+                    let on = match cur.get(tr.word as usize) {
+                        // 1-bit fields: covered when every input bit is set.
+                        Some(&m) if BITS == 1 => m & tr.pre == tr.pre,
+                        Some(&m) => covers_packed(m, tr.pre, high),
+                        None => self.enabled(cur, tr.t as usize),
+                    };
+                    if on {
+                        ready.push(TransitionId(tr.t));
+                    }
+                }
+            }
         }
     }
 
@@ -408,6 +496,19 @@ impl Compiled {
             *word = word.wrapping_add(add);
         }
         Ok(())
+    }
+
+    /// Turns `state` into the successor by `t`, known not to overflow (an
+    /// earlier [`Compiled::successor`] of the same state and transition).
+    #[inline]
+    pub(super) fn fire(&self, state: &mut [u64], t: usize) {
+        if let Some(info) = self.trans.get(t) {
+            for &(dw, add) in &self.wdelta[range(info.wdelta)] {
+                if let Some(word) = state.get_mut(dw as usize) {
+                    *word = word.wrapping_add(add);
+                }
+            }
+        }
     }
 
     /// Whether transition `t` is enabled in the packed state `cur`.
@@ -529,22 +630,16 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
     let max = opts.max_states.clamp(1, (u32::MAX - 1) as usize);
     let initial_max = net.places().iter().map(|p| p.initial).max().unwrap_or(0);
     let mut bits = bits_for(initial_max);
+    let keep = super::fold::independent_places(net);
     loop {
-        let c = Compiled::new(net, opts.semantics, bits);
+        let c = Compiled::new(net, opts.semantics, bits, keep.as_deref());
         // Recording edges and cutting markings are done by the sequential engines.
         let sequential = opts.threads == 1 || opts.record_edges || opts.cut_above.is_some();
         let result = if sequential {
             let x = Extras::new(opts);
             let extras = opts.record_edges || opts.cut_above.is_some();
             match (c.layout.words, extras) {
-                (1, false) => super::fixed::run::<1, false>(&c, net, max, x),
-                (2, false) => super::fixed::run::<2, false>(&c, net, max, x),
-                (3, false) => super::fixed::run::<3, false>(&c, net, max, x),
-                (4, false) => super::fixed::run::<4, false>(&c, net, max, x),
-                (5, false) => super::fixed::run::<5, false>(&c, net, max, x),
-                (6, false) => super::fixed::run::<6, false>(&c, net, max, x),
-                (7, false) => super::fixed::run::<7, false>(&c, net, max, x),
-                (8, false) => super::fixed::run::<8, false>(&c, net, max, x),
+                (1..=8, false) => super::fixed::run_keyed(&c, net, max, x),
                 (1, true) => super::fixed::run::<1, true>(&c, net, max, x),
                 (2, true) => super::fixed::run::<2, true>(&c, net, max, x),
                 (3, true) => super::fixed::run::<3, true>(&c, net, max, x),
@@ -597,7 +692,7 @@ fn default_threads() -> usize {
 }
 
 /// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option<StateSpace> {
+pub(super) fn run(c: &Compiled, net: &Net, max_states: usize, mut extras: Extras) -> Option<StateSpace> {
     let l = c.layout;
     let w = l.words;
     let mut arena: Vec<u64> = c.initial.clone();

@@ -3,7 +3,7 @@
 //! Same algorithm as `engine::run` (see the notes in `engine.rs`), with
 //! markings as `[u64; W]` values: copies, comparisons and table slots have a
 //! size known at compile time, which removes the bounds checks and `memcpy`
-//! calls of the slice-based version from the inner loop. Two differences:
+//! calls of the slice-based version from the inner loop. Differences:
 //!
 //! * The table hash is computed from the packed words ([`key_hash`]: `W`
 //!   multiplications), not kept incrementally, so no per-state hash array is
@@ -17,6 +17,10 @@
 //!   order), each lookup prefetching the slot [`PREFETCH_AHEAD`] lookups
 //!   later; the new states are numbered afterwards in BFS order, so the
 //!   numbering is that of a one-by-one search.
+//!   The batch holds keys only: a new state is fired again from its source
+//!   (in the arena) when it is numbered.
+//! * The table keys are the markings folded to `K` ≤ `W` words by the net's
+//!   place invariants ([`super::fold`]); the arena keeps whole markings.
 
 use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
 use super::hw;
@@ -244,24 +248,48 @@ const BUCKET_BITS: u32 = 12;
 /// How many lookups ahead the sorted pass prefetches.
 const PREFETCH_AHEAD: usize = 16;
 
-/// Runs BFS; `None` means a place overflowed its bit field (retry wider).
-///
-/// `EXTRAS` compiles in the calls to `extras` (edges, cut); without it the
-/// default search pays nothing for them and uses the smaller [`KeyTable`].
+/// Runs BFS with edges recorded or markings cut (`EXTRAS`, engine.rs calls
+/// it with `true`; the default search is [`run_keyed`]), with a
+/// [`FixedTable`] of whole markings and their indices; `None` means a place
+/// overflowed its bit field (retry wider).
 pub(super) fn run<const W: usize, const EXTRAS: bool>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
     extras: Extras,
 ) -> Option<StateSpace> {
-    if EXTRAS {
-        search::<W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
-    } else {
-        search::<W, EXTRAS, KeyTable<W>>(c, net, max_states, extras)
+    search::<W, W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
+}
+
+/// Runs the default BFS (no extras) with a [`KeyTable`] of the folded keys
+/// ([`Compiled::fold`]: `K` ≤ `W` words); `None` as for [`run`].
+pub(super) fn run_keyed(c: &Compiled, net: &Net, max_states: usize, extras: Extras) -> Option<StateSpace> {
+    macro_rules! keyed {
+        ($w:literal, $k:literal) => {
+            search::<$w, $k, false, KeyTable<$k>>(c, net, max_states, extras)
+        };
+    }
+    match (c.layout.words, c.fold.words) {
+        (1, _) => keyed!(1, 1),
+        (2, 1) => keyed!(2, 1),
+        (2, _) => keyed!(2, 2),
+        (3, 1) => keyed!(3, 1),
+        (3, 2) => keyed!(3, 2),
+        (3, _) => keyed!(3, 3),
+        (4, 1) => keyed!(4, 1),
+        (4, 2) => keyed!(4, 2),
+        (4, 3) => keyed!(4, 3),
+        (4, _) => keyed!(4, 4),
+        (5, _) => keyed!(5, 5),
+        (6, _) => keyed!(6, 6),
+        (7, _) => keyed!(7, 7),
+        (8, _) => keyed!(8, 8),
+        _ => super::engine::run(c, net, max_states, extras),
     }
 }
 
-fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
+/// The search: markings of `W` words, table keys of `K` words.
+fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
@@ -273,9 +301,10 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     let mut parent: Vec<u32> = vec![NO_PARENT];
     let mut via: Vec<u32> = vec![0];
     let mut table = T::new();
-    let m0 = key_hash(&init);
-    if let Err(pos) = table.find(&init, m0) {
-        table.insert_at(pos, init, m0, 0);
+    let k0: [u64; K] = c.fold.apply(&init);
+    let m0 = key_hash(&k0);
+    if let Err(pos) = table.find(&k0, m0) {
+        table.insert_at(pos, k0, m0, 0);
     }
     let mut stats = Stats::new(net);
     let mut dead = Vec::new();
@@ -288,7 +317,10 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     // Without extras (no index needed in the table) the lookups are sorted.
     let sorted = !EXTRAS;
     let batch = if sorted { SORTED_BATCH } else { BATCH };
-    let mut succs: Vec<[u64; W]> = Vec::with_capacity(batch + c.transitions());
+    // Sorted, the batch holds keys only: a new state is fired again from
+    // its source when it is numbered.
+    let mut succs: Vec<[u64; W]> = Vec::with_capacity(if sorted { 0 } else { batch + c.transitions() });
+    let mut keys: Vec<[u64; K]> = Vec::with_capacity(if sorted { batch + c.transitions() } else { 0 });
     let mut meta: Vec<(u64, u32, u32)> = Vec::with_capacity(batch + c.transitions());
     // Without extras: the batch in table order, and which successors are new.
     let mut order: Vec<u32> = Vec::new();
@@ -299,6 +331,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     'bfs: while next < parent.len() {
         // 1. Expand queued states until the batch is full.
         succs.clear();
+        keys.clear();
         meta.clear();
         // Room for the whole batch, so that the slots prefetched below stay put.
         while (table.len() + batch + c.transitions()) * 4 > table.capacity() * 3 {
@@ -312,7 +345,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
             if EXTRAS && extras.cut(&c.layout, s, &cur) {
                 continue;
             }
-            if c.ready_in(net, &cur, &mut enabled) {
+            if c.ready_fixed(net, &cur, &mut enabled) {
                 if vanishing.len() <= s / 64 {
                     vanishing.resize(s / 64 + 1, 0);
                 }
@@ -333,13 +366,16 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                         break 'bfs;
                     }
                 }
-                let hash = key_hash(&succ);
-                // Prefetched now, looked up after the batch: the misses
-                // overlap with the work of generating the next successors.
-                if !sorted {
+                let key = c.fold.apply::<W, K>(&succ);
+                let hash = key_hash(&key);
+                if sorted {
+                    keys.push(key);
+                } else {
+                    // Prefetched now, looked up after the batch: the misses
+                    // overlap with the work of generating the next successors.
                     table.prefetch(hash);
+                    succs.push(succ);
                 }
-                succs.push(succ);
                 meta.push((hash, s as u32, t.0));
             }
         }
@@ -372,14 +408,14 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                 if let Some(&j) = order.get(k + PREFETCH_AHEAD) {
                     table.prefetch(meta[j as usize].0);
                 }
-                let (key, hash) = (succs[i as usize], meta[i as usize].0);
+                let (key, hash) = (keys[i as usize], meta[i as usize].0);
                 if let Err(pos) = table.find(&key, hash) {
                     table.insert_at(pos, key, hash, 0);
                     fresh[i as usize] = true;
                 }
             }
             // 3. Number the new states in BFS order.
-            for ((key, &(_, s, t)), &new) in succs.iter().zip(&meta).zip(&fresh) {
+            for (&(_, s, t), &new) in meta.iter().zip(&fresh) {
                 if !new {
                     continue;
                 }
@@ -387,7 +423,9 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
                     stop = Some(StopReason::StateLimit);
                     break 'bfs;
                 }
-                arena.push(*key);
+                let mut succ = arena[s as usize];
+                c.fire(&mut succ, t as usize);
+                arena.push(succ);
                 parent.push(s);
                 via.push(t);
             }
@@ -395,7 +433,8 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
         }
 
         // 2. Look up and insert, in BFS order.
-        for (&key, &(mixed, s, t)) in succs.iter().zip(&meta) {
+        for (succ, &(mixed, s, t)) in succs.iter().zip(&meta) {
+            let key = c.fold.apply(succ);
             let pos = match table.find(&key, mixed) {
                 Ok(idx) => {
                     if EXTRAS {
@@ -414,7 +453,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
             if EXTRAS {
                 extras.edge(s, t, idx);
             }
-            arena.push(key);
+            arena.push(*succ);
             parent.push(s);
             via.push(t);
         }
@@ -424,7 +463,7 @@ fn search<const W: usize, const EXTRAS: bool, T: Visited<W>>(
     Some(StateSpace {
         semantics: c.semantics,
         layout: c.layout,
-        arena: arena.as_flattened().to_vec(),
+        arena: arena.into_flattened(),
         parent,
         via,
         dead,

@@ -39,6 +39,7 @@ use crate::model::{Marking, Net, PlaceId, TransitionId};
 
 mod engine;
 mod fixed;
+mod fold;
 mod hw;
 mod parallel;
 mod stubborn;
