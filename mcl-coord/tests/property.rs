@@ -131,6 +131,30 @@ fn case3(seed: u64) -> String {
     format!("{}mission : c {{ {c} }}\n", case(seed))
 }
 
+/// Two random missions linked by one to three mutexes, capacity 1 or 2.
+fn case_mutex(seed: u64) -> String {
+    let mut r = Rng(seed ^ 0x0BAD_CAFE);
+    let (mut na, mut nb) = (0, 0);
+    let a = stmt(&mut r, 2, &mut na);
+    let b = stmt(&mut r, 2, &mut nb);
+    let cs: Vec<String> = (0..1 + r.below(3))
+        .map(|_| {
+            let (x, y, beta) = (1 + r.below(na), 1 + r.below(nb), 1 + r.below(2));
+            format!("mutex {{ a:l{x}, b:l{y} }} = {beta}")
+        })
+        .collect();
+    format!("mission : a {{ {a} }}\nmission : b {{ {b} }}\nconstraints {{\n {}\n}}\n", cs.join("\n "))
+}
+
+/// The proofs without a product (the holdings, `verify/holding.rs`, then
+/// the state equation) tried on every group, however small.
+fn proving() -> AnalyzeOptions {
+    AnalyzeOptions {
+        verify: VerifyOptions { structural_threshold: 0, ..VerifyOptions::default() },
+        ..AnalyzeOptions::default()
+    }
+}
+
 /// The options of the random-walk variant: walks first, whatever the size.
 fn hunting() -> AnalyzeOptions {
     AnalyzeOptions {
@@ -435,6 +459,17 @@ proptest! {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Mutexes alone, the holdings tried first: a "free" they give holds
+    /// on the centralised net like any other.
+    #[test]
+    fn free_by_holdings_means_no_deadlock(seed in any::<u64>()) {
+        check_text(case_mutex(seed), seed, &proving())?;
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
 
     /// Mutex, order and sync together in every case.
@@ -444,6 +479,25 @@ proptest! {
         prop_assert!(["mutex", "order", "sync"].iter().all(|k| text.contains(k)), "{text}");
         check_text(text, seed, &AnalyzeOptions::default())?;
     }
+}
+
+/// The holdings give the verdict on some of the mutex-only cases (so that
+/// `free_by_holdings_means_no_deadlock` tests them), and each verdict they
+/// give passes the centralised net's checks.
+#[test]
+fn fixed_seeds_proven_by_holdings() {
+    let mut proven = 0;
+    for seed in 0..12u64 {
+        let text = case_mutex(seed);
+        let (ms, cs) = compile(&text, seed);
+        let r = analyze_with(&ms, &cs, &proving()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        if r.stats.holding_proofs > 0 {
+            assert_eq!(r.verdict, Verdict::Free, "{text}");
+            proven += 1;
+            check_text(text, seed, &proving()).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        }
+    }
+    assert!(proven > 0, "no case proven by the holdings");
 }
 
 #[test]

@@ -4,6 +4,7 @@
 
 use mcl_net::{Net, TransitionId};
 
+use super::holding;
 use super::hunt::hunt;
 use super::lts::Lts;
 use super::product::{explore_product, Effect, Product, NOBODY};
@@ -153,6 +154,12 @@ pub(super) fn verify_group(
     let mut candidates = Vec::new();
     if nv > 1 && estimate > opts.structural_threshold as f64 {
         let init: Vec<u32> = sups.iter().map(|s| u32::try_from(s.initial.max(0)).unwrap_or(u32::MAX)).collect();
+        // Resources that every vehicle gives back alone: free, loops or
+        // not (`holding.rs`).
+        if holding::prove(quots, &effects, &init, &grp.urgent, can_end) {
+            stats.holding_proofs += 1;
+            return GroupOutcome::Verified;
+        }
         match structural_proof::prove(quots, &effects, &init) {
             Proof::Free => {
                 stats.structural_proofs += 1;

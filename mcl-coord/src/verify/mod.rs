@@ -62,6 +62,11 @@
 //! (one rule for all vehicles) allows, and more: a deadlock-free verdict
 //! holds for both.
 //!
+//! A large group whose supervisors are all resources (mutexes) that each
+//! vehicle, holding any, can give back alone, is proven free from the
+//! vehicles' graphs alone (`holding.rs`; docs/coordination.md,
+//! "Holdings"), loops or not.
+//!
 //! A large group whose vehicles' graphs have no cycle is first tried by the
 //! state equation of the product (`structural_proof.rs`): when no
 //! combination of the vehicles' positions and path effects can be dead,
@@ -76,6 +81,7 @@
 
 pub mod flight;
 mod group;
+mod holding;
 mod hunt;
 mod lts;
 mod product;
@@ -169,6 +175,10 @@ pub struct VerifyStats {
     /// Groups of vehicles proven free by the state equation, without their
     /// product (`structural_proof.rs`).
     pub structural_proofs: usize,
+    /// Groups of vehicles proven free by their holdings, without their
+    /// product (`holding.rs`: supervisors that are resources each vehicle
+    /// gives back alone).
+    pub holding_proofs: usize,
     /// True when no supervisor place ever exceeded K (the product is then
     /// exact, not an over-approximation).
     pub exact: bool,

@@ -146,3 +146,27 @@ pub(super) fn reduce(lts: &Lts, settling: bool) -> Quotient {
     }
     Quotient { block, n: count, off, edges: flat, gates, fin, unstable }
 }
+
+#[cfg(test)]
+impl Quotient {
+    /// A quotient given by its edges (label, class) per class, for tests:
+    /// class 0 initial, no gates, no end.
+    pub(super) fn from_edges(out: &[Vec<(u32, u32)>]) -> Quotient {
+        let mut off = vec![0u32];
+        let mut edges = Vec::new();
+        for es in out {
+            edges.extend_from_slice(es);
+            off.push(edges.len() as u32);
+        }
+        let n = out.len();
+        Quotient {
+            block: vec![0],
+            n,
+            off,
+            edges,
+            gates: vec![Vec::new(); n],
+            fin: vec![false; n],
+            unstable: vec![false; n],
+        }
+    }
+}
