@@ -170,6 +170,45 @@ fn dot_views_structure_and_task() {
     assert_eq!(bad(&["compile", "examples/dam-inspection.mcl", "-o", p, "--view", "structure"]), Some(2));
 }
 
+/// Every method of `mcl analyze` agrees with `oracle.json` on every MCC net:
+/// the explicit search on one thread and on the threads without levels
+/// (states, edges, deadlock, 1-safeness, the same dead markings and
+/// bounds), and the stubborn sets (the deadlock verdict and the full
+/// search's number of dead markings, never more states). `--method
+/// symbolic` has its own test below.
+#[test]
+fn analyze_every_method_matches_the_oracle() {
+    let dir = std::path::Path::new("tests/data/mcc");
+    let oracle: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("oracle.json")).unwrap()).unwrap();
+    let oracle = oracle.as_object().unwrap();
+    assert!(oracle.len() >= 10, "{}", oracle.len());
+    let run = |args: &[&str]| -> Value {
+        let o = mcl(args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    for (name, expect) in oracle {
+        let net = dir.join(format!("{name}.pnml"));
+        let net = net.to_str().unwrap();
+        let one = run(&["analyze", "--format", "json", "--semantics", "plain", net]);
+        let threads = run(&["analyze", "--format", "json", "--semantics", "plain", "--threads", "2", net]);
+        for (what, v) in [("one thread", &one), ("two threads", &threads)] {
+            assert_eq!(v["complete"], true, "{name} {what}");
+            for key in ["states", "edges", "deadlock", "one_safe"] {
+                assert_eq!(v[key], expect[key], "{name} {what} {key}");
+            }
+        }
+        for key in ["dead_markings", "bounds"] {
+            assert_eq!(threads[key], one[key], "{name} {key}");
+        }
+        let por = run(&["analyze", "--format", "json", "--method", "por", net]);
+        assert_eq!(por["complete"], true, "{name} por");
+        assert_eq!(por["deadlock"], expect["deadlock"], "{name} por");
+        assert_eq!(por["dead_markings"], one["dead_markings"], "{name} por");
+        assert!(por["states"].as_u64().unwrap() <= one["states"].as_u64().unwrap(), "{name} por {por}");
+    }
+}
+
 /// `--method symbolic`: the decision-diagram exploration gives the
 /// oracle's states, edges, deadlock verdict and 1-safeness on every MCC
 /// net (the large ones included), the explicit search's dead markings and

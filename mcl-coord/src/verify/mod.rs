@@ -134,9 +134,10 @@ pub struct VerifyOptions {
     /// from them replay as often as before the reduction existed.
     pub reduction_threshold: u64,
     /// Above this many combinations of the vehicles' reduced states, a
-    /// group of vehicles without loops is first tried by the state
-    /// equation (`structural_proof.rs`), which proves it free without
-    /// exploring the product; `u64::MAX`: never.
+    /// group is first tried by the holdings rule (`holding.rs`: mutexes
+    /// alone, loops or not) and, without loops, by the state equation
+    /// (`structural_proof.rs`), which prove it free without exploring the
+    /// product; `u64::MAX`: never.
     pub structural_threshold: u64,
     /// Largest number of states of the exact product (`flight.rs`: the
     /// players with their messages in flight) that decides a deadlock the
