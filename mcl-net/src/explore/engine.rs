@@ -20,7 +20,7 @@
 //! * **Trigger places.** A transition is only tested when one designated input
 //!   place is marked; unmarked parts of the net cost nothing.
 
-use super::fold::KeyFold;
+use super::fold::{KeyFold, LinearKey};
 use super::{Options, Semantics, StateId, StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
 use crate::semantics::{self, MarkingClass};
@@ -45,7 +45,8 @@ pub(crate) struct Layout {
 }
 
 impl Layout {
-    fn new(places: usize, bits: u32) -> Self {
+    /// `places` fields of `bits` bits.
+    pub(super) fn new(places: usize, bits: u32) -> Self {
         let per_word = (64 / bits) as usize;
         let high = (0..per_word).fold(0u64, |h, f| h | 1u64 << (f as u32 * bits + bits - 1));
         let (words, mask, shift) = (places.div_ceil(per_word).max(1), (1u64 << bits) - 1, bits.trailing_zeros());
@@ -140,6 +141,9 @@ pub(super) struct Compiled {
     pub(super) initial: Vec<u64>,
     /// Hash-table keys of the sequential search ([`KeyFold`]).
     pub(super) fold: KeyFold,
+    /// One-word linear keys for the sequential search, when they are shorter
+    /// than the fold's ([`LinearKey`]; set by [`explore`]).
+    pub(super) linear: Option<LinearKey>,
     /// Whether the MCL rule can remove enabled transitions.
     mcl_rule: bool,
     pub(super) semantics: Semantics,
@@ -259,6 +263,7 @@ impl Compiled {
             initial_hash,
             initial: layout.pack(&initial_marking),
             fold: KeyFold::new(&layout, keep),
+            linear: None,
             // With only immediate, unprioritized transitions the MCL rule keeps
             // every enabled transition: skip it.
             mcl_rule: semantics == Semantics::Mcl
@@ -478,6 +483,20 @@ impl Compiled {
     /// Raises `bounds` to the new token counts of the places `t` adds to.
     #[inline(always)]
     pub(super) fn successor(&self, state: &mut [u64], t: usize, bounds: &mut [u32]) -> Result<(), Overflow> {
+        self.check(state, t, bounds)?;
+        if let Some(info) = self.trans.get(t) {
+            for &(dw, add) in &self.wdelta[range(info.wdelta)] {
+                let word = &mut state[dw as usize];
+                *word = word.wrapping_add(add);
+            }
+        }
+        Ok(())
+    }
+
+    /// What [`Compiled::successor`] checks and records of the successor of
+    /// `state` by `t`, without computing it.
+    #[inline(always)]
+    pub(super) fn check(&self, state: &[u64], t: usize, bounds: &mut [u32]) -> Result<(), Overflow> {
         let l = &self.layout;
         let Some(info) = self.trans.get(t) else {
             return Ok(());
@@ -490,10 +509,6 @@ impl Compiled {
             if let Some(b) = bounds.get_mut(p as usize) {
                 *b = (*b).max(v as u32);
             }
-        }
-        for &(dw, add) in &self.wdelta[range(info.wdelta)] {
-            let word = &mut state[dw as usize];
-            *word = word.wrapping_add(add);
         }
         Ok(())
     }
@@ -631,13 +646,20 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
     let initial_max = net.places().iter().map(|p| p.initial).max().unwrap_or(0);
     let mut bits = bits_for(initial_max);
     let keep = super::fold::independent_places(net);
+    // One-token groups, found when a linear key may help (once).
+    let mut groups: Option<Vec<Vec<crate::model::PlaceId>>> = None;
     loop {
-        let c = Compiled::new(net, opts.semantics, bits, keep.as_deref());
+        let mut c = Compiled::new(net, opts.semantics, bits, keep.as_deref());
         // Recording edges and cutting markings are done by the sequential engines.
         let sequential = opts.threads == 1 || opts.record_edges || opts.cut_above.is_some();
+        let extras = opts.record_edges || opts.cut_above.is_some();
+        if sequential && !extras && c.layout.words <= super::fold::MAX_WORDS && c.fold.words >= 2 {
+            let groups = groups.get_or_insert_with(|| super::fold::one_token_groups(net));
+            let lin = LinearKey::new(net, &c.layout, keep.as_deref(), groups);
+            c.linear = (lin.bits <= u64::BITS).then_some(lin);
+        }
         let result = if sequential {
             let x = Extras::new(opts);
-            let extras = opts.record_edges || opts.cut_above.is_some();
             match (c.layout.words, extras) {
                 (1..=8, false) => super::fixed::run_keyed(&c, net, max, x),
                 (1, true) => super::fixed::run::<1, true>(&c, net, max, x),

@@ -21,6 +21,9 @@
 //!   (in the arena) when it is numbered.
 //! * The table keys are the markings folded to `K` ≤ `W` words by the net's
 //!   place invariants ([`super::fold`]); the arena keeps whole markings.
+//!   With a [`super::fold::LinearKey`] (`LIN`), keys are one word, kept per
+//!   state, and a successor's key is its source's plus the transition's
+//!   constant.
 
 use super::engine::{mix, Compiled, Extras, Overflow, Stats, BATCH, NO_PARENT};
 use super::hw;
@@ -258,16 +261,30 @@ pub(super) fn run<const W: usize, const EXTRAS: bool>(
     max_states: usize,
     extras: Extras,
 ) -> Option<StateSpace> {
-    search::<W, W, EXTRAS, FixedTable<W>>(c, net, max_states, extras)
+    search::<W, W, EXTRAS, false, FixedTable<W>>(c, net, max_states, extras)
 }
 
-/// Runs the default BFS (no extras) with a [`KeyTable`] of the folded keys
-/// ([`Compiled::fold`]: `K` ≤ `W` words); `None` as for [`run`].
+/// Runs the default BFS (no extras) with a [`KeyTable`] of the linear keys
+/// ([`Compiled::linear`]: one word) when there are some, else of the folded
+/// keys ([`Compiled::fold`]: `K` ≤ `W` words); `None` as for [`run`].
 pub(super) fn run_keyed(c: &Compiled, net: &Net, max_states: usize, extras: Extras) -> Option<StateSpace> {
     macro_rules! keyed {
         ($w:literal, $k:literal) => {
-            search::<$w, $k, false, KeyTable<$k>>(c, net, max_states, extras)
+            search::<$w, $k, false, false, KeyTable<$k>>(c, net, max_states, extras)
         };
+    }
+    macro_rules! linear {
+        ($w:literal) => {
+            search::<$w, 1, false, true, KeyTable<1>>(c, net, max_states, extras)
+        };
+    }
+    if c.linear.is_some() {
+        match c.layout.words {
+            2 => return linear!(2),
+            3 => return linear!(3),
+            4 => return linear!(4),
+            _ => {}
+        }
     }
     match (c.layout.words, c.fold.words) {
         (1, _) => keyed!(1, 1),
@@ -288,8 +305,19 @@ pub(super) fn run_keyed(c: &Compiled, net: &Net, max_states: usize, extras: Extr
     }
 }
 
-/// The search: markings of `W` words, table keys of `K` words.
-fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
+/// A `K`-word key holding the linear key `k` (`K` is 1 where it is used).
+#[inline(always)]
+fn linear_key<const K: usize>(k: u64) -> [u64; K] {
+    let mut key = [0u64; K];
+    if let Some(x) = key.first_mut() {
+        *x = k;
+    }
+    key
+}
+
+/// The search: markings of `W` words, table keys of `K` words (with `LIN`,
+/// `K` is 1 and the keys come from [`Compiled::linear`]).
+fn search<const W: usize, const K: usize, const EXTRAS: bool, const LIN: bool, T: Visited<K>>(
     c: &Compiled,
     net: &Net,
     max_states: usize,
@@ -301,7 +329,13 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
     let mut parent: Vec<u32> = vec![NO_PARENT];
     let mut via: Vec<u32> = vec![0];
     let mut table = T::new();
-    let k0: [u64; K] = c.fold.apply(&init);
+    // With `LIN`: the linear key of each state, and each transition's change.
+    let (lin0, lin_delta) = match &c.linear {
+        Some(l) if LIN => (l.initial, &l.delta[..]),
+        _ => (0, &[][..]),
+    };
+    let mut lin_keys: Vec<u64> = if LIN { vec![lin0] } else { Vec::new() };
+    let k0: [u64; K] = if LIN { linear_key(lin0) } else { c.fold.apply(&init) };
     let m0 = key_hash(&k0);
     if let Err(pos) = table.find(&k0, m0) {
         table.insert_at(pos, k0, m0, 0);
@@ -356,9 +390,17 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                 continue;
             }
             edges += enabled.len() as u64;
+            let lin_cur = if LIN { lin_keys[s] } else { 0 };
             for &t in &enabled {
                 let mut succ = cur;
-                match c.successor(&mut succ, t.index(), &mut stats.bounds) {
+                // Linear keys need no successor marking: it is computed
+                // again when numbered.
+                let next = if LIN && sorted {
+                    c.check(&cur, t.index(), &mut stats.bounds)
+                } else {
+                    c.successor(&mut succ, t.index(), &mut stats.bounds)
+                };
+                match next {
                     Ok(()) => {}
                     Err(Overflow::Widen) => return None,
                     Err(Overflow::Stop) => {
@@ -366,7 +408,11 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                         break 'bfs;
                     }
                 }
-                let key = c.fold.apply::<W, K>(&succ);
+                let key = if LIN {
+                    linear_key(lin_cur.wrapping_add(lin_delta.get(t.index()).copied().unwrap_or(0)))
+                } else {
+                    c.fold.apply::<W, K>(&succ)
+                };
                 let hash = key_hash(&key);
                 if sorted {
                     keys.push(key);
@@ -415,7 +461,7 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                 }
             }
             // 3. Number the new states in BFS order.
-            for (&(_, s, t), &new) in meta.iter().zip(&fresh) {
+            for ((&(_, s, t), &new), key) in meta.iter().zip(&fresh).zip(&keys) {
                 if !new {
                     continue;
                 }
@@ -428,6 +474,9 @@ fn search<const W: usize, const K: usize, const EXTRAS: bool, T: Visited<K>>(
                 arena.push(succ);
                 parent.push(s);
                 via.push(t);
+                if LIN {
+                    lin_keys.push(key[0]);
+                }
             }
             continue;
         }

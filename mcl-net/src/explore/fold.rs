@@ -13,9 +13,21 @@
 //! FMS-PT-00005 (22 places, 4-bit fields: two words) has 16 independent
 //! rows, so its keys are one word; SharedMemory-PT-000010 (131 1-safe
 //! places: three words) has 110, so two.
+//!
+//! A [`LinearKey`] is shorter still on nets of one-token groups (the
+//! mutually exclusive places of a unit-weight P-semiflow holding one token,
+//! `symbolic/group.rs`): at most one place of a group is marked, with one
+//! token, so `Σ_{p∈g} (i_p + 1)·m(p)` (`i_p` the place's index in the group)
+//! says which, in `⌈log2(|g| + 1)⌉` bits. Such a sum for every group, shifted
+//! to its own bit range, plus the field of every other place, is a linear
+//! function of the marking that tells all reachable markings apart; when it
+//! fits in 64 bits, a successor's key is its parent's plus a constant of the
+//! transition. SharedMemory-PT-000010: a group of 91 places (the bus and the
+//! accesses, 7 bits) and ten of 3 (2 bits each); the ten other places have
+//! dependent rows: 27 bits.
 
 use super::engine::Layout;
-use crate::model::Net;
+use crate::model::{Net, PlaceId};
 
 /// Larger nets keep whole markings as keys: the elimination below costs
 /// `places² · transitions`, and the fold is only used for markings of at
@@ -166,11 +178,86 @@ impl KeyFold {
     }
 }
 
+/// One-word keys that are a linear function of the marking (see the module
+/// notes): `key(m) = Σ_p w_p·m(p) mod 2^64`.
+#[derive(Clone, Debug)]
+pub(super) struct LinearKey {
+    /// The key of the initial marking.
+    pub initial: u64,
+    /// `Σ_p w_p·Δ_t(p) mod 2^64` of each transition `t`: what firing it adds
+    /// to the key.
+    pub delta: Vec<u64>,
+    /// The bits the keys use (more than 64: some are cut).
+    pub bits: u32,
+}
+
+impl LinearKey {
+    /// The key of `net` with fields of `layout.bits` bits for the places
+    /// outside `groups` (which must be sets of places of which every
+    /// reachable marking marks at most one, with one token). With `keep`
+    /// (from [`independent_places`]) only the kept places count: a group
+    /// without one is left out. The keys tell reachable markings apart when
+    /// [`LinearKey::bits`] is at most 64.
+    pub fn new(net: &Net, layout: &Layout, keep: Option<&[bool]>, groups: &[Vec<PlaceId>]) -> Self {
+        let np = net.place_count();
+        let kept = |p: usize| keep.is_none_or(|k| k.get(p).copied().unwrap_or(true));
+        let mut weight = vec![0u64; np];
+        let mut grouped = vec![false; np];
+        let mut shift = 0u32;
+        for g in groups {
+            for p in g {
+                if let Some(x) = grouped.get_mut(p.index()) {
+                    *x = true;
+                }
+            }
+            if !g.iter().any(|p| kept(p.index())) {
+                continue;
+            }
+            // Values 0 (none marked) ..= |g|.
+            let width = u64::BITS - (g.len() as u64).leading_zeros();
+            for (i, p) in g.iter().enumerate() {
+                if let Some(w) = weight.get_mut(p.index()) {
+                    *w = (i as u64 + 1).checked_shl(shift).unwrap_or(0);
+                }
+            }
+            shift += width;
+        }
+        for p in (0..np).filter(|&p| !grouped[p] && kept(p)) {
+            weight[p] = 1u64.checked_shl(shift).unwrap_or(0);
+            shift += layout.bits;
+        }
+        let delta = net
+            .transition_ids()
+            .map(|t| {
+                net.delta(t).iter().fold(0u64, |k, &(p, d)| k.wrapping_add((d as u64).wrapping_mul(weight[p.index()])))
+            })
+            .collect();
+        let initial = net
+            .places()
+            .iter()
+            .zip(&weight)
+            .fold(0u64, |k, (p, &w)| k.wrapping_add(u64::from(p.initial).wrapping_mul(w)));
+        LinearKey { initial, delta, bits: shift }
+    }
+}
+
+/// The one-token groups of `net` (`symbolic/group.rs`).
+pub(super) fn one_token_groups(net: &Net) -> Vec<Vec<PlaceId>> {
+    super::symbolic::group::units(net, true)
+        .into_iter()
+        .filter_map(|u| match u {
+            super::symbolic::group::Unit::Group(g) => Some(g),
+            super::symbolic::group::Unit::Place(_) => None,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use std::collections::HashSet;
 
-    use super::{independent_places, KeyFold};
+    use super::{independent_places, one_token_groups, KeyFold, LinearKey};
+    use crate::explore::engine::Layout;
     use crate::explore::{explore, Options};
     use crate::model::{Net, NetBuilder, Place, Transition};
 
@@ -210,6 +297,42 @@ mod tests {
         assert_eq!(fold.words, 1);
         let keys: HashSet<[u64; 1]> = ss.arena.chunks_exact(2).map(|m| fold.apply::<2, 1>(&[m[0], m[1]])).collect();
         assert_eq!(keys.len(), ss.len());
+    }
+
+    /// The three one-token cycles are groups (3 bits each), the cycle of 4
+    /// tokens keeps its 4-bit fields; the keys, followed along the paths of
+    /// the search, tell all reachable markings apart, with and without the
+    /// places of dependent rows.
+    #[test]
+    fn linear_keys_tell_all_reachable_markings_apart() {
+        let net = cycles();
+        let ss = explore(&net, &Options { threads: 1, ..Options::default() });
+        let groups = one_token_groups(&net);
+        assert_eq!(groups.len(), 3);
+        let keep = independent_places(&net);
+        for (keep, bits) in [(None, 3 * 3 + 5 * 4), (keep.as_deref(), 3 * 3 + 4 * 4)] {
+            let lin = LinearKey::new(&net, &ss.layout, keep, &groups);
+            assert_eq!(lin.bits, bits);
+            let keys: HashSet<u64> = ss
+                .states()
+                .map(|s| ss.path_to(s).iter().fold(lin.initial, |k, t| k.wrapping_add(lin.delta[t.index()])))
+                .collect();
+            assert_eq!(keys.len(), ss.len());
+        }
+    }
+
+    /// SharedMemory-PT-000010: three words of 1-bit fields, two folded,
+    /// 27 bits as a linear key (a group of 91 places, ten of 3; the ten
+    /// other places have dependent rows).
+    #[test]
+    fn shared_memory_keys_are_one_word() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/mcc/SharedMemory-PT-000010.pnml");
+        let net = crate::read_pnml(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let layout = Layout::new(net.place_count(), 1);
+        let keep = independent_places(&net);
+        assert_eq!((layout.words, KeyFold::new(&layout, keep.as_deref()).words), (3, 2));
+        let lin = LinearKey::new(&net, &layout, keep.as_deref(), &one_token_groups(&net));
+        assert_eq!(lin.bits, 7 + 10 * 2);
     }
 
     #[test]

@@ -24,7 +24,7 @@ const MAX_PAIRS: usize = 20_000_000;
 
 /// The places of one level.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(super) enum Unit {
+pub(crate) enum Unit {
     /// One place; the value is its token count.
     Place(PlaceId),
     /// Mutually exclusive 1-bounded places; the value is 0 when none is
@@ -46,7 +46,7 @@ impl Unit {
 /// unit-weight P-semiflows with one initial token (largest first, each place
 /// in at most one group), every other place alone; without, one unit per
 /// place. Units come in the order of their first place.
-pub(super) fn units(net: &Net, group: bool) -> Vec<Unit> {
+pub(crate) fn units(net: &Net, group: bool) -> Vec<Unit> {
     let mut in_group = vec![false; net.place_count()];
     let mut groups: Vec<Vec<PlaceId>> = Vec::new();
     if group {

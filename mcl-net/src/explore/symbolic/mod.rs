@@ -26,7 +26,7 @@ use crate::model::{Net, PlaceId, TransitionId};
 use group::Layout;
 
 mod count;
-mod group;
+pub(crate) mod group;
 mod order;
 mod relation;
 mod saturate;
