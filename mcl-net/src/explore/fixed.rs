@@ -98,10 +98,17 @@ impl<const W: usize> FixedTable<W> {
     }
 }
 
-/// Hash of a packed marking for the sequential tables: a multiply per word,
-/// then the MurmurHash3 finalizer.
+/// Hash of a packed marking for the sequential tables ([`hash_words`] on
+/// `W` words, unrolled).
 #[inline(always)]
 pub(super) fn key_hash<const W: usize>(key: &[u64; W]) -> u64 {
+    hash_words(key)
+}
+
+/// Hash of a packed marking, for every table of the explorer: a multiply
+/// per word, then the MurmurHash3 finalizer.
+#[inline(always)]
+pub(super) fn hash_words(key: &[u64]) -> u64 {
     const K: [u64; 8] = [
         0x9E37_79B9_7F4A_7C15,
         0xC2B2_AE3D_27D4_EB4F,

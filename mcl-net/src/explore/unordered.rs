@@ -54,7 +54,8 @@ use std::time::Duration;
 use crossbeam_deque::{Steal, Stealer, Worker as Deque};
 use rustc_hash::FxHashSet;
 
-use super::engine::{mix, Compiled, Overflow, Stats, NO_PARENT};
+use super::engine::{Compiled, Overflow, Stats, NO_PARENT};
+use super::fixed::hash_words;
 use super::hw;
 use super::{StateSpace, StopReason};
 use crate::model::{Net, TransitionId};
@@ -80,27 +81,6 @@ const BUSY: u64 = 1;
 /// that a stored marking never looks free or claimed; the (unlikely)
 /// markings whose first word is `SALT` or `SALT ^ 1` go to a side set.
 const SALT: u64 = 0xA5C3_96E1_4D2B_7F08;
-
-/// Hash of a packed marking: a multiply per word, then the MurmurHash3
-/// finalizer.
-#[inline(always)]
-fn hash_words(key: &[u64]) -> u64 {
-    const K: [u64; 8] = [
-        0x9E37_79B9_7F4A_7C15,
-        0xC2B2_AE3D_27D4_EB4F,
-        0x1656_67B1_9E37_79F9,
-        0x85EB_CA77_C2B2_AE63,
-        0x27D4_EB2F_1656_67C5,
-        0xD6E8_FEB8_6659_FD93,
-        0xA076_1D64_78BD_642F,
-        0xE703_7ED1_A0B4_28DB,
-    ];
-    let mut h = 0u64;
-    for (i, &k) in key.iter().enumerate() {
-        h = h.wrapping_add(k.wrapping_mul(K[i % 8])).rotate_left(23);
-    }
-    mix(h)
-}
 
 /// What [`Table::insert`] did.
 #[derive(Clone, Copy, PartialEq, Eq)]
