@@ -17,7 +17,8 @@
 //!   allowed (each from 0 to initial − h_v(c)), some edge of the vehicle is
 //!   enabled there, under the product's rule (a blocked edge waits while an
 //!   urgent gate is allowed), and leads one step closer. A vehicle that
-//!   holds something can give it all back alone, whatever the others do.
+//!   holds something can give it all back alone, while the others stand
+//!   still at any counts in that range.
 //! * H3, **alone**: with counts initial − h_v (the others hold nothing),
 //!   from every class holding nothing the vehicle alone reaches an end
 //!   class holding nothing when it can end alone, and otherwise is at an
