@@ -46,17 +46,13 @@ pub(super) fn independent_places(net: &Net) -> Option<Vec<bool>> {
     if np > MAX_PLACES || np.saturating_mul(np).saturating_mul(nt.max(1)) > MAX_WORK {
         return None;
     }
-    let mut rows = vec![vec![0i128; nt]; np];
-    for t in net.transition_ids() {
-        for &(p, d) in net.delta(t) {
-            rows[p.index()][t.index()] += i128::from(d);
-        }
-    }
+    let c = crate::structural::incidence(net);
+    let rows = (0..np).map(|p| c.row(PlaceId(p as u32)).iter().map(|&d| i128::from(d)).collect::<Vec<_>>());
     // Fraction-free elimination: `basis` holds reduced rows with distinct
     // pivot columns; a row reduced to zero depends on the kept ones.
     let mut basis: Vec<(usize, Vec<i128>)> = Vec::new();
     let mut keep = vec![false; np];
-    for (p, mut r) in rows.into_iter().enumerate() {
+    for (p, mut r) in rows.enumerate() {
         for (piv, b) in &basis {
             let (a, f) = (b[*piv], r[*piv]);
             if f == 0 {

@@ -32,6 +32,7 @@ use serde::Serialize;
 use std::hash::Hasher;
 
 use crate::model::{Marking, Net, PlaceId, TransitionId};
+use crate::semantics::{covers, fire};
 
 /// What a reduced exploration found.
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]
@@ -101,20 +102,14 @@ pub fn explore_por_examples(
             closure.best(&arcs, &m);
             for k in 0..closure.best.len() {
                 let t = closure.best[k];
-                let mut m2 = m.clone();
-                let mut overflow = false;
-                for &(p, d) in net.delta(TransitionId(t)) {
-                    match u32::try_from(i64::from(m2[p.index()]) + d) {
-                        Ok(x) => m2[p.index()] = x,
-                        Err(_) => overflow = true,
-                    }
-                }
-                if overflow {
+                let mut m2 = Marking(m.clone());
+                if fire(net, &mut m2, TransitionId(t)).is_err() {
+                    // `t` is enabled: a place would pass `u32::MAX`.
                     report.complete = false;
                     continue;
                 }
                 report.edges += 1;
-                pack(&m2, &mut buf);
+                pack(&m2.0, &mut buf);
                 if store.find(&buf).is_none() {
                     if store.len() >= max_states {
                         report.complete = false;
@@ -174,7 +169,7 @@ impl Arcs {
     }
 
     fn is_enabled(&self, t: u32, m: &[u32]) -> bool {
-        self.pre[t as usize].iter().all(|&(p, w, _)| m[p as usize] >= w)
+        covers(self.pre[t as usize].iter().map(|&(p, w, _)| (p, w)), |p| m[p as usize])
     }
 }
 
