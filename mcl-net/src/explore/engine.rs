@@ -645,14 +645,16 @@ pub(super) fn explore(net: &Net, opts: &Options) -> StateSpace {
     let max = opts.max_states.clamp(1, (u32::MAX - 1) as usize);
     let initial_max = net.places().iter().map(|p| p.initial).max().unwrap_or(0);
     let mut bits = bits_for(initial_max);
-    let keep = super::fold::independent_places(net);
+    // Recording edges and cutting markings are done by the sequential engines.
+    let extras = opts.record_edges || opts.cut_above.is_some();
+    let sequential = opts.threads == 1 || extras;
+    // Only the sequential search without extras (`fixed::run_keyed`) uses
+    // the folded and linear keys.
+    let keep = if sequential && !extras { super::fold::independent_places(net) } else { None };
     // One-token groups, found when a linear key may help (once).
     let mut groups: Option<Vec<Vec<crate::model::PlaceId>>> = None;
     loop {
         let mut c = Compiled::new(net, opts.semantics, bits, keep.as_deref());
-        // Recording edges and cutting markings are done by the sequential engines.
-        let sequential = opts.threads == 1 || opts.record_edges || opts.cut_above.is_some();
-        let extras = opts.record_edges || opts.cut_above.is_some();
         if sequential && !extras && c.layout.words <= super::fold::MAX_WORDS && c.fold.words >= 2 {
             let groups = groups.get_or_insert_with(|| super::fold::one_token_groups(net));
             let lin = LinearKey::new(net, &c.layout, keep.as_deref(), groups);
